@@ -1,0 +1,201 @@
+//! The paper's ground contact model as a pure function: (terrain, sphere pose and velocity,
+//! parameters, a little friction state) → force and contact point. Nothing here knows rapier.
+//!
+//! Per step, for a sphere of radius r (a ball, or a foot):
+//! 1. [`sphere_geometry`]: closest surface point, penetration x along the surface normal, ground frame
+//!    (exact normal, or the paper's roll/pitch angles, eq. 1–4).
+//! 2. The contact point's velocity is split into the normal part v_n and the in-plane slip (eq. 3–4).
+//! 3. Normal force from the [`NormalLaw`] (eq. 5–6: F = k·x + c·ẋ, never pulling).
+//! 4. In-plane force from the [`FrictionLaw`] (Coulomb, viscous, Stribeck, Karnopp).
+//! 5. The sum acts at the contact point (so a ball rolls).
+
+mod friction;
+mod geometry;
+mod normal;
+
+pub use friction::{FrictionLaw, FrictionOutcome, stopping_force};
+pub use geometry::{SphereGeometry, sphere_geometry};
+pub use normal::{NormalLaw, exact_decay_factor};
+
+use crate::terrain::{GroundFrame, Orientation};
+use glam::{DMat2, DMat3, DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// The contact model's parameters: normal law, friction law, and how the ground's orientation is found.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactModel {
+    #[serde(default)]
+    pub normal: NormalLaw,
+    #[serde(default)]
+    pub friction: FrictionLaw,
+    #[serde(default)]
+    pub orientation: Orientation,
+}
+
+/// The inertia a contact point presents: along the normal, and (as a 2×2 matrix in the ground
+/// frame's in-plane axes) in the plane. For a free rigid body, 1/m(d) = 1/m + (r×d)ᵀ·I⁻¹·(r×d).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EffectiveMass {
+    pub normal: f64,
+    pub tangential: DMat2,
+}
+
+impl EffectiveMass {
+    /// A point mass (or a body whose rotation is locked).
+    pub fn particle(mass: f64) -> Self {
+        EffectiveMass {
+            normal: mass,
+            tangential: DMat2::from_diagonal(DVec2::splat(mass)),
+        }
+    }
+
+    /// A free rigid body of `mass` with world-frame inverse inertia `inverse_inertia`, whose centre
+    /// of mass is at `arm` from the contact point (`arm` = point − centre of mass).
+    pub fn rigid_body(mass: f64, inverse_inertia: DMat3, arm: DVec3, frame: &GroundFrame) -> Self {
+        let mobility =
+            |a: DVec3, b: DVec3| a.dot(b) / mass + arm.cross(a).dot(inverse_inertia * arm.cross(b));
+        let (t1, t2, n) = (frame.tangent_x, frame.tangent_y, frame.normal);
+        let m12 = mobility(t1, t2);
+        let inverse = DMat2::from_cols(
+            DVec2::new(mobility(t1, t1), m12),
+            DVec2::new(m12, mobility(t2, t2)),
+        );
+        EffectiveMass {
+            normal: 1.0 / mobility(n, n),
+            tangential: inverse.inverse(),
+        }
+    }
+}
+
+/// Friction's memory between steps: last step's friction and slip (world frame), for the
+/// tangential load estimate. Reset when the contact opens.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactState {
+    previous: Option<(DVec3, DVec3)>,
+}
+
+impl ContactState {
+    /// True while the sphere was in contact at the last step.
+    pub fn in_contact(&self) -> bool {
+        self.previous.is_some()
+    }
+}
+
+/// The contact's response over one step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactForce {
+    /// Where the force acts (the surface point closest to the sphere's centre).
+    pub point: DVec3,
+    /// Total force on the sphere (world frame).
+    pub force: DVec3,
+    /// Normal force magnitude (≥ 0).
+    pub normal_force: f64,
+    /// In-plane friction force (world frame).
+    pub friction: DVec3,
+    /// Depth along the normal (> 0 in contact).
+    pub penetration: f64,
+    /// Normal velocity of the contact point (> 0 separating).
+    pub normal_velocity: f64,
+    /// In-plane velocity of the contact point (world frame).
+    pub slip: DVec3,
+    /// Friction held the contact at rest this step.
+    pub sticking: bool,
+    /// The ground frame at the contact.
+    pub frame: GroundFrame,
+}
+
+impl ContactModel {
+    /// The force over a step of length `dt` on a sphere in the given geometry whose material point
+    /// at the contact moves with `point_velocity`. Returns `None` (and resets `state`) when the sphere
+    /// does not touch the ground.
+    pub fn respond(
+        &self,
+        geometry: &SphereGeometry,
+        point_velocity: DVec3,
+        mass: &EffectiveMass,
+        dt: f64,
+        state: &mut ContactState,
+    ) -> Option<ContactForce> {
+        if geometry.penetration <= 0.0 {
+            state.previous = None;
+            return None;
+        }
+        let frame = &geometry.frame;
+        let local = frame.to_local(point_velocity);
+        let normal_velocity = local.z;
+        let slip = DVec2::new(local.x, local.y);
+        let normal_force =
+            self.normal
+                .force(geometry.penetration, -normal_velocity, mass.normal, dt);
+        let in_plane = |v: DVec3| DVec2::new(frame.tangent_x.dot(v), frame.tangent_y.dot(v));
+        let previous = state
+            .previous
+            .map(|(force, slip)| (in_plane(force), in_plane(slip)));
+        let stop = stopping_force(mass.tangential, slip, dt, previous);
+        let outcome = if normal_force > 0.0 {
+            self.friction.force(slip, normal_force, stop)
+        } else {
+            FrictionOutcome {
+                force: DVec2::ZERO,
+                sticking: false,
+            }
+        };
+        let friction = frame.to_world(outcome.force.extend(0.0));
+        let slip_world = frame.to_world(slip.extend(0.0));
+        state.previous = Some((friction, slip_world));
+        Some(ContactForce {
+            point: geometry.point,
+            force: normal_force * frame.normal + friction,
+            normal_force,
+            friction,
+            penetration: geometry.penetration,
+            normal_velocity,
+            slip: slip_world,
+            sticking: outcome.sticking,
+            frame: *frame,
+        })
+    }
+
+    /// Checks every parameter, naming the bad one (`normal.damping`, `friction.mu_static`, …).
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        self.normal
+            .validate()
+            .map_err(|(f, e)| (format!("normal.{f}"), e))?;
+        self.friction
+            .validate()
+            .map_err(|(f, e)| (format!("friction.{f}"), e))?;
+        if let Orientation::Paper { xe, ye } = self.orientation {
+            for (name, v) in [("orientation.xe", xe), ("orientation.ye", ye)] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err((
+                        name.into(),
+                        format!("expected a finite step > 0 m, got {v}"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rigid_sphere_presents_two_sevenths_of_its_mass_in_the_plane() {
+        let (m, r) = (1.0, 0.05);
+        let inertia = 0.4 * m * r * r;
+        let frame = GroundFrame::from_normal(DVec3::Z);
+        let eff = EffectiveMass::rigid_body(
+            m,
+            DMat3::from_diagonal(DVec3::splat(1.0 / inertia)),
+            DVec3::new(0.0, 0.0, -r),
+            &frame,
+        );
+        assert!((eff.normal - m).abs() < 1e-12);
+        assert!((eff.tangential.x_axis.x - 2.0 / 7.0 * m).abs() < 1e-12);
+        assert!(eff.tangential.x_axis.y.abs() < 1e-12);
+    }
+}

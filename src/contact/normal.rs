@@ -1,0 +1,185 @@
+//! Normal force laws: the paper's linear spring-damper (eq. 5–6) and Hunt–Crossley.
+//!
+//! ## Stable damping on light bodies
+//! An explicit damper force −c·v over a step of length h changes a mass m's velocity by the factor
+//! (1 − c·h/m), which overshoots for c·h/m > 1 and diverges past 2 — and a 0.05 kg foot with the
+//! reference c = 150 N·s/m at h = 1 ms has c·h/m = 3. Instead the damper's velocity change over the
+//! step is the exact solution of m·v̇ = −c·v, v(h) = v·e^(−c·h/m), so the force applied is
+//! −c·φ(c·h/m)·v with φ(z) = (1 − e^(−z))/z. φ → 1 as z → 0 (the explicit force for heavy bodies,
+//! φ = 0.93 for the 1 kg ball), and the damper can never reverse the normal velocity (it only takes
+//! energy out: passive) however light the body. The spring stays explicit; semi-implicit Euler keeps
+//! it stable while √(k/m)·h < 2, which [`NormalLaw::stable_time_step`] reports.
+
+use serde::{Deserialize, Serialize};
+
+/// A normal force law on the penetration x ≥ 0 and its rate ẋ (positive when sinking in).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+pub enum NormalLaw {
+    /// F = k·x + c·ẋ, clamped at ≥ 0 (the ground pushes, never pulls).
+    SpringDamper { stiffness: f64, damping: f64 },
+    /// F = k·xⁿ·(1 + d·ẋ), clamped at ≥ 0: zero at touch-down, so no sticky tension.
+    HuntCrossley {
+        stiffness: f64,
+        exponent: f64,
+        damping: f64,
+    },
+}
+
+impl Default for NormalLaw {
+    /// The reference contact: k = 2·10⁴ N/m, c = 150 N·s/m.
+    fn default() -> Self {
+        NormalLaw::SpringDamper {
+            stiffness: 2.0e4,
+            damping: 150.0,
+        }
+    }
+}
+
+/// φ(z) = (1 − e^(−z))/z, the exact-decay factor of a damper over one step.
+pub fn exact_decay_factor(z: f64) -> f64 {
+    if z < 1e-8 {
+        1.0 - 0.5 * z
+    } else {
+        -(-z).exp_m1() / z
+    }
+}
+
+impl NormalLaw {
+    /// The normal force for penetration `x` (> 0 in contact) and penetration rate `rate` (ẋ = −v_n),
+    /// on a body whose effective mass along the normal is `mass`, over a step `dt`.
+    pub fn force(&self, x: f64, rate: f64, mass: f64, dt: f64) -> f64 {
+        if x <= 0.0 {
+            return 0.0;
+        }
+        let (elastic, damping) = match *self {
+            NormalLaw::SpringDamper { stiffness, damping } => (stiffness * x, damping),
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                damping,
+            } => {
+                let elastic = stiffness * x.powf(exponent);
+                (elastic, elastic * damping)
+            }
+        };
+        let damping = damping * exact_decay_factor(damping * dt / mass);
+        (elastic + damping * rate).max(0.0)
+    }
+
+    /// Elastic energy stored at penetration `x`: ½·k·x² or k·xⁿ⁺¹/(n+1).
+    pub fn stored_energy(&self, x: f64) -> f64 {
+        if x <= 0.0 {
+            return 0.0;
+        }
+        match *self {
+            NormalLaw::SpringDamper { stiffness, .. } => 0.5 * stiffness * x * x,
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                ..
+            } => stiffness * x.powf(exponent + 1.0) / (exponent + 1.0),
+        }
+    }
+
+    /// The largest step for which the explicit spring is stable on `mass`, 2/√(k/m), for the
+    /// linear law; for Hunt–Crossley the tangent stiffness at penetration `x` is used.
+    pub fn stable_time_step(&self, mass: f64, x: f64) -> f64 {
+        let stiffness = match *self {
+            NormalLaw::SpringDamper { stiffness, .. } => stiffness,
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                ..
+            } => stiffness * exponent * x.max(1e-6).powf(exponent - 1.0),
+        };
+        2.0 / (stiffness / mass).sqrt()
+    }
+
+    /// Checks the parameters, returning the name of the bad field and what was expected.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let check = |name: &'static str, v: f64, min: f64| {
+            if v.is_finite() && v >= min {
+                Ok(())
+            } else {
+                Err((name, format!("expected a finite number ≥ {min}, got {v}")))
+            }
+        };
+        match *self {
+            NormalLaw::SpringDamper { stiffness, damping } => {
+                check("stiffness", stiffness, f64::MIN_POSITIVE)?;
+                check("damping", damping, 0.0)
+            }
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                damping,
+            } => {
+                check("stiffness", stiffness, f64::MIN_POSITIVE)?;
+                check("exponent", exponent, 1.0)?;
+                check("damping", damping, 0.0)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spring_damper_is_the_papers_law_for_heavy_bodies() {
+        let law = NormalLaw::SpringDamper {
+            stiffness: 2e4,
+            damping: 150.0,
+        };
+        // effectively explicit when c·h/m is tiny
+        let f = law.force(0.001, 0.2, 1e6, 1e-3);
+        assert!((f - (20.0 + 30.0)).abs() < 1e-3, "{f}");
+    }
+
+    #[test]
+    fn never_pulls() {
+        let law = NormalLaw::default();
+        assert_eq!(law.force(0.001, -10.0, 1.0, 1e-3), 0.0);
+        assert_eq!(law.force(-0.001, 1.0, 1.0, 1e-3), 0.0);
+        let hc = NormalLaw::HuntCrossley {
+            stiffness: 2e6,
+            exponent: 1.5,
+            damping: 1.0,
+        };
+        assert_eq!(hc.force(0.001, -5.0, 1.0, 1e-3), 0.0);
+    }
+
+    #[test]
+    fn hunt_crossley_is_continuous_at_touch_down() {
+        let hc = NormalLaw::HuntCrossley {
+            stiffness: 2e6,
+            exponent: 1.5,
+            damping: 1.0,
+        };
+        assert!(hc.force(1e-12, 3.0, 1.0, 1e-3) < 1e-8);
+        // F = k·x^n·(1 + d·ẋ) for a heavy body
+        let f = hc.force(1e-3, 0.5, 1e9, 1e-3);
+        assert!((f - 2e6 * 1e-3f64.powf(1.5) * 1.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn damper_cannot_reverse_a_light_body() {
+        // c·h/m = 3 (0.05 kg foot, c = 150, h = 1 ms): the impulse is below m·v
+        let law = NormalLaw::SpringDamper {
+            stiffness: 0.0,
+            damping: 150.0,
+        };
+        let (m, v, h) = (0.05, 1.0, 1e-3);
+        let impulse = law.force(1e-3, v, m, h) * h;
+        assert!(impulse < m * v);
+        assert!((impulse - m * v * (1.0 - (-3.0f64).exp())).abs() < 1e-12);
+    }
+
+    #[test]
+    fn decay_factor_is_smooth_at_zero() {
+        assert!((exact_decay_factor(1e-9) - exact_decay_factor(1.1e-8)).abs() < 1e-8);
+        assert!((exact_decay_factor(3.0) - (1.0 - (-3.0f64).exp()) / 3.0).abs() < 1e-15);
+    }
+}

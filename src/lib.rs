@@ -1,0 +1,8 @@
+//! hexsim: a hexapod walking-robot simulator on uneven ground, built on the ground contact model of
+//! Burkus & Odry, "Implementation of 3D Ground Contact Model for Uneven Ground".
+
+pub mod contact;
+pub mod record;
+pub mod runner;
+pub mod sim;
+pub mod terrain;

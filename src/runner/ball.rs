@@ -1,0 +1,149 @@
+//! The ball experiment end to end: terrain + ball + contact → step loop → recording, CSV, metrics.
+
+use crate::contact::ContactModel;
+use crate::record::ball::{BallMetrics, BallRecorder, BallTrajectory};
+use crate::record::output::{check_writable, write_atomically};
+use crate::record::rerun::Recording;
+use crate::record::{Observer, decimation};
+use crate::sim::{BallConfig, BallSim};
+use crate::terrain::HeightGrid;
+use anyhow::{Result, bail};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Everything a ball run needs.
+pub struct BallRun {
+    pub ball: BallConfig,
+    pub terrain: Arc<HeightGrid>,
+    pub terrain_name: String,
+    pub contact: ContactModel,
+    pub dt: f64,
+    pub duration: f64,
+    pub record: Option<PathBuf>,
+    pub log_rate: f64,
+    pub trajectory: Option<PathBuf>,
+    pub metrics: Option<PathBuf>,
+}
+
+/// What a run produced.
+pub struct BallOutcome {
+    pub metrics: BallMetrics,
+    pub written: Vec<PathBuf>,
+}
+
+impl BallRun {
+    /// Validates the set-up; errors name the field.
+    pub fn validate(&self) -> Result<()> {
+        if let Err((field, expected)) = self.ball.validate() {
+            bail!("ball.{field}: {expected}");
+        }
+        if let Err((field, expected)) = self.contact.validate() {
+            bail!("contact.{field}: {expected}");
+        }
+        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 0.01) {
+            bail!("dt: expected a time step in (0, 0.01] s, got {}", self.dt);
+        }
+        if !(self.duration.is_finite() && self.duration >= 0.0) {
+            bail!(
+                "duration: expected a finite number ≥ 0 s, got {}",
+                self.duration
+            );
+        }
+        let limit = self
+            .contact
+            .normal
+            .stable_time_step(self.ball.mass, self.ball.radius * 0.1);
+        if self.dt >= limit {
+            bail!(
+                "dt = {} s is too large for the contact spring on a {} kg ball: the explicit spring needs dt < {limit:.2e} s (2/√(k/m))",
+                self.dt,
+                self.ball.mass
+            );
+        }
+        Ok(())
+    }
+
+    pub fn execute(&self) -> Result<BallOutcome> {
+        self.validate()?;
+        for path in [&self.record, &self.trajectory, &self.metrics]
+            .into_iter()
+            .flatten()
+        {
+            check_writable(path)?;
+        }
+        let mut sim = BallSim::new(self.ball, self.terrain.clone(), self.contact, self.dt);
+        let every = decimation(self.log_rate, self.dt);
+        let initial = sim.sample();
+        let mut metrics = BallMetrics::new(&initial, self.ball.radius);
+        let mut recorder = match &self.record {
+            Some(path) => {
+                let recording =
+                    Recording::create(path, format!("ball on {}", self.terrain_name), self.dt)?;
+                recording.log_terrain("world/terrain", &self.terrain)?;
+                Some(BallRecorder::new(recording, self.ball.radius, every)?)
+            }
+            None => None,
+        };
+        let mut trajectory = match &self.trajectory {
+            Some(path) => Some(BallTrajectory::create(path, every)?),
+            None => None,
+        };
+        let steps = (self.duration / self.dt).round() as u64;
+        let mut observe = |sample: &crate::sim::BallSample| -> Result<()> {
+            metrics.observe(sample)?;
+            if let Some(r) = recorder.as_mut() {
+                r.observe(sample)?;
+            }
+            if let Some(t) = trajectory.as_mut() {
+                t.observe(sample)?;
+            }
+            Ok(())
+        };
+        observe(&initial)?;
+        let mut complete = true;
+        let mut failure = None;
+        for _ in 0..steps {
+            if super::interrupted() {
+                complete = false;
+                break;
+            }
+            let sample = sim.step();
+            if !(sample.position.is_finite() && sample.velocity.is_finite()) {
+                complete = false;
+                failure = Some(format!(
+                    "the simulation diverged at t = {:.4} s (non-finite ball state); reduce dt or the contact stiffness/damping",
+                    sample.time
+                ));
+                break;
+            }
+            observe(&sample)?;
+        }
+        metrics.complete = complete;
+        let mut written = Vec::new();
+        if let Some(r) = recorder {
+            written.push(r.finish()?);
+        }
+        if let Some(t) = trajectory {
+            written.push(t.finish()?);
+        }
+        if let Some(path) = &self.metrics {
+            write_atomically(path, serde_json::to_string_pretty(&metrics)?.as_bytes())?;
+            written.push(path.clone());
+        }
+        if let Some(message) = failure {
+            bail!("{message} (files written: {})", list(&written));
+        }
+        Ok(BallOutcome { metrics, written })
+    }
+}
+
+fn list(paths: &[PathBuf]) -> String {
+    if paths.is_empty() {
+        return "none".into();
+    }
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}

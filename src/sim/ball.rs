@@ -1,0 +1,241 @@
+//! The paper's experiment: a rigid ball dropped on a terrain, with the contact model as the only
+//! ground force.
+
+use super::engine::{Engine, STANDARD_GRAVITY};
+use crate::contact::{ContactForce, ContactModel, ContactState, EffectiveMass, sphere_geometry};
+use crate::terrain::HeightGrid;
+use glam::{DMat3, DVec3, Vec3};
+use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// A ball's set-up. A solid sphere (I = 2/5·m·r²) unless `lock_rotation`, which makes it a
+/// non-rotating foot (a sliding block with a round sole).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BallConfig {
+    pub radius: f64,
+    pub mass: f64,
+    /// Centre at start (m).
+    pub position: [f64; 3],
+    pub velocity: [f64; 3],
+    pub angular_velocity: [f64; 3],
+    pub lock_rotation: bool,
+    pub gravity: f64,
+}
+
+impl Default for BallConfig {
+    /// The reference ball: r = 0.05 m, m = 1 kg, at rest.
+    fn default() -> Self {
+        BallConfig {
+            radius: 0.05,
+            mass: 1.0,
+            position: [0.0, 0.0, 0.5],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            lock_rotation: false,
+            gravity: STANDARD_GRAVITY,
+        }
+    }
+}
+
+impl BallConfig {
+    /// Moment of inertia of the solid sphere about its centre.
+    pub fn inertia(&self) -> f64 {
+        0.4 * self.mass * self.radius * self.radius
+    }
+
+    /// Checks every field, naming the bad one.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        for (name, v) in [("radius", self.radius), ("mass", self.mass)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err((name, format!("expected a finite number > 0, got {v}")));
+            }
+        }
+        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+            return Err((
+                "gravity",
+                format!("expected a finite number ≥ 0, got {}", self.gravity),
+            ));
+        }
+        for (name, v) in [
+            ("position", self.position),
+            ("velocity", self.velocity),
+            ("angular_velocity", self.angular_velocity),
+        ] {
+            if v.iter().any(|c| !c.is_finite()) {
+                return Err((name, format!("expected three finite numbers, got {v:?}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The ball's state after a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BallSample {
+    pub step: u64,
+    pub time: f64,
+    pub position: DVec3,
+    pub velocity: DVec3,
+    pub angular_velocity: DVec3,
+    /// The contact's response during the step that led here (None: in the air).
+    pub contact: Option<ContactForce>,
+    pub kinetic_energy: f64,
+    /// m·g·z of the centre.
+    pub potential_energy: f64,
+    /// Energy stored in the contact spring at the current penetration.
+    pub spring_energy: f64,
+}
+
+impl BallSample {
+    pub fn total_energy(&self) -> f64 {
+        self.kinetic_energy + self.potential_energy + self.spring_energy
+    }
+}
+
+/// A ball in a rapier world over a terrain.
+pub struct BallSim {
+    engine: Engine,
+    ball: RigidBodyHandle,
+    config: BallConfig,
+    terrain: Arc<HeightGrid>,
+    contact: ContactModel,
+    contact_state: ContactState,
+    last_contact: Option<ContactForce>,
+    step: u64,
+}
+
+fn to_f64(v: Vec3) -> DVec3 {
+    v.as_dvec3()
+}
+
+impl BallSim {
+    pub fn new(
+        config: BallConfig,
+        terrain: Arc<HeightGrid>,
+        contact: ContactModel,
+        dt: f64,
+    ) -> Self {
+        let mut engine = Engine::new(dt, config.gravity, 1);
+        let inertia = config.inertia() as f32;
+        let mut builder = RigidBodyBuilder::dynamic()
+            .translation(DVec3::from(config.position).as_vec3())
+            .linvel(DVec3::from(config.velocity).as_vec3())
+            .angvel(DVec3::from(config.angular_velocity).as_vec3())
+            .additional_mass_properties(MassProperties::new(
+                Vec3::ZERO,
+                config.mass as f32,
+                Vec3::splat(inertia),
+            ))
+            .can_sleep(false)
+            .allow_fast_rotation(true);
+        if config.lock_rotation {
+            builder = builder.lock_rotations();
+        }
+        let ball = engine.bodies.insert(builder.build());
+        BallSim {
+            engine,
+            ball,
+            config,
+            terrain,
+            contact,
+            contact_state: ContactState::default(),
+            last_contact: None,
+            step: 0,
+        }
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.engine.dt()
+    }
+
+    pub fn terrain(&self) -> &HeightGrid {
+        &self.terrain
+    }
+
+    pub fn config(&self) -> &BallConfig {
+        &self.config
+    }
+
+    /// Computes the ground force for the current state, applies it, and advances one step.
+    pub fn step(&mut self) -> BallSample {
+        let dt = self.dt();
+        let body = &self.engine.bodies[self.ball];
+        let center = to_f64(body.translation());
+        let velocity = to_f64(body.linvel());
+        let angular_velocity = to_f64(body.angvel());
+        let geometry = sphere_geometry(
+            &self.terrain,
+            center,
+            self.config.radius,
+            self.contact.orientation,
+        );
+        let response = if geometry.penetration > 0.0 {
+            let arm = geometry.point - center;
+            let point_velocity = velocity + angular_velocity.cross(arm);
+            let mass = if self.config.lock_rotation {
+                EffectiveMass::particle(self.config.mass)
+            } else {
+                let inverse_inertia =
+                    DMat3::from_diagonal(DVec3::splat(1.0 / self.config.inertia()));
+                EffectiveMass::rigid_body(self.config.mass, inverse_inertia, arm, &geometry.frame)
+            };
+            self.contact.respond(
+                &geometry,
+                point_velocity,
+                &mass,
+                dt,
+                &mut self.contact_state,
+            )
+        } else {
+            self.contact.respond(
+                &geometry,
+                DVec3::ZERO,
+                &EffectiveMass::particle(1.0),
+                dt,
+                &mut self.contact_state,
+            )
+        };
+        let body = &mut self.engine.bodies[self.ball];
+        body.reset_forces(false);
+        body.reset_torques(false);
+        if let Some(c) = &response {
+            // Force and torque about our own centre: rapier's `add_force_at_point` measures the arm
+            // from its world centre of mass, which is not computed until the first step.
+            body.add_force(c.force.as_vec3(), true);
+            body.add_torque((c.point - center).cross(c.force).as_vec3(), true);
+        }
+        self.engine.step();
+        self.step += 1;
+        self.last_contact = response;
+        self.sample()
+    }
+
+    /// The current state.
+    pub fn sample(&self) -> BallSample {
+        let body = &self.engine.bodies[self.ball];
+        let position = to_f64(body.translation());
+        let velocity = to_f64(body.linvel());
+        let angular_velocity = if self.config.lock_rotation {
+            DVec3::ZERO
+        } else {
+            to_f64(body.angvel())
+        };
+        let c = &self.config;
+        let kinetic_energy = 0.5 * c.mass * velocity.length_squared()
+            + 0.5 * c.inertia() * angular_velocity.length_squared();
+        let geometry = sphere_geometry(&self.terrain, position, c.radius, self.contact.orientation);
+        BallSample {
+            step: self.step,
+            time: self.step as f64 * self.dt(),
+            position,
+            velocity,
+            angular_velocity,
+            contact: self.last_contact,
+            kinetic_energy,
+            potential_energy: c.mass * c.gravity * position.z,
+            spring_energy: self.contact.normal.stored_energy(geometry.penetration),
+        }
+    }
+}

@@ -1,0 +1,310 @@
+//! Terrain generators. Each is a pure function of its parameters (and seed), so a terrain is
+//! reproducible bit for bit.
+
+use super::grid::{GridError, HeightGrid, MAX_SAMPLES};
+use rand_mt::Mt;
+use rustfft::{FftPlanner, num_complex::Complex};
+
+/// MATLAB's `rand` for its default generator (`rng default`: Mersenne Twister MT19937 seeded 5489):
+/// a double with 53 random bits built from two 32-bit draws (`genrand_res53`).
+pub struct MatlabRand(Mt);
+
+impl MatlabRand {
+    pub fn new(seed: u32) -> Self {
+        MatlabRand(Mt::new(seed))
+    }
+    /// Uniform in [0, 1).
+    pub fn next_f64(&mut self) -> f64 {
+        let a = (self.0.next_u32() >> 5) as f64;
+        let b = (self.0.next_u32() >> 6) as f64;
+        (a * 67_108_864.0 + b) / 9_007_199_254_740_992.0
+    }
+}
+
+fn check_samples(rows: usize, cols: usize) -> Result<(), GridError> {
+    if rows < 2 || cols < 2 {
+        return Err(GridError::TooSmall { rows, cols });
+    }
+    if rows.checked_mul(cols).is_none_or(|n| n > MAX_SAMPLES) {
+        return Err(GridError::TooLarge {
+            rows: rows as f64,
+            cols: cols as f64,
+            max: MAX_SAMPLES,
+        });
+    }
+    Ok(())
+}
+
+/// The paper's "natural" fractal terrain, eq. 7:
+/// `S = |ifft2((hypot(X, Y) + 0.1)^(−1.7) · exp(2πi·U))|` with X, Y = meshgrid(−n/2 … n/2−1), U uniform
+/// from MATLAB's generator seeded `seed` and filled column-major, the spectrum *not* shifted before
+/// the inverse FFT (as the paper's MATLAB). The magnitudes are scaled to `[0, peak_to_peak]` over a
+/// square of `size` centred on `center`. With seed 5489 and n = 100 this is the paper's terrain.
+pub fn natural(
+    seed: u32,
+    n: usize,
+    size: [f64; 2],
+    center: [f64; 2],
+    peak_to_peak: f64,
+) -> Result<HeightGrid, GridError> {
+    check_samples(n, n)?;
+    let mut rng = MatlabRand::new(seed);
+    let mut phase = vec![0.0; n * n];
+    // column-major fill: MATLAB's rand(n) draws down each column first.
+    for j in 0..n {
+        for i in 0..n {
+            phase[i * n + j] = rng.next_f64();
+        }
+    }
+    let half = (n / 2) as f64;
+    let mut spectrum: Vec<Complex<f64>> = (0..n * n)
+        .map(|k| {
+            let (i, j) = (k / n, k % n);
+            let (x, y) = (j as f64 - half, i as f64 - half);
+            let amplitude = (x.hypot(y) + 0.1).powf(-1.7);
+            Complex::from_polar(amplitude, 2.0 * std::f64::consts::PI * phase[k])
+        })
+        .collect();
+    inverse_fft_2d(&mut spectrum, n);
+    let magnitude: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
+    let heights = rescale(&magnitude, peak_to_peak);
+    HeightGrid::new(
+        n,
+        n,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        heights,
+    )
+}
+
+/// In-place 2-D inverse DFT of a row-major n×n array (unnormalised; the caller rescales).
+fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) {
+    let fft = FftPlanner::new().plan_fft_inverse(n);
+    for row in data.chunks_exact_mut(n) {
+        fft.process(row);
+    }
+    let mut column = vec![Complex::default(); n];
+    for j in 0..n {
+        for i in 0..n {
+            column[i] = data[i * n + j];
+        }
+        fft.process(&mut column);
+        for i in 0..n {
+            data[i * n + j] = column[i];
+        }
+    }
+}
+
+/// Affine map of values onto [0, peak_to_peak] (a flat input maps to 0).
+fn rescale(values: &[f64], peak_to_peak: f64) -> Vec<f64> {
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let range = hi - lo;
+    values
+        .iter()
+        .map(|v| {
+            if range > 0.0 {
+                (v - lo) / range * peak_to_peak
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+fn span(center: f64, size: f64) -> [f64; 2] {
+    [center - size / 2.0, center + size / 2.0]
+}
+
+/// The paper's inverted bell, eq. 8: `z = −depth · exp(−(x² + y²) / (2σ²))` (the paper: depth 1,
+/// σ = 1) on the square [−half_width, half_width]², sampled `samples × samples`.
+pub fn bell(
+    half_width: f64,
+    samples: usize,
+    depth: f64,
+    sigma: f64,
+) -> Result<HeightGrid, GridError> {
+    check_samples(samples, samples)?;
+    let r = [-half_width, half_width];
+    HeightGrid::from_fn(samples, samples, r, r, |x, y| {
+        -depth * (-(x * x + y * y) / (2.0 * sigma * sigma)).exp()
+    })
+}
+
+/// A horizontal plane at `height`.
+pub fn flat(size: [f64; 2], center: [f64; 2], height: f64) -> Result<HeightGrid, GridError> {
+    // Interpolation reproduces planes exactly, so 2×2 samples describe it completely.
+    HeightGrid::from_fn(
+        2,
+        2,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        |_, _| height,
+    )
+}
+
+/// A plane through the centre rising at `angle` (radians) towards the azimuth `ascent` (radians from +x).
+pub fn slope(
+    size: [f64; 2],
+    center: [f64; 2],
+    angle: f64,
+    ascent: f64,
+) -> Result<HeightGrid, GridError> {
+    let g = angle.tan();
+    let (s, c) = ascent.sin_cos();
+    HeightGrid::from_fn(
+        2,
+        2,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        |x, y| g * ((x - center[0]) * c + (y - center[1]) * s),
+    )
+}
+
+/// A staircase along +x: `step_height` up every `step_length`, starting at x = `first_step`, sampled
+/// every `cell` metres (each riser becomes a ramp one cell wide).
+pub fn steps(
+    size: [f64; 2],
+    center: [f64; 2],
+    first_step: f64,
+    step_length: f64,
+    step_height: f64,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let (cols, rows) = samples_for(size, cell)?;
+    HeightGrid::from_fn(
+        rows,
+        cols,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        |x, _| {
+            if x < first_step {
+                0.0
+            } else {
+                step_height * (1.0 + ((x - first_step) / step_length).floor())
+            }
+        },
+    )
+}
+
+/// A rough field: the sum of `waves` sinusoids with seeded random directions, phases and wavelengths
+/// in [`wavelength_min`, `wavelength_max`], scaled to `[0, peak_to_peak]`.
+#[allow(clippy::too_many_arguments)]
+pub fn rough(
+    size: [f64; 2],
+    center: [f64; 2],
+    peak_to_peak: f64,
+    wavelength_min: f64,
+    wavelength_max: f64,
+    waves: usize,
+    seed: u32,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let (cols, rows) = samples_for(size, cell)?;
+    let mut rng = MatlabRand::new(seed);
+    let tau = std::f64::consts::TAU;
+    let components: Vec<(f64, f64, f64, f64)> = (0..waves)
+        .map(|_| {
+            let direction = tau * rng.next_f64();
+            let wavelength = wavelength_min + (wavelength_max - wavelength_min) * rng.next_f64();
+            let phase = tau * rng.next_f64();
+            let k = tau / wavelength;
+            (k * direction.cos(), k * direction.sin(), phase, wavelength)
+        })
+        .collect();
+    let raw = HeightGrid::from_fn(
+        rows,
+        cols,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        |x, y| {
+            // amplitude ∝ wavelength: long waves carry more height, as in natural ground
+            components
+                .iter()
+                .map(|&(kx, ky, phase, wavelength)| wavelength * (kx * x + ky * y + phase).sin())
+                .sum()
+        },
+    )?;
+    let heights = rescale(raw.samples(), peak_to_peak);
+    HeightGrid::new(rows, cols, raw.x_range(), raw.y_range(), heights)
+}
+
+/// An egg-crate field `z = amplitude · sin(2πx/λ) · sin(2πy/λ)`.
+pub fn sine(
+    size: [f64; 2],
+    center: [f64; 2],
+    amplitude: f64,
+    wavelength: f64,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let (cols, rows) = samples_for(size, cell)?;
+    let k = std::f64::consts::TAU / wavelength;
+    HeightGrid::from_fn(
+        rows,
+        cols,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        |x, y| amplitude * (k * x).sin() * (k * y).sin(),
+    )
+}
+
+/// Sample counts (cols, rows) for a rectangle at a given cell size, refusing absurd sizes before
+/// anything is allocated.
+fn samples_for(size: [f64; 2], cell: f64) -> Result<(usize, usize), GridError> {
+    let count = |extent: f64| -> f64 { (extent / cell).round() + 1.0 };
+    let (cols, rows) = (count(size[0]), count(size[1]));
+    let fits = cols * rows <= MAX_SAMPLES as f64;
+    if !fits {
+        // also catches NaN and infinite counts (a zero or negative cell size)
+        return Err(GridError::TooLarge {
+            rows,
+            cols,
+            max: MAX_SAMPLES,
+        });
+    }
+    let (cols, rows) = (cols.max(2.0) as usize, rows.max(2.0) as usize);
+    check_samples(rows, cols)?;
+    Ok((cols, rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn matlab_rand_matches_known_first_draws() {
+        // `rng default; rand(1,3)` in MATLAB: 0.8147 0.9058 0.1270
+        let mut r = MatlabRand::new(5489);
+        let v: Vec<f64> = (0..3).map(|_| r.next_f64()).collect();
+        assert!((v[0] - 0.814_723_686_393_179).abs() < 1e-15, "{v:?}");
+        assert!((v[1] - 0.905_791_937_075_619).abs() < 1e-15);
+        assert!((v[2] - 0.126_986_816_293_506).abs() < 1e-15);
+    }
+
+    #[test]
+    fn natural_is_scaled_and_reproducible() {
+        let a = natural(7, 32, [2.0, 2.0], [0.0, 0.0], 0.05).unwrap();
+        let b = natural(7, 32, [2.0, 2.0], [0.0, 0.0], 0.05).unwrap();
+        assert_eq!(a, b);
+        let (lo, hi) = a.height_bounds();
+        assert_eq!(lo, 0.0);
+        assert!((hi - 0.05).abs() < 1e-15);
+        assert_ne!(a, natural(8, 32, [2.0, 2.0], [0.0, 0.0], 0.05).unwrap());
+    }
+
+    #[test]
+    fn bell_has_its_formula() {
+        let g = bell(3.0, 61, 1.0, 1.0).unwrap();
+        assert!((g.height(0.0, 0.0) + 1.0).abs() < 1e-12);
+        assert!((g.height(1.0, 0.0) + (-0.5f64).exp()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn refuses_absurd_sizes_before_allocating() {
+        assert!(steps([1e6, 1e6], [0.0, 0.0], 0.0, 1.0, 0.1, 1e-3).is_err());
+        assert!(sine([1.0, 1.0], [0.0, 0.0], 0.1, 1.0, 0.0).is_err());
+    }
+}

@@ -1,0 +1,418 @@
+//! The height grid and its interpolated surface.
+//!
+//! A terrain is a regular grid of heights `z[i][j]` over a rectangle: row `i` lies at
+//! `y = y0 + i·dy`, column `j` at `x = x0 + j·dx` (the layout of the paper's MATLAB matrices and of
+//! `natural_matlab_seed5489.csv`). Between the samples the surface is interpolated, and the contact
+//! model reads the height *and* its analytic gradient from the same interpolant, so the normal it
+//! uses is the exact normal of the surface it touches.
+//!
+//! Outside the rectangle the surface continues flat at the height of the nearest edge point
+//! (coordinates are clamped): a body that walks off the map stands on a level apron instead of
+//! falling through or panicking.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// How heights are interpolated between grid samples.
+///
+/// The default is [`Interpolation::Bicubic`] (Catmull–Rom): its surface is C¹, so the normal — and
+/// with it the direction of the contact force — varies continuously as a ball rolls from one cell
+/// into the next. Bilinear patches meet with a kink, where the normal jumps; a penalty force whose
+/// direction jumps is not the gradient of a potential, and a rolling ball can gain energy crossing
+/// the kinks. Both interpolants reproduce planes exactly (Catmull–Rom reproduces quadratics).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Interpolation {
+    Bilinear,
+    #[default]
+    Bicubic,
+}
+
+/// A sample of the surface: height and its partial derivatives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    pub height: f64,
+    /// ∂z/∂x
+    pub slope_x: f64,
+    /// ∂z/∂y
+    pub slope_y: f64,
+}
+
+impl SurfacePoint {
+    /// Exact unit normal of the surface z = h(x, y): (−∂h/∂x, −∂h/∂y, 1) / ‖·‖.
+    pub fn normal(&self) -> DVec3 {
+        DVec3::new(-self.slope_x, -self.slope_y, 1.0).normalize()
+    }
+}
+
+/// A regular grid of finite heights over a rectangle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightGrid {
+    /// Columns (samples along x), at least 2.
+    nx: usize,
+    /// Rows (samples along y), at least 2.
+    ny: usize,
+    x0: f64,
+    y0: f64,
+    dx: f64,
+    dy: f64,
+    /// Row-major: `heights[i * nx + j]` is the height at row i (y), column j (x).
+    heights: Vec<f64>,
+    interpolation: Interpolation,
+}
+
+/// Why a grid could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GridError {
+    #[error("a height grid needs at least 2×2 samples, got {rows}×{cols}")]
+    TooSmall { rows: usize, cols: usize },
+    #[error("expected {expected} heights for {rows}×{cols} samples, got {got}")]
+    WrongLength {
+        rows: usize,
+        cols: usize,
+        expected: usize,
+        got: usize,
+    },
+    #[error("height at row {row}, column {col} is {value}, expected a finite number")]
+    NonFinite { row: usize, col: usize, value: f64 },
+    #[error("a grid of {rows}×{cols} samples is larger than the {max} samples hexsim accepts")]
+    TooLarge { rows: f64, cols: f64, max: usize },
+    #[error(
+        "the grid's extent must be finite and positive, got x ∈ [{x_min}, {x_max}], y ∈ [{y_min}, {y_max}]"
+    )]
+    BadExtent {
+        x_min: f64,
+        x_max: f64,
+        y_min: f64,
+        y_max: f64,
+    },
+}
+
+/// The largest grid hexsim accepts: 2²⁶ samples (512 MiB of f64). Checked before allocating.
+pub const MAX_SAMPLES: usize = 1 << 26;
+
+impl HeightGrid {
+    /// A grid of `rows × cols` heights (row-major, row i at y, column j at x) spanning
+    /// `[x_min, x_max] × [y_min, y_max]`.
+    pub fn new(
+        rows: usize,
+        cols: usize,
+        x_range: [f64; 2],
+        y_range: [f64; 2],
+        heights: Vec<f64>,
+    ) -> Result<Self, GridError> {
+        if rows < 2 || cols < 2 {
+            return Err(GridError::TooSmall { rows, cols });
+        }
+        if heights.len() != rows * cols {
+            return Err(GridError::WrongLength {
+                rows,
+                cols,
+                expected: rows * cols,
+                got: heights.len(),
+            });
+        }
+        let [x_min, x_max] = x_range;
+        let [y_min, y_max] = y_range;
+        let extent_ok = [x_min, x_max, y_min, y_max].iter().all(|v| v.is_finite())
+            && x_max > x_min
+            && y_max > y_min;
+        if !extent_ok {
+            return Err(GridError::BadExtent {
+                x_min,
+                x_max,
+                y_min,
+                y_max,
+            });
+        }
+        if let Some(k) = heights.iter().position(|h| !h.is_finite()) {
+            return Err(GridError::NonFinite {
+                row: k / cols,
+                col: k % cols,
+                value: heights[k],
+            });
+        }
+        Ok(Self {
+            nx: cols,
+            ny: rows,
+            x0: x_min,
+            y0: y_min,
+            dx: (x_max - x_min) / (cols - 1) as f64,
+            dy: (y_max - y_min) / (rows - 1) as f64,
+            heights,
+            interpolation: Interpolation::default(),
+        })
+    }
+
+    /// A grid sampled from a function z = f(x, y).
+    pub fn from_fn(
+        rows: usize,
+        cols: usize,
+        x_range: [f64; 2],
+        y_range: [f64; 2],
+        f: impl Fn(f64, f64) -> f64,
+    ) -> Result<Self, GridError> {
+        if rows < 2 || cols < 2 {
+            return Err(GridError::TooSmall { rows, cols });
+        }
+        let x_at = |j: usize| x_range[0] + (x_range[1] - x_range[0]) * j as f64 / (cols - 1) as f64;
+        let y_at = |i: usize| y_range[0] + (y_range[1] - y_range[0]) * i as f64 / (rows - 1) as f64;
+        let heights = (0..rows)
+            .flat_map(|i| (0..cols).map(move |j| (i, j)))
+            .map(|(i, j)| f(x_at(j), y_at(i)))
+            .collect();
+        Self::new(rows, cols, x_range, y_range, heights)
+    }
+
+    pub fn with_interpolation(mut self, interpolation: Interpolation) -> Self {
+        self.interpolation = interpolation;
+        self
+    }
+
+    pub fn interpolation(&self) -> Interpolation {
+        self.interpolation
+    }
+    pub fn rows(&self) -> usize {
+        self.ny
+    }
+    pub fn cols(&self) -> usize {
+        self.nx
+    }
+    pub fn x_range(&self) -> [f64; 2] {
+        [self.x0, self.x0 + self.dx * (self.nx - 1) as f64]
+    }
+    pub fn y_range(&self) -> [f64; 2] {
+        [self.y0, self.y0 + self.dy * (self.ny - 1) as f64]
+    }
+    /// Sample spacing (dx, dy).
+    pub fn spacing(&self) -> (f64, f64) {
+        (self.dx, self.dy)
+    }
+    /// The x of column j.
+    pub fn x_at(&self, j: usize) -> f64 {
+        self.x0 + self.dx * j as f64
+    }
+    /// The y of row i.
+    pub fn y_at(&self, i: usize) -> f64 {
+        self.y0 + self.dy * i as f64
+    }
+    /// The stored sample at row i, column j.
+    pub fn sample(&self, i: usize, j: usize) -> f64 {
+        self.heights[i * self.nx + j]
+    }
+    /// All samples, row-major.
+    pub fn samples(&self) -> &[f64] {
+        &self.heights
+    }
+    /// (min, max) of the samples.
+    pub fn height_bounds(&self) -> (f64, f64) {
+        self.heights
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &h| {
+                (lo.min(h), hi.max(h))
+            })
+    }
+
+    /// Interpolated height at (x, y).
+    pub fn height(&self, x: f64, y: f64) -> f64 {
+        self.surface(x, y).height
+    }
+
+    /// Exact unit normal of the interpolated surface at (x, y).
+    pub fn normal(&self, x: f64, y: f64) -> DVec3 {
+        self.surface(x, y).normal()
+    }
+
+    /// Height and gradient of the interpolated surface at (x, y); outside the rectangle the
+    /// coordinates are clamped to it, so the gradient across the boundary is zero there.
+    pub fn surface(&self, x: f64, y: f64) -> SurfacePoint {
+        let (j, tx, inside_x) = locate(x, self.x0, self.dx, self.nx);
+        let (i, ty, inside_y) = locate(y, self.y0, self.dy, self.ny);
+        let (wx, dwx) = self.weights(tx);
+        let (wy, dwy) = self.weights(ty);
+        let (mut h, mut hx, mut hy) = (0.0, 0.0, 0.0);
+        match self.interpolation {
+            Interpolation::Bilinear => {
+                for a in 0..2 {
+                    for b in 0..2 {
+                        let z = self.sample(i + a, j + b);
+                        h += wy[a] * wx[b] * z;
+                        hx += wy[a] * dwx[b] * z;
+                        hy += dwy[a] * wx[b] * z;
+                    }
+                }
+            }
+            Interpolation::Bicubic => {
+                for a in 0..4 {
+                    let row = i as isize + a as isize - 1;
+                    for b in 0..4 {
+                        let z = self.ghost_sample(row, j as isize + b as isize - 1);
+                        h += wy[a] * wx[b] * z;
+                        hx += wy[a] * dwx[b] * z;
+                        hy += dwy[a] * wx[b] * z;
+                    }
+                }
+            }
+        }
+        SurfacePoint {
+            height: h,
+            slope_x: if inside_x { hx / self.dx } else { 0.0 },
+            slope_y: if inside_y { hy / self.dy } else { 0.0 },
+        }
+    }
+
+    /// Interpolation weights and their derivatives (per unit of t) for the local coordinate t ∈ [0, 1].
+    fn weights(&self, t: f64) -> ([f64; 4], [f64; 4]) {
+        match self.interpolation {
+            Interpolation::Bilinear => ([1.0 - t, t, 0.0, 0.0], [-1.0, 1.0, 0.0, 0.0]),
+            Interpolation::Bicubic => catmull_rom(t),
+        }
+    }
+
+    /// A sample with one ghost row/column beyond each edge, extrapolated linearly
+    /// (z₋₁ = 2z₀ − z₁), which keeps planes exact up to the edge.
+    fn ghost_sample(&self, i: isize, j: isize) -> f64 {
+        let column = |i: usize| -> f64 {
+            let last = self.nx as isize - 1;
+            if j < 0 {
+                2.0 * self.sample(i, 0) - self.sample(i, 1)
+            } else if j > last {
+                2.0 * self.sample(i, self.nx - 1) - self.sample(i, self.nx - 2)
+            } else {
+                self.sample(i, j as usize)
+            }
+        };
+        let last = self.ny as isize - 1;
+        if i < 0 {
+            2.0 * column(0) - column(1)
+        } else if i > last {
+            2.0 * column(self.ny - 1) - column(self.ny - 2)
+        } else {
+            column(i as usize)
+        }
+    }
+}
+
+/// Cell index, local coordinate in [0, 1] and whether the coordinate lay inside the grid.
+fn locate(x: f64, origin: f64, spacing: f64, n: usize) -> (usize, f64, bool) {
+    let u = (x - origin) / spacing;
+    let last = (n - 1) as f64;
+    // NaN compares false everywhere: treat it as outside, at the origin (callers check finiteness).
+    let inside = (0.0..=last).contains(&u);
+    let u = if u.is_nan() { 0.0 } else { u.clamp(0.0, last) };
+    let cell = (u.floor() as usize).min(n - 2);
+    (cell, u - cell as f64, inside)
+}
+
+/// Catmull–Rom weights for samples at −1, 0, 1, 2 and their derivatives with respect to t.
+fn catmull_rom(t: f64) -> ([f64; 4], [f64; 4]) {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    (
+        [
+            0.5 * (-t3 + 2.0 * t2 - t),
+            0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+            0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+            0.5 * (t3 - t2),
+        ],
+        [
+            0.5 * (-3.0 * t2 + 4.0 * t - 1.0),
+            0.5 * (9.0 * t2 - 10.0 * t),
+            0.5 * (-9.0 * t2 + 8.0 * t + 1.0),
+            0.5 * (3.0 * t2 - 2.0 * t),
+        ],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plane(interp: Interpolation) -> HeightGrid {
+        HeightGrid::from_fn(7, 9, [-1.0, 3.0], [-2.0, 1.0], |x, y| {
+            0.3 * x - 0.2 * y + 0.1
+        })
+        .unwrap()
+        .with_interpolation(interp)
+    }
+
+    #[test]
+    fn planes_are_exact_in_both_interpolations() {
+        for interp in [Interpolation::Bilinear, Interpolation::Bicubic] {
+            let g = plane(interp);
+            for &(x, y) in &[(0.0, 0.0), (-1.0, -2.0), (2.99, 0.99), (0.123, -1.77)] {
+                let s = g.surface(x, y);
+                assert!(
+                    (s.height - (0.3 * x - 0.2 * y + 0.1)).abs() < 1e-12,
+                    "{interp:?}"
+                );
+                assert!((s.slope_x - 0.3).abs() < 1e-12);
+                assert!((s.slope_y + 0.2).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn bicubic_gradient_matches_finite_difference() {
+        let g = HeightGrid::from_fn(12, 12, [0.0, 1.0], [0.0, 1.0], |x, y| {
+            (5.0 * x).sin() * (3.0 * y).cos()
+        })
+        .unwrap();
+        let h = 1e-6;
+        for &(x, y) in &[(0.31, 0.47), (0.05, 0.93), (0.77, 0.12)] {
+            let s = g.surface(x, y);
+            let fx = (g.height(x + h, y) - g.height(x - h, y)) / (2.0 * h);
+            let fy = (g.height(x, y + h) - g.height(x, y - h)) / (2.0 * h);
+            assert!((s.slope_x - fx).abs() < 1e-6, "{} vs {}", s.slope_x, fx);
+            assert!((s.slope_y - fy).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn bicubic_is_c1_across_cell_borders() {
+        let g = HeightGrid::from_fn(6, 6, [0.0, 5.0], [0.0, 5.0], |x, y| (x * y).sin()).unwrap();
+        let e = 1e-9;
+        let a = g.surface(2.0 - e, 1.3);
+        let b = g.surface(2.0 + e, 1.3);
+        assert!((a.slope_x - b.slope_x).abs() < 1e-6);
+        assert!((a.slope_y - b.slope_y).abs() < 1e-6);
+    }
+
+    #[test]
+    fn interpolates_samples_exactly() {
+        let g = HeightGrid::from_fn(5, 4, [0.0, 3.0], [0.0, 4.0], |x, y| x * x - y).unwrap();
+        for i in 0..5 {
+            for j in 0..4 {
+                assert!((g.height(g.x_at(j), g.y_at(i)) - g.sample(i, j)).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn outside_is_the_clamped_edge_and_flat_across_it() {
+        let g = plane(Interpolation::Bicubic);
+        let edge = g.surface(3.0, 0.0);
+        let out = g.surface(10.0, 0.0);
+        assert!((out.height - edge.height).abs() < 1e-12);
+        assert_eq!(out.slope_x, 0.0);
+        assert!((out.slope_y + 0.2).abs() < 1e-12);
+        let far = g.surface(f64::NAN, 1e300);
+        assert!(far.height.is_finite());
+    }
+
+    #[test]
+    fn rejects_bad_grids() {
+        assert!(matches!(
+            HeightGrid::new(1, 5, [0.0, 1.0], [0.0, 1.0], vec![0.0; 5]),
+            Err(GridError::TooSmall { .. })
+        ));
+        assert!(matches!(
+            HeightGrid::new(2, 2, [0.0, 1.0], [0.0, 1.0], vec![0.0, f64::NAN, 0.0, 0.0]),
+            Err(GridError::NonFinite { row: 0, col: 1, .. })
+        ));
+        assert!(matches!(
+            HeightGrid::new(2, 2, [1.0, 1.0], [0.0, 1.0], vec![0.0; 4]),
+            Err(GridError::BadExtent { .. })
+        ));
+    }
+}

@@ -1,0 +1,18 @@
+//! Terrain: a height grid, its interpolated surface and normals, the paper's orientation method,
+//! generators, and height files (CSV, PNG, STL).
+
+mod generate;
+mod grid;
+pub mod io;
+mod orientation;
+mod spec;
+
+pub use generate::{MatlabRand, bell, flat, natural, rough, sine, slope, steps};
+pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
+pub use orientation::{GroundFrame, Orientation};
+pub use spec::{Source, TerrainError, TerrainSpec};
+
+/// Loads a terrain file and builds its grid.
+pub fn load(path: &std::path::Path) -> Result<HeightGrid, TerrainError> {
+    TerrainSpec::from_file(path)?.build(path)
+}

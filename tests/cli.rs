@@ -1,0 +1,126 @@
+//! The `hexsim` binary end to end: outputs written, errors reported with exit code 2.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn hexsim() -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hexsim"));
+    cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+    cmd
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hexsim-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn ball_writes_recording_trajectory_and_metrics() {
+    let dir = scratch("ball");
+    let (rrd, csv, json) = (dir.join("b.rrd"), dir.join("b.csv"), dir.join("b.json"));
+    let out = hexsim()
+        .args([
+            "ball",
+            "--terrain",
+            "terrains/bell.toml",
+            "--at",
+            "0.7",
+            "0.3",
+            "--duration",
+            "1",
+        ])
+        .arg("--record")
+        .arg(&rrd)
+        .arg("--trajectory")
+        .arg(&csv)
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rrd_bytes = std::fs::read(&rrd).unwrap();
+    assert!(
+        rrd_bytes.len() > 10_000 && rrd_bytes.starts_with(b"RRF"),
+        "not an .rrd file"
+    );
+    let trajectory = std::fs::read_to_string(&csv).unwrap();
+    assert!(trajectory.starts_with("time,x,y,z,"));
+    assert_eq!(
+        trajectory.lines().count(),
+        1 + 101,
+        "header + 100 Hz for 1 s + the initial row"
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["complete"], true);
+    assert_eq!(metrics["steps"], 1000);
+    assert!(metrics["touchdowns"].as_u64().unwrap() >= 1);
+    assert!(!dir.join("b.rrd.partial").exists());
+}
+
+#[test]
+fn terrain_export_writes_stl_and_png_that_read_back() {
+    let dir = scratch("export");
+    let out = hexsim()
+        .args(["terrain", "export", "terrains/natural.toml", "--stl"])
+        .arg(dir.join("n.stl"))
+        .arg("--png")
+        .arg(dir.join("n.png"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stl = std::fs::read(dir.join("n.stl")).unwrap();
+    assert_eq!(
+        stl.len(),
+        84 + 50 * 2 * 99 * 99,
+        "binary STL with two triangles per cell"
+    );
+    let png = image::open(dir.join("n.png")).unwrap();
+    assert_eq!(png.color(), image::ColorType::L16);
+    assert_eq!((png.width(), png.height()), (100, 100));
+}
+
+#[test]
+fn bad_input_is_a_clear_error_with_exit_code_2() {
+    let dir = scratch("bad");
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[source]\nkind = \"bell\"\nsamples = 1\n").unwrap();
+    let out = hexsim()
+        .args(["ball", "--no-record", "--terrain"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("bad.toml") && stderr.contains("source.samples"),
+        "{stderr}"
+    );
+    let out = hexsim()
+        .args(["ball", "--no-record", "--terrain", "no/such/file.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/file.toml"));
+    let out = hexsim()
+        .args([
+            "ball",
+            "--duration",
+            "0.1",
+            "--record",
+            "/nonexistent-dir/x.rrd",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/x.rrd"));
+}

@@ -1,0 +1,77 @@
+//! Helpers shared by the validation tests.
+#![allow(dead_code)]
+
+use hexsim::contact::{ContactModel, FrictionLaw, NormalLaw};
+use hexsim::sim::{BallConfig, BallSample, BallSim};
+use hexsim::terrain::HeightGrid;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+pub const G: f64 = 9.81;
+pub const DT: f64 = 1e-3;
+
+pub fn project_file(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+pub fn spring_damper(stiffness: f64, damping: f64, friction: FrictionLaw) -> ContactModel {
+    ContactModel {
+        normal: NormalLaw::SpringDamper { stiffness, damping },
+        friction,
+        ..ContactModel::default()
+    }
+}
+
+pub fn karnopp(mu_static: f64, mu_kinetic: f64) -> FrictionLaw {
+    FrictionLaw::Karnopp {
+        mu_static,
+        mu_kinetic,
+        stick_band: 1e-3,
+    }
+}
+
+/// Runs a ball for `seconds`, returning every step's sample (the first is the initial state).
+pub fn run_ball(
+    config: BallConfig,
+    terrain: HeightGrid,
+    contact: ContactModel,
+    seconds: f64,
+) -> Vec<BallSample> {
+    run_ball_with_step(config, terrain, contact, seconds, DT)
+}
+
+/// [`run_ball`] with a chosen time step.
+pub fn run_ball_with_step(
+    config: BallConfig,
+    terrain: HeightGrid,
+    contact: ContactModel,
+    seconds: f64,
+    dt: f64,
+) -> Vec<BallSample> {
+    let mut sim = BallSim::new(config, Arc::new(terrain), contact, dt);
+    let steps = (seconds / dt).round() as usize;
+    let mut samples = Vec::with_capacity(steps + 1);
+    samples.push(sim.sample());
+    for _ in 0..steps {
+        samples.push(sim.step());
+    }
+    samples
+}
+
+/// Centre of a sphere of radius r resting on the plane through the origin rising at `angle` towards
+/// +x, touching it above x = `along`, sunk in by `depth` along the normal.
+pub fn on_slope(angle: f64, along: f64, radius: f64, depth: f64) -> [f64; 3] {
+    let (s, c) = angle.sin_cos();
+    let foot = [along, 0.0, along * angle.tan()];
+    let d = radius - depth;
+    [foot[0] - s * d, 0.0, foot[2] + c * d]
+}
+
+/// Least-squares slope of y(t).
+pub fn fitted_rate(t: &[f64], y: &[f64]) -> f64 {
+    let n = t.len() as f64;
+    let (mt, my) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = t.iter().zip(y).map(|(a, b)| (a - mt) * (b - my)).sum();
+    let sxx: f64 = t.iter().map(|a| (a - mt) * (a - mt)).sum();
+    sxy / sxx
+}
