@@ -2,7 +2,9 @@
 //! Burkus & Odry, "Implementation of 3D Ground Contact Model for Uneven Ground".
 
 pub mod contact;
+pub mod gait;
 pub mod record;
+pub mod robot;
 pub mod runner;
 pub mod sim;
 pub mod terrain;

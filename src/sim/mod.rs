@@ -5,3 +5,7 @@ mod engine;
 
 pub use ball::{BallConfig, BallSample, BallSim};
 pub use engine::{Engine, STANDARD_GRAVITY};
+pub use hexapod::{Hexapod, HexapodSample, HexapodSettings, Placement, ServoGains};
+pub use walker::{WalkSample, Walker};
+pub mod hexapod;
+pub mod walker;

@@ -1,0 +1,174 @@
+//! The gait controller: a commanded body velocity → foot targets in the body frame → joint
+//! targets through inverse kinematics.
+//!
+//! Each foot has a neutral point N (the standing pose). Over a stance of duration Tₛ = duty·T the
+//! ground under a foot moves, seen from the body, by D = −(v + ω×N)·Tₛ; the foot follows it from
+//! N − D/2 to N + D/2 and swings back through the air.
+
+use super::schedule::{LegPhase, leg_phase};
+use super::spec::{GaitSpec, SwingShape};
+use crate::robot::RobotModel;
+use crate::robot::kinematics::LegChain;
+use glam::DVec3;
+
+/// A velocity command in the body frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VelocityCommand {
+    /// m/s along the body's x.
+    #[serde(default)]
+    pub forward: f64,
+    /// m/s along the body's y (left).
+    #[serde(default)]
+    pub sideways: f64,
+    /// rad/s about z (left turn positive).
+    #[serde(default)]
+    pub yaw_rate: f64,
+}
+
+/// The controller's output for one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaitTargets {
+    pub joint_angles: [[f64; 3]; 6],
+    /// Foot centre targets (body frame).
+    pub feet: [DVec3; 6],
+    pub phases: [LegPhase; 6],
+    /// Legs whose target was out of reach this instant (IK answered with the closest pose).
+    pub clamped: [bool; 6],
+}
+
+pub struct GaitController {
+    spec: GaitSpec,
+    offsets: [f64; 6],
+    chains: Vec<LegChain>,
+    neutral: [DVec3; 6],
+    last: [[f64; 3]; 6],
+}
+
+/// Farther than this from its target (m), an IK answer counts as clamped.
+pub const REACH_TOLERANCE: f64 = 1e-4;
+
+impl GaitController {
+    /// Builds the controller and checks that the legs reach the standing pose and the swing apex.
+    pub fn new(model: &RobotModel, spec: GaitSpec) -> Result<Self, String> {
+        let chains: Vec<LegChain> = model
+            .legs
+            .iter()
+            .map(|leg| LegChain::new(model, leg))
+            .collect();
+        let mut neutral = [DVec3::ZERO; 6];
+        let mut last = [[0.0; 3]; 6];
+        for (k, chain) in chains.iter().enumerate() {
+            let leg = &model.legs[k];
+            let reach = spec.reach.unwrap_or(0.6 * chain.length());
+            let yaw = chain.rest_yaw();
+            let hip = chain.hip();
+            neutral[k] = DVec3::new(
+                hip.x + reach * yaw.cos(),
+                hip.y + reach * yaw.sin(),
+                -spec.stance_height + leg.foot.radius,
+            );
+            // a bent-knee guess: femur up, tibia down, so the solver finds the usual stance
+            let guess = chain.solve(neutral[k], [0.0, -0.3, 1.2]);
+            if guess.error > REACH_TOLERANCE {
+                return Err(format!(
+                    "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm",
+                    leg.name,
+                    neutral[k].to_array(),
+                    spec.stance_height,
+                    guess.error * 1e3
+                ));
+            }
+            last[k] = guess.angles;
+            let apex = neutral[k] + DVec3::new(0.0, 0.0, spec.step_height);
+            let lifted = chain.solve(apex, last[k]);
+            if lifted.error > REACH_TOLERANCE {
+                return Err(format!(
+                    "leg {} cannot lift its foot {} m (step_height) above the stance: missed by {:.1} mm",
+                    leg.name,
+                    spec.step_height,
+                    lifted.error * 1e3
+                ));
+            }
+        }
+        Ok(GaitController {
+            offsets: spec.offsets(),
+            spec,
+            chains,
+            neutral,
+            last,
+        })
+    }
+
+    pub fn spec(&self) -> &GaitSpec {
+        &self.spec
+    }
+
+    pub fn chains(&self) -> &[LegChain] {
+        &self.chains
+    }
+
+    /// Joint angles of the standing pose.
+    pub fn standing_angles(&self) -> [[f64; 3]; 6] {
+        std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
+    }
+
+    /// Targets at gait time `t` (s since the gait started) for a command, with the stride scaled by
+    /// `blend` ∈ [0, 1] (ramped up at start so the feet leave the standing pose smoothly).
+    pub fn targets(&mut self, t: f64, command: VelocityCommand, blend: f64) -> GaitTargets {
+        let stance_time = self.spec.duty_factor * self.spec.period;
+        let v = DVec3::new(command.forward, command.sideways, 0.0);
+        let omega = DVec3::new(0.0, 0.0, command.yaw_rate);
+        let mut out = GaitTargets {
+            joint_angles: [[0.0; 3]; 6],
+            feet: [DVec3::ZERO; 6],
+            phases: [LegPhase::Stance(0.0); 6],
+            clamped: [false; 6],
+        };
+        for k in 0..6 {
+            let n = self.neutral[k];
+            // ground displacement under the foot over one stance, seen from the body
+            let d = -(v + omega.cross(n)) * stance_time * blend;
+            let phase = leg_phase(t, self.spec.period, self.spec.duty_factor, self.offsets[k]);
+            let foot = match phase {
+                LegPhase::Stance(s) => n + d * (s - 0.5),
+                LegPhase::Swing(s) => {
+                    let (progress, lift) = swing_profile(self.spec.swing, s);
+                    n + d * (0.5 - progress) + DVec3::Z * (self.spec.step_height * lift)
+                }
+            };
+            let solution = self.chains[k].solve(foot, self.last[k]);
+            self.last[k] = solution.angles;
+            out.joint_angles[k] = solution.angles;
+            out.feet[k] = foot;
+            out.phases[k] = phase;
+            out.clamped[k] = solution.error > REACH_TOLERANCE;
+        }
+        out
+    }
+}
+
+/// Horizontal progress (0 → 1) and lift (0 → 1 → 0) through a swing at progress s ∈ [0, 1).
+fn swing_profile(shape: SwingShape, s: f64) -> (f64, f64) {
+    use std::f64::consts::PI;
+    match shape {
+        SwingShape::Sine => ((1.0 - (PI * s).cos()) / 2.0, (PI * s).sin()),
+        SwingShape::Cycloid => {
+            let theta = 2.0 * PI * s;
+            (
+                (theta - theta.sin()) / (2.0 * PI),
+                (1.0 - theta.cos()) / 2.0,
+            )
+        }
+        SwingShape::Rectangle => {
+            let third = 1.0 / 3.0;
+            if s < third {
+                (0.0, s / third)
+            } else if s < 2.0 * third {
+                ((s - third) / third, 1.0)
+            } else {
+                (1.0, (1.0 - s) / third)
+            }
+        }
+    }
+}

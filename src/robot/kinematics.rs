@@ -1,0 +1,133 @@
+//! Leg kinematics from the URDF's geometry: forward kinematics of a 3-joint leg in the body frame,
+//! and inverse kinematics by damped Newton iterations on the analytic Jacobian — general for any
+//! three revolute joints, not only yaw-pitch-pitch legs.
+
+use super::model::{Leg, RobotModel};
+use glam::{DAffine3, DMat3, DVec3};
+
+/// One leg's chain, in the body (root link) frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LegChain {
+    origins: [DAffine3; 3],
+    axes: [DVec3; 3],
+    foot: DVec3,
+    lower: [f64; 3],
+    upper: [f64; 3],
+}
+
+/// The result of an inverse-kinematics solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IkSolution {
+    pub angles: [f64; 3],
+    /// Distance from the reached foot position to the target (m).
+    pub error: f64,
+}
+
+/// The IK answer is accepted as reaching the target within this distance (m).
+pub const IK_TOLERANCE: f64 = 1e-6;
+
+impl LegChain {
+    pub fn new(model: &RobotModel, leg: &Leg) -> Self {
+        let j = leg.joints.map(|k| &model.joints[k]);
+        // The first joint may hang from the body through fixed offsets only (merged into its origin).
+        LegChain {
+            origins: j.map(|j| j.origin),
+            axes: j.map(|j| j.axis),
+            foot: leg.foot.center,
+            lower: j.map(|j| j.lower),
+            upper: j.map(|j| j.upper),
+        }
+    }
+
+    /// Where the first joint sits in the body frame.
+    pub fn hip(&self) -> DVec3 {
+        self.origins[0].translation
+    }
+
+    /// Foot centre in the body frame for joint angles `q`.
+    pub fn foot_position(&self, q: [f64; 3]) -> DVec3 {
+        self.frames(q).1
+    }
+
+    /// Joint positions and axes (body frame), and the foot position.
+    fn frames(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3) {
+        let mut frame = DAffine3::IDENTITY;
+        let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
+        for k in 0..3 {
+            frame *= self.origins[k];
+            joints[k] = (frame.translation, frame.matrix3 * self.axes[k]);
+            frame *= DAffine3::from_axis_angle(self.axes[k], q[k]);
+        }
+        (joints, frame.transform_point3(self.foot))
+    }
+
+    /// ∂(foot position)/∂q, column k = axis_k × (foot − joint_k).
+    pub fn jacobian(&self, q: [f64; 3]) -> DMat3 {
+        let (joints, foot) = self.frames(q);
+        DMat3::from_cols(
+            joints[0].1.cross(foot - joints[0].0),
+            joints[1].1.cross(foot - joints[1].0),
+            joints[2].1.cross(foot - joints[2].0),
+        )
+    }
+
+    pub fn clamp(&self, q: [f64; 3]) -> [f64; 3] {
+        [0, 1, 2].map(|k| q[k].clamp(self.lower[k], self.upper[k]))
+    }
+
+    /// Joint angles that put the foot at `target` (body frame), starting from `guess` (use the
+    /// last answer: it keeps the knee on the same side). Damped least squares, within the
+    /// joints' limits; if the target is out of reach the closest reachable answer is returned
+    /// with its error.
+    pub fn solve(&self, target: DVec3, guess: [f64; 3]) -> IkSolution {
+        let mut q = self.clamp(guess);
+        let mut error = target - self.foot_position(q);
+        for _ in 0..50 {
+            if error.length() < IK_TOLERANCE * 0.1 {
+                break;
+            }
+            let j = self.jacobian(q);
+            // a small damping keeps the step finite where the leg is stretched (singular)
+            let lambda2 = 1e-6;
+            let step = j.transpose()
+                * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
+                * error;
+            let next = self.clamp([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
+            let next_error = target - self.foot_position(next);
+            if next_error.length() >= error.length() {
+                // no progress: try a half step once, then stop
+                let half = self.clamp([
+                    q[0] + 0.5 * step.x,
+                    q[1] + 0.5 * step.y,
+                    q[2] + 0.5 * step.z,
+                ]);
+                let half_error = target - self.foot_position(half);
+                if half_error.length() >= error.length() {
+                    break;
+                }
+                q = half;
+                error = half_error;
+                continue;
+            }
+            q = next;
+            error = next_error;
+        }
+        IkSolution {
+            angles: q,
+            error: error.length(),
+        }
+    }
+
+    /// Heading of the leg at rest (all joints zero): the yaw of the foot seen from the hip.
+    pub fn rest_yaw(&self) -> f64 {
+        let d = self.foot_position([0.0; 3]) - self.hip();
+        d.y.atan2(d.x)
+    }
+
+    /// Horizontal reach of the outstretched leg (all joints zero), from the hip.
+    pub fn length(&self) -> f64 {
+        (self.foot_position([0.0; 3]) - self.hip())
+            .truncate()
+            .length()
+    }
+}

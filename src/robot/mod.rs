@@ -1,0 +1,14 @@
+//! The robot: URDF loading and validation, leg discovery, and leg kinematics.
+
+pub mod kinematics;
+mod model;
+pub mod urdf;
+
+pub use model::{Foot, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual};
+
+/// Loads a URDF robot file.
+pub fn load(path: &std::path::Path) -> Result<RobotModel, urdf::RobotError> {
+    let mut model = urdf::load(path)?;
+    model.source = path.to_path_buf();
+    Ok(model)
+}

@@ -1,0 +1,271 @@
+//! Validation cases V11–V15 of `shared/reference/README.md`: the hexapod hex18.
+
+mod common;
+use common::*;
+use hexsim::contact::ContactModel;
+use hexsim::gait::{GaitController, GaitSpec};
+use hexsim::robot::{self, RobotModel};
+use hexsim::sim::{Hexapod, HexapodSample, HexapodSettings, Placement};
+use hexsim::terrain::{self, HeightGrid};
+use std::sync::Arc;
+
+fn hex18() -> Arc<RobotModel> {
+    Arc::new(robot::load(&project_file("robots/hex18.urdf")).unwrap())
+}
+
+fn tripod() -> GaitSpec {
+    GaitSpec::from_file(&project_file("gaits/tripod.toml")).unwrap()
+}
+
+fn standing(
+    model: &Arc<RobotModel>,
+    ground: HeightGrid,
+    placement: Placement,
+) -> (Hexapod, GaitController) {
+    let controller = GaitController::new(model, tripod()).unwrap();
+    let pose: Vec<f64> = standing_pose(model, &controller);
+    let hexapod = Hexapod::new(
+        model.clone(),
+        Arc::new(ground),
+        ContactModel::default(),
+        HexapodSettings::default(),
+        placement,
+        &pose,
+    );
+    (hexapod, controller)
+}
+
+/// The standing pose as per-joint angles.
+fn standing_pose(model: &RobotModel, controller: &GaitController) -> Vec<f64> {
+    let mut pose = vec![0.0; model.joints.len()];
+    for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
+        for (j, a) in leg.joints.iter().zip(angles) {
+            pose[*j] = a;
+        }
+    }
+    pose
+}
+
+fn run(hexapod: &mut Hexapod, seconds: f64) -> Vec<HexapodSample> {
+    (0..(seconds / DT).round() as usize)
+        .map(|_| hexapod.step())
+        .collect()
+}
+
+#[test]
+fn hex18_loads_as_the_reference_robot() {
+    let model = hex18();
+    assert!(
+        (model.total_mass() - 2.52).abs() < 1e-9,
+        "mass {}",
+        model.total_mass()
+    );
+    assert_eq!(model.legs.len(), 6);
+    assert_eq!(model.joints.len(), 18);
+    let names: Vec<&str> = model.legs.iter().map(|l| l.name).collect();
+    assert_eq!(names, ["lf", "lm", "lr", "rf", "rm", "rr"]);
+    assert_eq!(model.links[model.legs[0].foot_link].name, "lf_tibia");
+}
+
+#[test]
+fn v11_standing_load_equals_weight() {
+    let model = hex18();
+    let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
+    let (mut hexapod, _) = standing(
+        &model,
+        ground,
+        Placement {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+    );
+    let samples = run(&mut hexapod, 3.0);
+    let last = samples.last().unwrap();
+    let height = last.body.translation.z;
+    let forces: Vec<f64> = last
+        .foot_contacts
+        .iter()
+        .map(|c| c.map_or(0.0, |c| c.normal_force))
+        .collect();
+    // average the vertical load over the last 0.5 s (the contact springs ring slightly)
+    let tail = &samples[samples.len() - 500..];
+    let load: f64 = tail
+        .iter()
+        .map(|s| {
+            s.foot_contacts
+                .iter()
+                .map(|c| c.map_or(0.0, |c| c.force.z))
+                .sum::<f64>()
+        })
+        .sum::<f64>()
+        / tail.len() as f64;
+    println!(
+        "V11: body height {height:.4} m, foot normal forces {forces:.3?} N, mean vertical load {load:.4} N"
+    );
+    assert!(
+        (height - 0.10).abs() <= 0.01,
+        "V11: body height {height:.4} m, expected 0.10 ± 0.01"
+    );
+    assert!(
+        forces.iter().all(|&f| f > 0.0),
+        "V11: not all feet loaded: {forces:?}"
+    );
+    let weight = model.total_mass() * G;
+    assert!(
+        (load - weight).abs() <= 0.01 * weight,
+        "V11: load {load:.4} N, expected {weight:.2} N ± 1 %"
+    );
+}
+
+/// Walks `seconds` after 1 s of settling; returns the samples from the gait's start.
+fn walk(
+    ground: HeightGrid,
+    placement: Placement,
+    gait: GaitSpec,
+    seconds: f64,
+) -> Vec<HexapodSample> {
+    let model = hex18();
+    let speed = gait.nominal_speed();
+    let controller = GaitController::new(&model, gait).unwrap();
+    let pose = standing_pose(&model, &controller);
+    let hexapod = Hexapod::new(
+        model,
+        Arc::new(ground),
+        ContactModel::default(),
+        HexapodSettings::default(),
+        placement,
+        &pose,
+    );
+    let command = hexsim::gait::VelocityCommand {
+        forward: speed,
+        ..Default::default()
+    };
+    let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 1.0);
+    let total = ((1.0 + seconds) / DT).round() as usize;
+    let samples: Vec<HexapodSample> = (0..total).map(|_| walker.step().robot).collect();
+    samples[(1.0 / DT) as usize - 1..].to_vec()
+}
+
+#[test]
+fn v12_tripod_walks_on_flat_ground() {
+    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let samples = walk(
+        ground,
+        Placement {
+            x: -5.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        tripod(),
+        20.0,
+    );
+    let (start, end) = (samples.first().unwrap(), samples.last().unwrap());
+    let moved = end.body.translation - start.body.translation;
+    let heading = (end.roll_pitch_yaw().2 - start.roll_pitch_yaw().2).to_degrees();
+    println!(
+        "V12: forward {:.4} m, sideways {:.4} m, heading change {heading:.3}°",
+        moved.x, moved.y
+    );
+    assert!(
+        moved.x >= 0.9 * 2.4,
+        "V12: walked {:.3} m, expected ≥ 2.16 m",
+        moved.x
+    );
+    assert!(
+        moved.y.abs() < 0.05 * moved.x,
+        "V12: drifted {:.3} m sideways",
+        moved.y
+    );
+    assert!(heading.abs() < 5.0, "V12: heading changed {heading:.2}°");
+}
+
+#[test]
+fn v13_tripod_walks_on_the_natural_terrain() {
+    let ground = terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
+    let samples = walk(
+        ground,
+        Placement {
+            x: -1.25,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        tripod(),
+        20.0,
+    );
+    let (start, end) = (samples.first().unwrap(), samples.last().unwrap());
+    let forward = end.body.translation.x - start.body.translation.x;
+    let tilt = samples
+        .iter()
+        .map(|s| {
+            let (roll, pitch, _) = s.roll_pitch_yaw();
+            roll.abs().max(pitch.abs()).to_degrees()
+        })
+        .fold(0.0, f64::max);
+    let deepest = samples
+        .iter()
+        .flat_map(|s| s.foot_contacts.iter().flatten().map(|c| c.penetration))
+        .fold(0.0, f64::max);
+    println!(
+        "V13: forward {forward:.4} m, max roll/pitch {tilt:.2}°, deepest foot {:.3} mm",
+        deepest * 1e3
+    );
+    assert!(
+        forward >= 0.7 * 2.4,
+        "V13: walked {forward:.3} m, expected ≥ 1.68 m"
+    );
+    assert!(tilt < 25.0, "V13: tilted {tilt:.1}°");
+    assert!(deepest <= 0.005, "V13: a foot sank {:.2} mm", deepest * 1e3);
+}
+
+#[test]
+fn v14_stands_on_a_15_degree_slope() {
+    let model = hex18();
+    let ground = terrain::slope([4.0, 4.0], [0.0, 0.0], 15f64.to_radians(), 0.0).unwrap();
+    let (mut hexapod, _) = standing(
+        &model,
+        ground,
+        Placement {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+    );
+    // let it land, then measure 10 s
+    let landing = run(&mut hexapod, 1.0);
+    let start = landing.last().unwrap().body.translation;
+    let samples = run(&mut hexapod, 10.0);
+    let moved = samples
+        .iter()
+        .map(|s| (s.body.translation - start).length())
+        .fold(0.0, f64::max);
+    println!("V14: body moved {:.4} mm in 10 s on 15°", moved * 1e3);
+    assert!(moved < 0.005, "V14: the body moved {:.3} mm", moved * 1e3);
+}
+
+#[test]
+fn v15_same_scenario_same_result_bit_for_bit() {
+    let ground = || terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
+    let a = walk(
+        ground(),
+        Placement {
+            x: -1.25,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        tripod(),
+        3.0,
+    );
+    let b = walk(
+        ground(),
+        Placement {
+            x: -1.25,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        tripod(),
+        3.0,
+    );
+    assert_eq!(a, b, "V15: two identical runs differ");
+    println!("V15: {} samples identical", a.len());
+}
