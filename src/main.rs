@@ -17,7 +17,8 @@ use std::sync::Arc;
     about = "Hexapod walking-robot simulator on uneven ground, built on the Burkus & Odry ground contact model",
     long_about = "Hexapod walking-robot simulator on uneven ground, built on the Burkus & Odry ground contact \
                   model (spring-damper normal force, exchangeable friction laws, height-grid terrain).\n\n\
-                  Without a subcommand, runs the paper's ball experiment on its natural terrain with built-in defaults."
+                  Without a subcommand, runs `hexsim run`: hex18 walks a tripod gait on the paper's natural terrain for 20 s \
+                  and the run is recorded to hexsim.rrd."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -26,6 +27,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Walk the hexapod on a terrain with a gait and record it (the main job).
+    Run(Box<RunArgs>),
     /// Drop a ball on a terrain (the paper's experiment) and record it.
     Ball(Box<BallArgs>),
     /// Inspect or export terrains.
@@ -222,6 +225,225 @@ struct BallArgs {
     spawn: bool,
 }
 
+#[derive(Args)]
+struct RunArgs {
+    /// Robot URDF. Default: robots/hex18.urdf (built in).
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Terrain file (TOML). Default: terrains/natural.toml (built in): the paper's natural terrain,
+    /// 0.04 m peak-to-peak over 4 m × 4 m.
+    #[arg(long)]
+    terrain: Option<PathBuf>,
+    /// Gait file (TOML). Default: gaits/tripod.toml (built in).
+    #[arg(long)]
+    gait: Option<PathBuf>,
+    /// Seconds walked (after settling).
+    #[arg(long, default_value_t = 20.0)]
+    duration: f64,
+    /// Seconds standing still before the gait starts.
+    #[arg(long, default_value_t = 1.0)]
+    settle: f64,
+    /// Time step (s).
+    #[arg(long, default_value_t = 1e-3)]
+    dt: f64,
+    /// Forward speed (m/s). Default: the gait's nominal stride / (duty · period).
+    #[arg(long, allow_negative_numbers = true)]
+    speed: Option<f64>,
+    /// Sideways speed (m/s, left positive).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    sideways: f64,
+    /// Turn rate (deg/s, left positive).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    turn: f64,
+    /// Start position x, y of the body (m). Default: 0.75 m inside the terrain's −x edge, centred in y.
+    #[arg(long, num_args = 2, value_names = ["X", "Y"], allow_negative_numbers = true)]
+    start: Option<Vec<f64>>,
+    /// Start heading (deg).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    heading: f64,
+    /// Seed for generated terrains (natural, rough); replaces the terrain file's.
+    #[arg(long)]
+    seed: Option<u32>,
+    #[command(flatten)]
+    contact: ContactArgs,
+    /// Servo stiffness (N·m/rad).
+    #[arg(long, default_value_t = 20.0)]
+    servo_stiffness: f64,
+    /// Servo damping (N·m·s/rad).
+    #[arg(long, default_value_t = 0.05)]
+    servo_damping: f64,
+    /// rapier substeps per step.
+    #[arg(long, default_value_t = 4)]
+    solver_iterations: usize,
+    /// Recording file (.rrd) for the rerun viewer.
+    #[arg(long, default_value = "hexsim.rrd")]
+    record: PathBuf,
+    /// Do not write a recording.
+    #[arg(long)]
+    no_record: bool,
+    /// Samples per second in the recording and trajectory.
+    #[arg(long, default_value_t = 50.0)]
+    log_rate: f64,
+    /// Trajectory CSV (time, body pose and velocity, joint angles/targets/torques, foot forces and contact).
+    #[arg(long)]
+    trajectory: Option<PathBuf>,
+    /// Summary metrics as JSON.
+    #[arg(long)]
+    metrics: Option<PathBuf>,
+    /// Open the recording in the rerun viewer when done.
+    #[arg(long)]
+    spawn: bool,
+}
+
+impl Default for RunArgs {
+    fn default() -> Self {
+        let cli = Cli::parse_from(["hexsim", "run"]);
+        match cli.command {
+            Some(Command::Run(args)) => *args,
+            _ => unreachable!("`hexsim run` parses to the run command"),
+        }
+    }
+}
+
+const HEX18: &str = include_str!("../robots/hex18.urdf");
+const NATURAL: &str = include_str!("../terrains/natural.toml");
+const TRIPOD: &str = include_str!("../gaits/tripod.toml");
+
+fn run(args: RunArgs) -> Result<()> {
+    use hexsim::gait::{GaitSpec, VelocityCommand};
+    use hexsim::runner::walk::WalkRun;
+    use hexsim::sim::{HexapodSettings, Placement, ServoGains};
+    use std::io::IsTerminal;
+
+    let robot = match &args.robot {
+        Some(path) => hexsim::robot::load(path)?,
+        None => hexsim::robot::urdf::from_str(HEX18, Path::new("robots/hex18.urdf"))?,
+    };
+    for warning in &robot.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let (terrain_origin, terrain_text) = match &args.terrain {
+        Some(path) => (
+            path.clone(),
+            std::fs::read_to_string(path)
+                .with_context(|| format!("{}: cannot read the terrain file", path.display()))?,
+        ),
+        None => (PathBuf::from("terrains/natural.toml"), NATURAL.to_string()),
+    };
+    let mut spec = TerrainSpec::from_toml(&terrain_text, &terrain_origin)?;
+    if let Some(seed) = args.seed {
+        spec = spec.with_seed(seed);
+    }
+    let grid = spec.build(&terrain_origin)?;
+    let gait = match &args.gait {
+        Some(path) => GaitSpec::from_file(path)?,
+        None => GaitSpec::from_toml(TRIPOD, Path::new("gaits/tripod.toml"))?,
+    };
+    let [x_min, _] = grid.x_range();
+    let [y_min, y_max] = grid.y_range();
+    let (x, y) = match &args.start {
+        Some(v) => (v[0], v[1]),
+        None => (x_min + 0.75, 0.5 * (y_min + y_max)),
+    };
+    let command = VelocityCommand {
+        forward: args.speed.unwrap_or_else(|| gait.nominal_speed()),
+        sideways: args.sideways,
+        yaw_rate: args.turn.to_radians(),
+    };
+    let terrain_name = terrain_origin.display().to_string();
+    let total = args.settle + args.duration;
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} simulating [{bar:40}] {percent:>3}% ({eta} left) {msg}",
+            )
+            .expect("the template is valid")
+            .progress_chars("=> "),
+        );
+        bar.set_message(format!("{total} s"));
+        bar
+    });
+    let progress_bar = bar.clone();
+    let run = WalkRun {
+        robot: Arc::new(robot),
+        terrain: Arc::new(grid),
+        terrain_name: terrain_name.clone(),
+        gait: gait.clone(),
+        command,
+        contact: args.contact.model(),
+        settings: HexapodSettings {
+            dt: args.dt,
+            solver_iterations: args.solver_iterations,
+            gains: ServoGains {
+                stiffness: args.servo_stiffness,
+                damping: args.servo_damping,
+            },
+        },
+        placement: Placement {
+            x,
+            y,
+            yaw: args.heading.to_radians(),
+        },
+        settle_time: args.settle,
+        duration: args.duration,
+        record: (!args.no_record).then(|| args.record.clone()),
+        log_rate: args.log_rate,
+        trajectory: args.trajectory.clone(),
+        metrics: args.metrics.clone(),
+        progress: progress_bar.map(|b| {
+            Box::new(move |f: f64| b.set_position((f * 1000.0) as u64)) as Box<dyn Fn(f64)>
+        }),
+    };
+    let outcome = run.execute();
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let outcome = outcome?;
+    let m = &outcome.metrics;
+    println!(
+        "{} ({}) on {terrain_name}: walked {:.2} s{}",
+        gait.name,
+        args.robot
+            .as_deref()
+            .map_or("hex18".into(), |p| p.display().to_string()),
+        m.walk_time,
+        if m.complete { "" } else { " (interrupted)" }
+    );
+    println!(
+        "  distance {:.3} m (forward {:.3}, sideways {:.3}), mean speed {:.4} m/s, heading change {:.2}°",
+        m.distance, m.forward_distance, m.sideways_distance, m.mean_speed, m.heading_change_deg
+    );
+    println!(
+        "  max roll {:.2}°, max pitch {:.2}°; body height {:.4} ± {:.4} m; deepest foot {:.2} mm",
+        m.max_roll_deg,
+        m.max_pitch_deg,
+        m.body_height_mean,
+        m.body_height_std,
+        m.max_penetration * 1e3
+    );
+    let slip: Vec<String> = m
+        .foot_slip
+        .iter()
+        .map(|s| format!("{:.1}", s * 1e3))
+        .collect();
+    println!("  foot slip (mm, lf lm lr rf rm rr): {}", slip.join(" "));
+    if m.clamped_ik_steps > 0 {
+        println!(
+            "  warning: {} steps had foot targets out of reach (IK clamped)",
+            m.clamped_ik_steps
+        );
+    }
+    println!("  {:.0} steps/s", outcome.steps_per_second);
+    for path in &outcome.written {
+        println!("  wrote {}", path.display());
+    }
+    if args.spawn && !args.no_record {
+        hexsim::record::rerun::spawn_viewer(&args.record)?;
+    }
+    Ok(())
+}
+
 impl Default for BallArgs {
     fn default() -> Self {
         let cli = Cli::parse_from(["hexsim", "ball"]);
@@ -378,8 +600,13 @@ fn terrain_command(command: TerrainCommand) -> Result<()> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C / SIGTERM stop the run at the next step; it then writes what it has, marked incomplete.
+    let _ = ctrlc::set_handler(|| {
+        hexsim::runner::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+    });
     let result = match cli.command {
-        None => ball(BallArgs::default()),
+        None => run(RunArgs::default()),
+        Some(Command::Run(args)) => run(*args),
         Some(Command::Ball(args)) => ball(*args),
         Some(Command::Terrain(command)) => terrain_command(command),
     };

@@ -124,3 +124,57 @@ fn bad_input_is_a_clear_error_with_exit_code_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent-dir/x.rrd"));
 }
+
+#[test]
+fn run_walks_and_writes_recording_trajectory_and_metrics() {
+    let dir = scratch("run");
+    let (rrd, csv, json) = (dir.join("h.rrd"), dir.join("h.csv"), dir.join("h.json"));
+    let out = hexsim()
+        .args([
+            "run",
+            "--gait",
+            "gaits/wave.toml",
+            "--duration",
+            "4",
+            "--settle",
+            "0.5",
+        ])
+        .arg("--record")
+        .arg(&rrd)
+        .arg("--trajectory")
+        .arg(&csv)
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("wave") && stdout.contains("distance"),
+        "{stdout}"
+    );
+    assert!(std::fs::read(&rrd).unwrap().starts_with(b"RRF"));
+    let trajectory = std::fs::read_to_string(&csv).unwrap();
+    let header = trajectory.lines().next().unwrap();
+    assert!(
+        header.starts_with("time,x,y,z,roll,pitch,yaw")
+            && header.contains("lf_coxa_joint_torque")
+            && header.ends_with("rr_contact")
+    );
+    assert_eq!(
+        trajectory.lines().count(),
+        1 + 225,
+        "header + 50 Hz over 4.5 s"
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["complete"], true);
+    assert!(
+        metrics["forward_distance"].as_f64().unwrap() > 0.1, // wave: 0.04 m/s nominal, ramping up over its first 1.8 s cycle
+        "{metrics}"
+    );
+}

@@ -269,3 +269,136 @@ fn v15_same_scenario_same_result_bit_for_bit() {
     assert_eq!(a, b, "V15: two identical runs differ");
     println!("V15: {} samples identical", a.len());
 }
+
+#[test]
+fn ik_round_trips_within_a_tenth_of_a_millimetre() {
+    let model = hex18();
+    let controller = GaitController::new(&model, tripod()).unwrap();
+    let standing = controller.standing_angles();
+    let mut rng = hexsim::terrain::MatlabRand::new(42);
+    for (leg, chain) in controller.chains().iter().enumerate() {
+        for _ in 0..200 {
+            // a reachable target: forward kinematics of angles around the standing pose
+            let q: [f64; 3] =
+                std::array::from_fn(|k| standing[leg][k] + 0.8 * (rng.next_f64() - 0.5));
+            let target = chain.foot_position(chain.clamp(q));
+            let answer = chain.solve(target, standing[leg]);
+            let reached = chain.foot_position(answer.angles);
+            assert!(
+                (reached - target).length() < 1e-4,
+                "leg {leg}: missed {target} by {:.3e} m",
+                (reached - target).length()
+            );
+        }
+    }
+}
+
+#[test]
+fn feet_touch_the_ground_when_the_gait_says_stance() {
+    // the tripod's schedule, checked against where the simulated feet actually bear load
+    let model = hex18();
+    let spec = tripod();
+    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let controller = GaitController::new(&model, spec.clone()).unwrap();
+    let pose = standing_pose(&model, &controller);
+    let hexapod = Hexapod::new(
+        model,
+        Arc::new(ground),
+        ContactModel::default(),
+        HexapodSettings::default(),
+        Placement {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        &pose,
+    );
+    let command = hexsim::gait::VelocityCommand {
+        forward: spec.nominal_speed(),
+        ..Default::default()
+    };
+    let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 0.5);
+    let (mut agree, mut total) = (0, 0);
+    for _ in 0..5500 {
+        let t = walker.gait_time(); // the time the step's targets are computed for
+        let s = walker.step();
+        let Some(gait) = s.gait else { continue };
+        if t < 2.0 * spec.period {
+            continue; // after the start-up ramp
+        }
+        for (k, phase) in gait.phases.iter().enumerate() {
+            // the schedule from the gait file, independently of the controller
+            let cycle = (t / spec.period - spec.offsets()[k]).rem_euclid(1.0);
+            assert_eq!(
+                phase.is_stance(),
+                cycle < spec.duty_factor,
+                "leg {k} at t = {t}"
+            );
+            total += 1;
+            agree += usize::from(
+                phase.is_stance() == s.robot.foot_contacts[k].is_some_and(|c| c.normal_force > 0.5),
+            );
+        }
+    }
+    let fraction = agree as f64 / total as f64;
+    println!(
+        "feet loaded as scheduled {:.1} % of the time",
+        100.0 * fraction
+    );
+    assert!(
+        fraction > 0.9,
+        "feet bear load as the schedule says only {:.1} % of the time",
+        100.0 * fraction
+    );
+}
+
+#[test]
+fn a_hexapod_of_another_design_loads_and_walks() {
+    let model = Arc::new(robot::load(&project_file("tests/data/round_hexapod.urdf")).unwrap());
+    assert_eq!(model.legs.len(), 6);
+    assert_eq!(
+        model.links.len(),
+        19,
+        "the IMU and the toes are merged into their links"
+    );
+    assert!((model.total_mass() - (1.8 + 0.05 + 6.0 * (0.04 + 0.08 + 0.06 + 0.01))).abs() < 1e-9);
+    let gait = GaitSpec {
+        reach: Some(0.16),
+        stance_height: 0.11,
+        ..tripod()
+    };
+    let speed = gait.nominal_speed();
+    let controller = GaitController::new(&model, gait).unwrap();
+    let pose = standing_pose(&model, &controller);
+    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let hexapod = Hexapod::new(
+        model,
+        Arc::new(ground),
+        ContactModel::default(),
+        HexapodSettings::default(),
+        Placement {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        &pose,
+    );
+    let command = hexsim::gait::VelocityCommand {
+        forward: speed,
+        ..Default::default()
+    };
+    let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 1.0);
+    let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
+    let start = samples[999].body.translation;
+    let end = samples.last().unwrap().body.translation;
+    println!(
+        "round hexapod: {:.3} m in 5 s (nominal {:.3})",
+        end.x - start.x,
+        speed * 5.0
+    );
+    assert!(
+        end.x - start.x > 0.8 * speed * 5.0,
+        "walked only {:.3} m",
+        end.x - start.x
+    );
+}

@@ -2,6 +2,7 @@
 //! hands each step's sample to the observers and knows nothing of what they write.
 
 pub mod ball;
+pub mod hexapod;
 pub mod output;
 pub mod rerun;
 

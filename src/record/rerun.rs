@@ -13,11 +13,39 @@ pub struct Recording {
 }
 
 impl Recording {
-    /// Creates the file; `dt` is the simulation step, for the `sim_time` timeline.
-    pub fn create(path: &Path, name: String, dt: f64) -> Result<Self> {
+    /// Creates the file; `dt` is the simulation step, for the `sim_time` timeline. `layout` is the
+    /// viewer's default arrangement: a 3D view of `world` beside tabs of time-series views.
+    pub fn create(path: &Path, name: String, dt: f64, layout: &[(&str, &[&str])]) -> Result<Self> {
+        use rerun::blueprint::{
+            Blueprint, ContainerLike, Horizontal, Spatial3DView, Tabs, TimePanel, TimeSeriesView,
+            Vertical,
+        };
+        let tabs: Vec<ContainerLike> = layout
+            .iter()
+            .map(|(tab, origins)| {
+                let views: Vec<ContainerLike> = origins
+                    .iter()
+                    .map(|origin| {
+                        TimeSeriesView::new(origin.rsplit('/').next().unwrap_or(origin))
+                            .with_origin(*origin)
+                            .into()
+                    })
+                    .collect();
+                Vertical::new(views).with_name(*tab).into()
+            })
+            .collect();
+        let blueprint = Blueprint::new(
+            Horizontal::new([
+                Spatial3DView::new("world").with_origin("world").into(),
+                Tabs::new(tabs).into(),
+            ])
+            .with_column_shares([0.6, 0.4]),
+        )
+        .with_time_panel(TimePanel::new().with_timeline("sim_time"));
         let stream = rerun::RecordingStreamBuilder::new("hexsim")
             .recording_name(name)
             .enabled(true)
+            .with_default_blueprint(blueprint)
             .save(partial_path(path))
             .with_context(|| format!("cannot create the recording {}", path.display()))?;
         stream.set_log_time_enabled(false);

@@ -77,8 +77,17 @@ impl BallRun {
         let mut metrics = BallMetrics::new(&initial, self.ball.radius);
         let mut recorder = match &self.record {
             Some(path) => {
-                let recording =
-                    Recording::create(path, format!("ball on {}", self.terrain_name), self.dt)?;
+                let layout: &[(&str, &[&str])] = &[
+                    ("motion", &["plots/height", "plots/speed"]),
+                    ("contact", &["plots/force", "plots/penetration_mm"]),
+                    ("energy", &["plots/energy"]),
+                ];
+                let recording = Recording::create(
+                    path,
+                    format!("ball on {}", self.terrain_name),
+                    self.dt,
+                    layout,
+                )?;
                 recording.log_terrain("world/terrain", &self.terrain)?;
                 Some(BallRecorder::new(recording, self.ball.radius, every)?)
             }

@@ -2,6 +2,7 @@
 //! This is where simulation and recording meet; neither knows the other.
 
 pub mod ball;
+pub mod walk;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

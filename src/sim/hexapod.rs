@@ -79,6 +79,8 @@ pub struct HexapodSample {
     pub time: f64,
     /// The body (root link) frame in the world.
     pub body: DAffine3,
+    /// Height of the body frame's origin above the terrain under it (m).
+    pub body_height: f64,
     pub body_rotation: DQuat,
     /// Velocity of the body frame's origin and angular velocity (world).
     pub body_velocity: DVec3,
@@ -289,6 +291,13 @@ impl Hexapod {
         }
     }
 
+    /// World poses of all the model's links (for drawing).
+    pub fn link_frames(&self) -> Vec<DAffine3> {
+        (0..self.model.links.len())
+            .map(|k| self.link_frame(k))
+            .collect()
+    }
+
     /// World pose of a model link's frame.
     fn link_frame(&self, link: usize) -> DAffine3 {
         let pose = affine_of(self.engine.bodies[self.bodies[link]].position());
@@ -418,6 +427,8 @@ impl Hexapod {
         HexapodSample {
             step: self.step,
             time: self.time(),
+            body_height: body.translation.z
+                - self.terrain.height(body.translation.x, body.translation.y),
             body,
             body_rotation: DQuat::from_mat3(&body.matrix3).normalize(),
             body_velocity: v_com - omega.cross(com_offset),

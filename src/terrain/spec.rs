@@ -213,6 +213,15 @@ impl TerrainSpec {
         })
     }
 
+    /// Replaces the generator's seed, for generators that have one (natural, rough); others ignore it.
+    pub fn with_seed(mut self, new_seed: u32) -> Self {
+        match &mut self.source {
+            Source::Natural { seed, .. } | Source::Rough { seed, .. } => *seed = new_seed,
+            _ => {}
+        }
+        self
+    }
+
     /// Builds the height grid. `origin` is the file the spec came from: relative data paths resolve
     /// against its folder, and errors name it.
     pub fn build(&self, origin: &Path) -> Result<HeightGrid, TerrainError> {

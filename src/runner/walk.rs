@@ -1,0 +1,227 @@
+//! A hexapod run end to end: robot + terrain + gait + contact → walker → recording, CSV, metrics.
+
+use crate::contact::ContactModel;
+use crate::gait::{GaitController, GaitSpec, VelocityCommand};
+use crate::record::hexapod::{HexapodMetrics, HexapodRecorder, HexapodTrajectory};
+use crate::record::output::{check_writable, write_atomically};
+use crate::record::rerun::Recording;
+use crate::record::{Observer, decimation};
+use crate::robot::RobotModel;
+use crate::sim::{Hexapod, HexapodSettings, Placement, Walker};
+use crate::terrain::HeightGrid;
+use anyhow::{Result, bail};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Everything a walking run needs.
+pub struct WalkRun {
+    pub robot: Arc<RobotModel>,
+    pub terrain: Arc<HeightGrid>,
+    pub terrain_name: String,
+    pub gait: GaitSpec,
+    pub command: VelocityCommand,
+    pub contact: ContactModel,
+    pub settings: HexapodSettings,
+    pub placement: Placement,
+    /// Seconds standing before the gait starts.
+    pub settle_time: f64,
+    /// Seconds walked.
+    pub duration: f64,
+    pub record: Option<PathBuf>,
+    pub log_rate: f64,
+    pub trajectory: Option<PathBuf>,
+    pub metrics: Option<PathBuf>,
+    /// Called with the fraction done, for a progress bar.
+    pub progress: Option<Box<dyn Fn(f64)>>,
+}
+
+pub struct WalkOutcome {
+    pub metrics: HexapodMetrics,
+    pub written: Vec<PathBuf>,
+    pub steps_per_second: f64,
+}
+
+impl WalkRun {
+    pub fn validate(&self) -> Result<()> {
+        if let Err((field, expected)) = self.contact.validate() {
+            bail!("contact.{field}: {expected}");
+        }
+        let dt = self.settings.dt;
+        if !(dt.is_finite() && dt > 0.0 && dt <= 0.01) {
+            bail!("dt: expected a time step in (0, 0.01] s, got {dt}");
+        }
+        if !(self.duration.is_finite() && self.duration >= 0.0) {
+            bail!(
+                "duration: expected a finite number ≥ 0 s, got {}",
+                self.duration
+            );
+        }
+        if !(self.settle_time.is_finite() && self.settle_time >= 0.0) {
+            bail!(
+                "settle: expected a finite number ≥ 0 s, got {}",
+                self.settle_time
+            );
+        }
+        if self.settings.solver_iterations == 0 {
+            bail!("solver_iterations: expected at least 1");
+        }
+        let g = self.settings.gains;
+        if !(g.stiffness.is_finite()
+            && g.stiffness > 0.0
+            && g.damping.is_finite()
+            && g.damping >= 0.0)
+        {
+            bail!(
+                "servo gains: expected stiffness > 0 and damping ≥ 0, got {} and {}",
+                g.stiffness,
+                g.damping
+            );
+        }
+        for (name, v) in [
+            ("speed", self.command.forward),
+            ("sideways", self.command.sideways),
+            ("turn", self.command.yaw_rate),
+        ] {
+            if !v.is_finite() {
+                bail!("{name}: expected a finite number, got {v}");
+            }
+        }
+        Ok(())
+    }
+
+    pub fn execute(self) -> Result<WalkOutcome> {
+        self.validate()?;
+        for path in [&self.record, &self.trajectory, &self.metrics]
+            .into_iter()
+            .flatten()
+        {
+            check_writable(path)?;
+        }
+        let controller = GaitController::new(&self.robot, self.gait.clone())
+            .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.name))?;
+        let mut pose = vec![0.0; self.robot.joints.len()];
+        for (leg, angles) in self.robot.legs.iter().zip(controller.standing_angles()) {
+            for (j, a) in leg.joints.iter().zip(angles) {
+                pose[*j] = a;
+            }
+        }
+        let dt = self.settings.dt;
+        let hexapod = Hexapod::new(
+            self.robot.clone(),
+            self.terrain.clone(),
+            self.contact,
+            self.settings,
+            self.placement,
+            &pose,
+        );
+        let mut walker = Walker::new(hexapod, controller, self.command, self.settle_time);
+        let every = decimation(self.log_rate, dt);
+        let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass());
+        let mut recorder = match &self.record {
+            Some(path) => {
+                let layout: &[(&str, &[&str])] = &[
+                    (
+                        "body",
+                        &[
+                            "plots/body/height_above_ground",
+                            "plots/body/attitude_deg",
+                            "plots/body/forward_speed",
+                        ],
+                    ),
+                    (
+                        "feet",
+                        &[
+                            "plots/feet/normal_force",
+                            "plots/feet/in_contact",
+                            "plots/gait/stance",
+                        ],
+                    ),
+                    ("lf", &["plots/joints/lf/angle", "plots/joints/lf/torque"]),
+                    ("lm", &["plots/joints/lm/angle", "plots/joints/lm/torque"]),
+                    ("lr", &["plots/joints/lr/angle", "plots/joints/lr/torque"]),
+                    ("rf", &["plots/joints/rf/angle", "plots/joints/rf/torque"]),
+                    ("rm", &["plots/joints/rm/angle", "plots/joints/rm/torque"]),
+                    ("rr", &["plots/joints/rr/angle", "plots/joints/rr/torque"]),
+                ];
+                let recording = Recording::create(
+                    path,
+                    format!("{} on {}", self.gait.name, self.terrain_name),
+                    dt,
+                    layout,
+                )?;
+                recording.log_terrain("world/terrain", &self.terrain)?;
+                Some(HexapodRecorder::new(recording, &self.robot, every)?)
+            }
+            None => None,
+        };
+        let mut trajectory = match &self.trajectory {
+            Some(path) => Some(HexapodTrajectory::create(path, &self.robot, every)?),
+            None => None,
+        };
+        let steps = ((self.settle_time + self.duration) / dt).round() as u64;
+        let started = std::time::Instant::now();
+        let mut complete = true;
+        let mut failure = None;
+        for k in 0..steps {
+            if super::interrupted() {
+                complete = false;
+                break;
+            }
+            let sample = walker.step();
+            if !(sample.robot.body.translation.is_finite()
+                && sample.robot.joint_angles.iter().all(|q| q.is_finite()))
+            {
+                complete = false;
+                failure = Some(format!(
+                    "the simulation diverged at t = {:.4} s (non-finite body or joint state); reduce dt or the contact stiffness/damping",
+                    sample.robot.time
+                ));
+                break;
+            }
+            metrics.observe(&sample)?;
+            if let Some(r) = recorder.as_mut()
+                && sample.robot.step.is_multiple_of(every)
+            {
+                r.observe_with(&sample, &self.robot, &walker.hexapod().link_frames())?;
+            }
+            if let Some(t) = trajectory.as_mut() {
+                t.observe(&sample)?;
+            }
+            if let Some(progress) = &self.progress
+                && k % 200 == 0
+            {
+                progress(k as f64 / steps as f64);
+            }
+        }
+        let elapsed = started.elapsed().as_secs_f64();
+        metrics.complete = complete;
+        metrics.set_clamped(walker.clamped_steps);
+        let mut written = Vec::new();
+        if let Some(r) = recorder {
+            written.push(r.finish()?);
+        }
+        if let Some(t) = trajectory {
+            written.push(t.finish()?);
+        }
+        if let Some(path) = &self.metrics {
+            write_atomically(path, serde_json::to_string_pretty(&metrics)?.as_bytes())?;
+            written.push(path.clone());
+        }
+        if let Some(message) = failure {
+            let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+            bail!(
+                "{message} (files written: {})",
+                if files.is_empty() {
+                    "none".into()
+                } else {
+                    files.join(", ")
+                }
+            );
+        }
+        Ok(WalkOutcome {
+            steps_per_second: metrics.steps as f64 / elapsed.max(1e-9),
+            metrics,
+            written,
+        })
+    }
+}
