@@ -518,11 +518,7 @@ fn ball(args: BallArgs) -> Result<()> {
         m.max_normal_force
     );
     if let Some(h) = m.first_apex_height {
-        println!(
-            "  first bounce apex {:.4} m (e = {:.3} for the drop height)",
-            h,
-            (h / args.drop_height).sqrt()
-        );
+        println!("  first bounce apex: lowest point at z = {h:.4} m");
     }
     println!(
         "  final position ({:.3}, {:.3}, {:.3}) m, speed {:.4} m/s; energy {:.3} → {:.3} J (largest rise {:.2e} J)",

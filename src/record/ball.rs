@@ -191,7 +191,8 @@ pub struct BallMetrics {
     pub max_energy_rise: f64,
     pub final_position: [f64; 3],
     pub final_speed: f64,
-    /// Height of the lowest point at the first apex after the first bounce, if there was one.
+    /// z of the ball's lowest point at the first apex after the first bounce, if there was one (on
+    /// flat ground at z = 0 the restitution is √(apex / drop height)).
     pub first_apex_height: Option<f64>,
     #[serde(skip)]
     lowest_energy: f64,
