@@ -243,6 +243,9 @@ struct RunArgs {
     /// Seconds standing still before the gait starts.
     #[arg(long, default_value_t = 1.0)]
     settle: f64,
+    /// Keep the body level on slopes: raise or lower each foot's path by the terrain under it.
+    #[arg(long)]
+    follow_terrain: bool,
     /// Time step (s).
     #[arg(long, default_value_t = 1e-3)]
     dt: f64,
@@ -386,6 +389,7 @@ fn run(args: RunArgs) -> Result<()> {
             yaw: args.heading.to_radians(),
         },
         settle_time: args.settle,
+        terrain_following: args.follow_terrain,
         duration: args.duration,
         record: (!args.no_record).then(|| args.record.clone()),
         log_rate: args.log_rate,

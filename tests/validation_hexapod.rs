@@ -402,3 +402,55 @@ fn a_hexapod_of_another_design_loads_and_walks() {
         end.x - start.x
     );
 }
+
+/// Uphill on 10°: planned for level ground the body pitches with the slope; following the terrain
+/// under the feet keeps it level.
+#[test]
+fn terrain_following_keeps_the_body_level_on_a_slope() {
+    let max_pitch = |following: bool| {
+        let model = hex18();
+        let spec = tripod();
+        let ground = terrain::slope([10.0, 4.0], [0.0, 0.0], 10f64.to_radians(), 0.0).unwrap();
+        let controller = GaitController::new(&model, spec.clone()).unwrap();
+        let pose = standing_pose(&model, &controller);
+        let hexapod = Hexapod::new(
+            model,
+            Arc::new(ground),
+            ContactModel::default(),
+            HexapodSettings::default(),
+            Placement {
+                x: -1.0,
+                y: 0.0,
+                yaw: 0.0,
+            },
+            &pose,
+        );
+        let command = hexsim::gait::VelocityCommand {
+            forward: spec.nominal_speed(),
+            ..Default::default()
+        };
+        let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 1.0);
+        walker.terrain_following = following;
+        let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
+        let climbed = samples.last().unwrap().body.translation.x - samples[999].body.translation.x;
+        let pitch = samples[2000..]
+            .iter()
+            .map(|s| s.roll_pitch_yaw().1.abs().to_degrees())
+            .fold(0.0, f64::max);
+        (pitch, climbed)
+    };
+    let (tilted, _) = max_pitch(false);
+    let (level, climbed) = max_pitch(true);
+    println!(
+        "10° uphill: max pitch {tilted:.2}° planned flat, {level:.2}° following the terrain ({climbed:.3} m in 5 s)"
+    );
+    assert!(
+        tilted > 5.0,
+        "planned for flat ground the body should follow the slope, pitched {tilted:.2}°"
+    );
+    assert!(
+        level < 3.0,
+        "following the terrain the body pitched {level:.2}°"
+    );
+    assert!(climbed > 0.4, "climbed only {climbed:.3} m");
+}

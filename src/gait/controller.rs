@@ -115,7 +115,16 @@ impl GaitController {
 
     /// Targets at gait time `t` (s since the gait started) for a command, with the stride scaled by
     /// `blend` ∈ [0, 1] (ramped up at start so the feet leave the standing pose smoothly).
-    pub fn targets(&mut self, t: f64, command: VelocityCommand, blend: f64) -> GaitTargets {
+    /// `ground` gives, for a point of a foot's path (body frame), how far the terrain under it lies
+    /// above the terrain under the body (`|_| 0.0` plans for level ground): following it the body
+    /// stays level and at the stance height while the legs reach down a slope or over a bump.
+    pub fn targets(
+        &mut self,
+        t: f64,
+        command: VelocityCommand,
+        blend: f64,
+        ground: impl Fn(DVec3) -> f64,
+    ) -> GaitTargets {
         let stance_time = self.spec.duty_factor * self.spec.period;
         let v = DVec3::new(command.forward, command.sideways, 0.0);
         let omega = DVec3::new(0.0, 0.0, command.yaw_rate);
@@ -130,13 +139,14 @@ impl GaitController {
             // ground displacement under the foot over one stance, seen from the body
             let d = -(v + omega.cross(n)) * stance_time * blend;
             let phase = leg_phase(t, self.spec.period, self.spec.duty_factor, self.offsets[k]);
-            let foot = match phase {
+            let mut foot = match phase {
                 LegPhase::Stance(s) => n + d * (s - 0.5),
                 LegPhase::Swing(s) => {
                     let (progress, lift) = swing_profile(self.spec.swing, s);
                     n + d * (0.5 - progress) + DVec3::Z * (self.spec.step_height * lift)
                 }
             };
+            foot.z += ground(foot);
             let solution = self.chains[k].solve(foot, self.last[k]);
             self.last[k] = solution.angles;
             out.joint_angles[k] = solution.angles;

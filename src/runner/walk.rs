@@ -25,6 +25,8 @@ pub struct WalkRun {
     pub placement: Placement,
     /// Seconds standing before the gait starts.
     pub settle_time: f64,
+    /// Keep the body level by following the terrain under the feet.
+    pub terrain_following: bool,
     /// Seconds walked.
     pub duration: f64,
     pub record: Option<PathBuf>,
@@ -115,6 +117,7 @@ impl WalkRun {
             &pose,
         );
         let mut walker = Walker::new(hexapod, controller, self.command, self.settle_time);
+        walker.terrain_following = self.terrain_following;
         let every = decimation(self.log_rate, dt);
         let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass());
         let mut recorder = match &self.record {

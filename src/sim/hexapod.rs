@@ -291,6 +291,11 @@ impl Hexapod {
         }
     }
 
+    /// The body (root link) frame in the world.
+    pub fn body_frame(&self) -> DAffine3 {
+        self.link_frame(0)
+    }
+
     /// World poses of all the model's links (for drawing).
     pub fn link_frames(&self) -> Vec<DAffine3> {
         (0..self.model.links.len())

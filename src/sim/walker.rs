@@ -14,6 +14,9 @@ pub struct Walker {
     last_targets: Option<GaitTargets>,
     /// Steps in which some leg's target was out of reach (IK clamped).
     pub clamped_steps: u64,
+    /// Follow the terrain under the feet (see [`GaitController::targets`]); off: every foot path
+    /// is planned for level ground.
+    pub terrain_following: bool,
 }
 
 /// A step of the walker: the robot's state and the gait's targets for it.
@@ -39,6 +42,7 @@ impl Walker {
             targets_by_joint: vec![0.0; n],
             last_targets: None,
             clamped_steps: 0,
+            terrain_following: false,
         }
     }
 
@@ -65,7 +69,24 @@ impl Walker {
             let period = self.controller.spec().period;
             // ramp the stride up over the first cycle so the feet leave the standing pose smoothly
             let blend = (t / period).min(1.0);
-            let targets = self.controller.targets(t, self.command, blend);
+            let targets = if self.terrain_following {
+                // the terrain under a body-frame point, relative to the terrain under the body,
+                // with the body's heading only (its tilt is what following the terrain avoids)
+                let body = self.hexapod.body_frame();
+                let terrain = self.hexapod.terrain();
+                let heading = glam::DMat3::from_rotation_z(
+                    body.matrix3.x_axis.y.atan2(body.matrix3.x_axis.x),
+                );
+                let center = body.translation;
+                let under_body = terrain.height(center.x, center.y);
+                let ground = |p: glam::DVec3| {
+                    let w = center + heading * p;
+                    terrain.height(w.x, w.y) - under_body
+                };
+                self.controller.targets(t, self.command, blend, ground)
+            } else {
+                self.controller.targets(t, self.command, blend, |_| 0.0)
+            };
             for (leg, angles) in self.hexapod.model().legs.iter().zip(targets.joint_angles) {
                 for (j, a) in leg.joints.iter().zip(angles) {
                     self.targets_by_joint[*j] = a;
