@@ -454,3 +454,29 @@ fn terrain_following_keeps_the_body_level_on_a_slope() {
     );
     assert!(climbed > 0.4, "climbed only {climbed:.3} m");
 }
+
+#[test]
+fn feet_can_be_named_in_a_robot_file_beside_the_urdf() {
+    // hex18 without its foot spheres: the robot file names the feet instead
+    let dir = std::env::temp_dir().join(format!("hexsim-feet-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let urdf = std::fs::read_to_string(project_file("robots/hex18.urdf")).unwrap();
+    let bare: String = urdf
+        .lines()
+        .filter(|l| !l.contains("<collision name=\"foot\""))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(dir.join("bare.urdf"), &bare).unwrap();
+    let error = robot::load(&dir.join("bare.urdf")).unwrap_err().to_string();
+    assert!(
+        error.contains("carries no foot") || error.contains("legs"),
+        "{error}"
+    );
+    std::fs::write(
+        dir.join("bare.toml"),
+        "[feet]\nlinks = [\"lf_tibia\", \"lm_tibia\", \"lr_tibia\", \"rf_tibia\", \"rm_tibia\", \"rr_tibia\"]\noffset = [0.12, 0.0, 0.0]\nradius = 0.01\n",
+    )
+    .unwrap();
+    let model = robot::load(&dir.join("bare.urdf")).unwrap();
+    assert_eq!(model.legs, hex18().legs);
+}

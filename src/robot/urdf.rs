@@ -21,7 +21,30 @@ fn pose(p: &urdf_rs::Pose) -> DAffine3 {
     DAffine3::from_rotation_translation(rotation, DVec3::from_array(p.xyz.0))
 }
 
-/// Loads and validates a URDF robot.
+/// Feet named in a robot file beside the URDF (`NAME.toml` next to `NAME.urdf`), for a robot whose
+/// URDF does not mark its feet with collision spheres:
+///
+/// ```toml
+/// [feet]
+/// links = ["lf_tibia", "lm_tibia", "lr_tibia", "rf_tibia", "rm_tibia", "rr_tibia"]
+/// offset = [0.12, 0.0, 0.0]   # foot centre in each link's frame (m)
+/// radius = 0.01               # m
+/// ```
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeetConfig {
+    pub links: Vec<String>,
+    pub offset: [f64; 3],
+    pub radius: f64,
+}
+
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotFile {
+    feet: FeetConfig,
+}
+
+/// Loads and validates a URDF robot, with the robot file beside it if there is one.
 pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
     let fail = |message: String| RobotError {
         file: path.to_path_buf(),
@@ -32,7 +55,38 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
     let robot =
         urdf_rs::read_from_string(&text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
-    build(&robot, base).map_err(fail)
+    let robot_file = path.with_extension("toml");
+    let feet = if robot_file.is_file() {
+        let fail = |message: String| RobotError {
+            file: robot_file.clone(),
+            message,
+        };
+        let text = std::fs::read_to_string(&robot_file)
+            .map_err(|e| fail(format!("cannot read the robot file: {e}")))?;
+        let file: RobotFile =
+            toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
+        if !(file.feet.radius.is_finite() && file.feet.radius > 0.0) {
+            return Err(fail(format!(
+                "field `feet.radius`: expected a finite number > 0, got {}",
+                file.feet.radius
+            )));
+        }
+        if let Some(missing) = file
+            .feet
+            .links
+            .iter()
+            .find(|name| !robot.links.iter().any(|l| &l.name == *name))
+        {
+            return Err(fail(format!(
+                "field `feet.links`: `{missing}` is not a link of {}",
+                path.display()
+            )));
+        }
+        Some(file.feet)
+    } else {
+        None
+    };
+    build(&robot, base, feet.as_ref()).map_err(fail)
 }
 
 /// Parses URDF text (for tests); `base` resolves mesh paths.
@@ -43,7 +97,7 @@ pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
     };
     let robot =
         urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
-    build(&robot, origin.parent().unwrap_or(Path::new("."))).map_err(fail)
+    build(&robot, origin.parent().unwrap_or(Path::new(".")), None).map_err(fail)
 }
 
 struct Tree<'a> {
@@ -220,7 +274,11 @@ fn shape(
     }
 }
 
-fn build(robot: &urdf_rs::Robot, base: &Path) -> Result<RobotModel, String> {
+fn build(
+    robot: &urdf_rs::Robot,
+    base: &Path,
+    feet: Option<&FeetConfig>,
+) -> Result<RobotModel, String> {
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
     // Walk the tree from the root, parents before children. Each URDF link maps to a body (itself,
@@ -316,7 +374,15 @@ fn build(robot: &urdf_rs::Robot, base: &Path) -> Result<RobotModel, String> {
                 color: color_of(robot, &visual.material),
             });
         }
-        for collision in &urdf_link.collision {
+        if let Some(feet) = feet
+            && feet.links.contains(&urdf_link.name)
+        {
+            body.foot = Some(Foot {
+                center: frame.transform_point3(DVec3::from_array(feet.offset)),
+                radius: feet.radius,
+            });
+        }
+        for collision in urdf_link.collision.iter().filter(|_| feet.is_none()) {
             if let urdf_rs::Geometry::Sphere { radius } = collision.geometry {
                 if !(radius.is_finite() && radius > 0.0) {
                     return Err(format!(
