@@ -178,6 +178,23 @@ fn v12_tripod_walks_on_flat_ground() {
         moved.y
     );
     assert!(heading.abs() < 5.0, "V12: heading changed {heading:.2}°");
+    // feet hold in stance: what each slides over its 20 stances, per stance, against the stride
+    for leg in 0..6 {
+        let slid: f64 = samples
+            .iter()
+            .filter_map(|s| s.foot_contacts[leg].map(|c| c.slip.length() * DT))
+            .sum();
+        let per_stance = slid / 20.0;
+        println!(
+            "V12: leg {leg} slides {:.2} mm per stance",
+            per_stance * 1e3
+        );
+        assert!(
+            per_stance < 0.05 * 0.06,
+            "leg {leg} slides {:.2} mm per stance, over 5 % of the 60 mm stride",
+            per_stance * 1e3
+        );
+    }
 }
 
 #[test]

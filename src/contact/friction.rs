@@ -19,6 +19,11 @@
 //! inside the band persist, a foot on a slope below its friction angle does not creep — the failure
 //! of regularised models (MuJoCo's, Drake's) that need a velocity to make a force.
 //!
+//! The load is measured one step late, so under a load that keeps changing (a walking robot's
+//! foot) a sticking contact still drifts a little; the stick force therefore also undoes half of
+//! the drift accumulated since the contact last stuck (the material point's slip integrated while
+//! sticking — not the geometric contact point, so a rolling ball is not held back).
+//!
 //! The other laws are continuous functions of the slip; they are evaluated as written, and only
 //! limited to F_stop when they would otherwise reverse the slip within one step (which explicit
 //! friction on a light foot does at once). That limit only ever removes energy.

@@ -68,11 +68,16 @@ impl EffectiveMass {
     }
 }
 
+/// Fraction of the drift accumulated while sticking that the stick force undoes per step.
+const DRIFT_RECOVERY: f64 = 0.5;
+
 /// Friction's memory between steps: last step's friction and slip (world frame), for the
 /// tangential load estimate. Reset when the contact opens.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactState {
     previous: Option<(DVec3, DVec3)>,
+    /// How far the contact's material point has slid since friction last held it (world frame).
+    drift: DVec3,
 }
 
 impl ContactState {
@@ -119,6 +124,7 @@ impl ContactModel {
     ) -> Option<ContactForce> {
         if geometry.penetration <= 0.0 {
             state.previous = None;
+            state.drift = DVec3::ZERO;
             return None;
         }
         let frame = &geometry.frame;
@@ -132,7 +138,11 @@ impl ContactModel {
         let previous = state
             .previous
             .map(|(force, slip)| (in_plane(force), in_plane(slip)));
-        let stop = stopping_force(mass.tangential, slip, dt, previous);
+        // and undo a fraction of the drift accumulated while sticking: the load is estimated one
+        // step late, which under a changing load (a walking robot's foot) lets the foot creep
+        let drift = in_plane(state.drift);
+        let stop = stopping_force(mass.tangential, slip, dt, previous)
+            - mass.tangential * drift * (DRIFT_RECOVERY / (dt * dt));
         let outcome = if normal_force > 0.0 {
             self.friction.force(slip, normal_force, stop)
         } else {
@@ -144,6 +154,11 @@ impl ContactModel {
         let friction = frame.to_world(outcome.force.extend(0.0));
         let slip_world = frame.to_world(slip.extend(0.0));
         state.previous = Some((friction, slip_world));
+        state.drift = if outcome.sticking {
+            state.drift + slip_world * dt
+        } else {
+            DVec3::ZERO
+        };
         Some(ContactForce {
             point: geometry.point,
             force: normal_force * frame.normal + friction,

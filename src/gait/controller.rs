@@ -142,7 +142,8 @@ impl GaitController {
             let mut foot = match phase {
                 LegPhase::Stance(s) => n + d * (s - 0.5),
                 LegPhase::Swing(s) => {
-                    let (progress, lift) = swing_profile(self.spec.swing, s);
+                    let duty = self.spec.duty_factor;
+                    let (progress, lift) = swing_profile(self.spec.swing, s, -(1.0 - duty) / duty);
                     n + d * (0.5 - progress) + DVec3::Z * (self.spec.step_height * lift)
                 }
             };
@@ -159,17 +160,19 @@ impl GaitController {
 }
 
 /// Horizontal progress (0 → 1) and lift (0 → 1 → 0) through a swing at progress s ∈ [0, 1).
-fn swing_profile(shape: SwingShape, s: f64) -> (f64, f64) {
+///
+/// For the smooth shapes the horizontal progress is the cubic Hermite curve from 0 to 1 whose slope
+/// at both ends is `end_slope` = −(1 − duty)/duty: the foot lifts off and touches down moving
+/// backwards exactly as the ground does under the body, so it does not skid at touch-down.
+fn swing_profile(shape: SwingShape, s: f64, end_slope: f64) -> (f64, f64) {
     use std::f64::consts::PI;
+    let matched = || {
+        let (s2, s3) = (s * s, s * s * s);
+        3.0 * s2 - 2.0 * s3 + end_slope * (2.0 * s3 - 3.0 * s2 + s)
+    };
     match shape {
-        SwingShape::Sine => ((1.0 - (PI * s).cos()) / 2.0, (PI * s).sin()),
-        SwingShape::Cycloid => {
-            let theta = 2.0 * PI * s;
-            (
-                (theta - theta.sin()) / (2.0 * PI),
-                (1.0 - theta.cos()) / 2.0,
-            )
-        }
+        SwingShape::Sine => (matched(), (PI * s).sin()),
+        SwingShape::Cycloid => (matched(), (1.0 - (2.0 * PI * s).cos()) / 2.0),
         SwingShape::Rectangle => {
             let third = 1.0 / 3.0;
             if s < third {
@@ -179,6 +182,34 @@ fn swing_profile(shape: SwingShape, s: f64) -> (f64, f64) {
             } else {
                 (1.0, (1.0 - s) / third)
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn smooth_swings_start_and_end_at_ground_speed() {
+        let duty = 0.5;
+        let slope = -(1.0 - duty) / duty;
+        for shape in [SwingShape::Sine, SwingShape::Cycloid] {
+            let (p0, l0) = swing_profile(shape, 0.0, slope);
+            let (p1, l1) = swing_profile(shape, 1.0, slope);
+            assert!(
+                p0.abs() < 1e-12
+                    && (p1 - 1.0).abs() < 1e-12
+                    && l0.abs() < 1e-12
+                    && l1.abs() < 1e-12
+            );
+            let h = 1e-6;
+            let start = (swing_profile(shape, h, slope).0 - p0) / h;
+            let end = (p1 - swing_profile(shape, 1.0 - h, slope).0) / h;
+            assert!(
+                (start - slope).abs() < 1e-4 && (end - slope).abs() < 1e-4,
+                "{start} {end}"
+            );
         }
     }
 }

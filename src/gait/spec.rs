@@ -24,10 +24,10 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SwingShape {
-    /// Height h·sin(πs), horizontal progress (1 − cos πs)/2: smooth lift and touch-down.
+    /// Height h·sin(πs); the foot leaves and lands moving with the ground (see the controller).
     #[default]
     Sine,
-    /// A cycloid: zero velocity at lift-off and touch-down in both directions.
+    /// Height h·(1 − cos 2πs)/2: lifts off and lands with no vertical speed.
     Cycloid,
     /// Lift, move, lower in thirds of the swing (for stepping over obstacles).
     Rectangle,
