@@ -3,9 +3,10 @@
 mod common;
 use common::*;
 use hexsim::contact::ContactModel;
+use hexsim::gait::VelocityCommand;
 use hexsim::gait::{GaitController, GaitSpec};
 use hexsim::robot::{self, RobotModel};
-use hexsim::sim::{Hexapod, HexapodSample, HexapodSettings, Placement};
+use hexsim::sim::{Hexapod, HexapodSample, HexapodSettings, Placement, Walker};
 use hexsim::terrain::{self, HeightGrid};
 use std::sync::Arc;
 
@@ -118,15 +119,18 @@ fn v11_standing_load_equals_weight() {
     );
 }
 
-/// Walks `seconds` after 1 s of settling; returns the samples from the gait's start.
-fn walk(
+/// A walker with the gait's nominal forward speed, standing for `settle` seconds first.
+fn walker(
+    model: Arc<RobotModel>,
     ground: HeightGrid,
     placement: Placement,
     gait: GaitSpec,
-    seconds: f64,
-) -> Vec<HexapodSample> {
-    let model = hex18();
-    let speed = gait.nominal_speed();
+    settle: f64,
+) -> Walker {
+    let command = VelocityCommand {
+        forward: gait.nominal_speed(),
+        ..Default::default()
+    };
     let controller = GaitController::new(&model, gait).unwrap();
     let pose = standing_pose(&model, &controller);
     let hexapod = Hexapod::new(
@@ -137,11 +141,17 @@ fn walk(
         placement,
         &pose,
     );
-    let command = hexsim::gait::VelocityCommand {
-        forward: speed,
-        ..Default::default()
-    };
-    let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 1.0);
+    Walker::new(hexapod, controller, command, settle)
+}
+
+/// Walks `seconds` after 1 s of settling; returns the samples from the gait's start.
+fn walk(
+    ground: HeightGrid,
+    placement: Placement,
+    gait: GaitSpec,
+    seconds: f64,
+) -> Vec<HexapodSample> {
+    let mut walker = walker(hex18(), ground, placement, gait, 1.0);
     let total = ((1.0 + seconds) / DT).round() as usize;
     let samples: Vec<HexapodSample> = (0..total).map(|_| walker.step().robot).collect();
     samples[(1.0 / DT) as usize - 1..].to_vec()
@@ -316,25 +326,17 @@ fn feet_touch_the_ground_when_the_gait_says_stance() {
     let model = hex18();
     let spec = tripod();
     let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
-    let controller = GaitController::new(&model, spec.clone()).unwrap();
-    let pose = standing_pose(&model, &controller);
-    let hexapod = Hexapod::new(
+    let mut walker = walker(
         model,
-        Arc::new(ground),
-        ContactModel::default(),
-        HexapodSettings::default(),
+        ground,
         Placement {
             x: 0.0,
             y: 0.0,
             yaw: 0.0,
         },
-        &pose,
+        spec.clone(),
+        0.5,
     );
-    let command = hexsim::gait::VelocityCommand {
-        forward: spec.nominal_speed(),
-        ..Default::default()
-    };
-    let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 0.5);
     let (mut agree, mut total) = (0, 0);
     for _ in 0..5500 {
         let t = walker.gait_time(); // the time the step's targets are computed for
@@ -385,26 +387,18 @@ fn a_hexapod_of_another_design_loads_and_walks() {
         ..tripod()
     };
     let speed = gait.nominal_speed();
-    let controller = GaitController::new(&model, gait).unwrap();
-    let pose = standing_pose(&model, &controller);
     let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
-    let hexapod = Hexapod::new(
+    let mut walker = walker(
         model,
-        Arc::new(ground),
-        ContactModel::default(),
-        HexapodSettings::default(),
+        ground,
         Placement {
             x: 0.0,
             y: 0.0,
             yaw: 0.0,
         },
-        &pose,
+        gait.clone(),
+        1.0,
     );
-    let command = hexsim::gait::VelocityCommand {
-        forward: speed,
-        ..Default::default()
-    };
-    let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 1.0);
     let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
     let start = samples[999].body.translation;
     let end = samples.last().unwrap().body.translation;
@@ -428,25 +422,17 @@ fn terrain_following_keeps_the_body_level_on_a_slope() {
         let model = hex18();
         let spec = tripod();
         let ground = terrain::slope([10.0, 4.0], [0.0, 0.0], 10f64.to_radians(), 0.0).unwrap();
-        let controller = GaitController::new(&model, spec.clone()).unwrap();
-        let pose = standing_pose(&model, &controller);
-        let hexapod = Hexapod::new(
+        let mut walker = walker(
             model,
-            Arc::new(ground),
-            ContactModel::default(),
-            HexapodSettings::default(),
+            ground,
             Placement {
                 x: -1.0,
                 y: 0.0,
                 yaw: 0.0,
             },
-            &pose,
+            spec.clone(),
+            1.0,
         );
-        let command = hexsim::gait::VelocityCommand {
-            forward: spec.nominal_speed(),
-            ..Default::default()
-        };
-        let mut walker = hexsim::sim::Walker::new(hexapod, controller, command, 1.0);
         walker.terrain_following = following;
         let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
         let climbed = samples.last().unwrap().body.translation.x - samples[999].body.translation.x;

@@ -1,10 +1,10 @@
 //! Observers for the ball experiment: rerun recording, trajectory CSV, summary metrics.
 
 use super::Observer;
-use super::output::{commit, partial_path};
 use super::rerun::Recording;
+use super::table::CsvTable;
 use crate::sim::BallSample;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -92,8 +92,7 @@ impl Observer<BallSample> for BallRecorder {
 
 /// Writes every `every`-th sample as a CSV row.
 pub struct BallTrajectory {
-    writer: csv::Writer<std::fs::File>,
-    path: PathBuf,
+    table: CsvTable,
     every: u64,
 }
 
@@ -120,21 +119,14 @@ impl BallTrajectory {
     ];
 
     pub fn create(path: &Path, every: u64) -> Result<Self> {
-        let mut writer = csv::Writer::from_path(partial_path(path))
-            .with_context(|| format!("cannot write the trajectory {}", path.display()))?;
-        writer.write_record(Self::HEADER)?;
         Ok(BallTrajectory {
-            writer,
-            path: path.to_path_buf(),
+            table: CsvTable::create(path, Self::HEADER)?,
             every,
         })
     }
 
-    pub fn finish(mut self) -> Result<PathBuf> {
-        self.writer.flush()?;
-        drop(self.writer);
-        commit(&self.path)?;
-        Ok(self.path)
+    pub fn finish(self) -> Result<PathBuf> {
+        self.table.finish()
     }
 }
 
@@ -167,9 +159,7 @@ impl Observer<BallSample> for BallTrajectory {
             s.potential_energy,
             s.total_energy(),
         ];
-        self.writer
-            .write_record(row.iter().map(|v| v.to_string()))?;
-        Ok(())
+        self.table.row(&row)
     }
 }
 

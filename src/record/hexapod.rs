@@ -1,12 +1,12 @@
 //! Observers for a hexapod run: rerun recording, trajectory CSV, summary metrics.
 
 use super::Observer;
-use super::output::{commit, partial_path};
 use super::rerun::Recording;
+use super::table::CsvTable;
 use crate::gait::LegPhase;
 use crate::robot::{LEG_NAMES, RobotModel, Shape};
 use crate::sim::WalkSample;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use glam::{DAffine3, DQuat};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -248,15 +248,12 @@ impl HexapodRecorder {
 /// Writes every `every`-th step as a CSV row: time, body pose and velocity, joint angles, targets
 /// and torques, and per foot its force and contact state.
 pub struct HexapodTrajectory {
-    writer: csv::Writer<std::fs::File>,
-    path: PathBuf,
+    table: CsvTable,
     every: u64,
 }
 
 impl HexapodTrajectory {
     pub fn create(path: &Path, model: &RobotModel, every: u64) -> Result<Self> {
-        let mut writer = csv::Writer::from_path(partial_path(path))
-            .with_context(|| format!("cannot write the trajectory {}", path.display()))?;
         let mut header: Vec<String> = [
             "time", "x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz",
         ]
@@ -268,19 +265,14 @@ impl HexapodTrajectory {
         for leg in LEG_NAMES {
             header.extend(["fx", "fy", "fz", "normal", "contact"].map(|q| format!("{leg}_{q}")));
         }
-        writer.write_record(&header)?;
         Ok(HexapodTrajectory {
-            writer,
-            path: path.to_path_buf(),
+            table: CsvTable::create(path, header)?,
             every,
         })
     }
 
-    pub fn finish(mut self) -> Result<PathBuf> {
-        self.writer.flush()?;
-        drop(self.writer);
-        commit(&self.path)?;
-        Ok(self.path)
+    pub fn finish(self) -> Result<PathBuf> {
+        self.table.finish()
     }
 }
 
@@ -316,9 +308,7 @@ impl Observer<WalkSample> for HexapodTrajectory {
                 None => row.extend([0.0; 5]),
             }
         }
-        self.writer
-            .write_record(row.iter().map(|v| v.to_string()))?;
-        Ok(())
+        self.table.row(&row)
     }
 }
 

@@ -5,6 +5,7 @@ pub mod ball;
 pub mod hexapod;
 pub mod output;
 pub mod rerun;
+pub mod table;
 
 /// Something that watches a simulation step by step.
 pub trait Observer<S> {

@@ -2,7 +2,7 @@
 
 use crate::contact::ContactModel;
 use crate::record::ball::{BallMetrics, BallRecorder, BallTrajectory};
-use crate::record::output::{check_writable, write_atomically};
+use crate::record::output::check_writable;
 use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::sim::{BallConfig, BallSim};
@@ -135,24 +135,7 @@ impl BallRun {
         if let Some(t) = trajectory {
             written.push(t.finish()?);
         }
-        if let Some(path) = &self.metrics {
-            write_atomically(path, serde_json::to_string_pretty(&metrics)?.as_bytes())?;
-            written.push(path.clone());
-        }
-        if let Some(message) = failure {
-            bail!("{message} (files written: {})", list(&written));
-        }
+        let written = super::conclude(written, self.metrics.as_deref(), &metrics, failure)?;
         Ok(BallOutcome { metrics, written })
     }
-}
-
-fn list(paths: &[PathBuf]) -> String {
-    if paths.is_empty() {
-        return "none".into();
-    }
-    paths
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
 }

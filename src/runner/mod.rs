@@ -12,3 +12,32 @@ pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 pub fn interrupted() -> bool {
     INTERRUPTED.load(Ordering::Relaxed)
 }
+
+/// Writes the metrics (if asked for) after the recording and trajectory have been finished, and
+/// turns a failure into an error that lists every file the run still wrote.
+pub(crate) fn conclude(
+    mut written: Vec<std::path::PathBuf>,
+    metrics_path: Option<&std::path::Path>,
+    metrics: &impl serde::Serialize,
+    failure: Option<String>,
+) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    if let Some(path) = metrics_path {
+        crate::record::output::write_atomically(
+            path,
+            serde_json::to_string_pretty(metrics)?.as_bytes(),
+        )?;
+        written.push(path.to_path_buf());
+    }
+    match failure {
+        None => Ok(written),
+        Some(message) => {
+            let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+            let files = if files.is_empty() {
+                "none".to_string()
+            } else {
+                files.join(", ")
+            };
+            anyhow::bail!("{message} (files written: {files})")
+        }
+    }
+}

@@ -3,7 +3,7 @@
 use crate::contact::ContactModel;
 use crate::gait::{GaitController, GaitSpec, VelocityCommand};
 use crate::record::hexapod::{HexapodMetrics, HexapodRecorder, HexapodTrajectory};
-use crate::record::output::{check_writable, write_atomically};
+use crate::record::output::check_writable;
 use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
@@ -206,21 +206,7 @@ impl WalkRun {
         if let Some(t) = trajectory {
             written.push(t.finish()?);
         }
-        if let Some(path) = &self.metrics {
-            write_atomically(path, serde_json::to_string_pretty(&metrics)?.as_bytes())?;
-            written.push(path.clone());
-        }
-        if let Some(message) = failure {
-            let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-            bail!(
-                "{message} (files written: {})",
-                if files.is_empty() {
-                    "none".into()
-                } else {
-                    files.join(", ")
-                }
-            );
-        }
+        let written = super::conclude(written, self.metrics.as_deref(), &metrics, failure)?;
         Ok(WalkOutcome {
             steps_per_second: metrics.steps as f64 / elapsed.max(1e-9),
             metrics,

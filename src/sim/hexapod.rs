@@ -19,7 +19,7 @@ use glam::{DAffine3, DMat2, DQuat, DVec2, DVec3};
 use rapier3d::math::Pose;
 use rapier3d::na;
 use rapier3d::prelude::{
-    GenericJointBuilder, JointAxesMask, JointAxis, MassProperties, MotorModel,
+    GenericJointBuilder, JointAxesMask, JointAxis, MassProperties, MotorModel, Multibody,
     MultibodyJointHandle, RigidBodyBuilder, RigidBodyHandle,
 };
 use serde::{Deserialize, Serialize};
@@ -313,14 +313,28 @@ impl Hexapod {
         }
     }
 
+    /// The robot's multibody.
+    fn multibody(&self) -> &Multibody {
+        let root = self.engine.multibody_joints.rigid_body_link(self.bodies[0]);
+        let root = root.expect("the root belongs to the multibody");
+        self.engine
+            .multibody_joints
+            .get_multibody(root.multibody)
+            .expect("the multibody exists")
+    }
+
+    /// The multibody link of a model link.
+    fn multibody_link(&self, link: usize) -> usize {
+        let id = self
+            .engine
+            .multibody_joints
+            .rigid_body_link(self.bodies[link]);
+        id.expect("every model link is in the multibody").id
+    }
+
     /// Computes each foot's ground force, applies it, and advances one step.
     pub fn step(&mut self) -> HexapodSample {
         let dt = self.dt();
-        let link_id = *self
-            .engine
-            .multibody_joints
-            .rigid_body_link(self.bodies[0])
-            .expect("the root belongs to the multibody");
         for &h in &self.bodies {
             let body = &mut self.engine.bodies[h];
             body.reset_forces(false);
@@ -341,17 +355,8 @@ impl Hexapod {
                 continue;
             }
             let com = frame.transform_point3(self.model.links[leg.foot_link].com);
-            let mb = self
-                .engine
-                .multibody_joints
-                .get_multibody(link_id.multibody)
-                .expect("the multibody exists");
-            let mb_link = self
-                .engine
-                .multibody_joints
-                .rigid_body_link(self.bodies[leg.foot_link])
-                .expect("in multibody")
-                .id;
+            let mb = self.multibody();
+            let mb_link = self.multibody_link(leg.foot_link);
             let point_jacobian =
                 PointJacobian::new(mb.body_jacobian(mb_link), geometry.point - com);
             let velocity = point_jacobian.velocity(&mb.generalized_velocity());
@@ -379,28 +384,15 @@ impl Hexapod {
 
     /// The current state.
     pub fn sample(&self) -> HexapodSample {
-        let link_id = *self
-            .engine
-            .multibody_joints
-            .rigid_body_link(self.bodies[0])
-            .expect("the root belongs to the multibody");
-        let mb = self
-            .engine
-            .multibody_joints
-            .get_multibody(link_id.multibody)
-            .expect("the multibody exists");
+        let mb = self.multibody();
         let velocities = mb.generalized_velocity();
         let mut joint_angles = Vec::with_capacity(self.joints.len());
         let mut joint_velocities = Vec::with_capacity(self.joints.len());
         let mut joint_torques = Vec::with_capacity(self.joints.len());
         for (j, joint) in self.model.joints.iter().enumerate() {
-            let id = self
-                .engine
-                .multibody_joints
-                .rigid_body_link(self.bodies[joint.child])
-                .expect("in multibody")
-                .id;
-            let link = mb.link(id).expect("link exists");
+            let link = mb
+                .link(self.multibody_link(joint.child))
+                .expect("link exists");
             let q = link.joint().coords()[3] as f64;
             let qd = mb.joint_velocity(link)[0] as f64;
             let effort = joint.effort;
