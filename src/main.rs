@@ -325,19 +325,12 @@ fn run(args: RunArgs) -> Result<()> {
     for warning in &robot.warnings {
         eprintln!("warning: {warning}");
     }
-    let (terrain_origin, terrain_text) = match &args.terrain {
-        Some(path) => (
-            path.clone(),
-            std::fs::read_to_string(path)
-                .with_context(|| format!("{}: cannot read the terrain file", path.display()))?,
-        ),
-        None => (PathBuf::from("terrains/natural.toml"), NATURAL.to_string()),
-    };
-    let mut spec = TerrainSpec::from_toml(&terrain_text, &terrain_origin)?;
-    if let Some(seed) = args.seed {
-        spec = spec.with_seed(seed);
-    }
-    let grid = spec.build(&terrain_origin)?;
+    let (grid, terrain_name) = load_terrain(
+        args.terrain.as_deref(),
+        NATURAL,
+        "terrains/natural.toml",
+        args.seed,
+    )?;
     let gait = match &args.gait {
         Some(path) => GaitSpec::from_file(path)?,
         None => GaitSpec::from_toml(TRIPOD, Path::new("gaits/tripod.toml"))?,
@@ -353,7 +346,6 @@ fn run(args: RunArgs) -> Result<()> {
         sideways: args.sideways,
         yaw_rate: args.turn.to_radians(),
     };
-    let terrain_name = terrain_origin.display().to_string();
     let total = args.settle + args.duration;
     let bar = std::io::stderr().is_terminal().then(|| {
         let bar = indicatif::ProgressBar::new(1000);
@@ -461,19 +453,30 @@ impl Default for BallArgs {
 /// The ball experiment's default ground: the paper's natural terrain at ball scale.
 const BALL_TERRAIN: &str = include_str!("../terrains/natural_ball.toml");
 
+/// A terrain from its file, or the built-in one; `seed` replaces a generator's seed.
 fn load_terrain(
     path: Option<&Path>,
     builtin: &str,
     builtin_name: &str,
+    seed: Option<u32>,
 ) -> Result<(HeightGrid, String)> {
-    match path {
-        Some(path) => Ok((terrain::load(path)?, path.display().to_string())),
+    let (spec, origin, name) = match path {
+        Some(path) => (
+            TerrainSpec::from_file(path)?,
+            path,
+            path.display().to_string(),
+        ),
         None => {
             let origin = Path::new(builtin_name);
-            let grid = TerrainSpec::from_toml(builtin, origin)?.build(origin)?;
-            Ok((grid, format!("{builtin_name} (built in)")))
+            let spec = TerrainSpec::from_toml(builtin, origin)?;
+            (spec, origin, format!("{builtin_name} (built in)"))
         }
-    }
+    };
+    let spec = match seed {
+        Some(seed) => spec.with_seed(seed),
+        None => spec,
+    };
+    Ok((spec.build(origin)?, name))
 }
 
 fn ball(args: BallArgs) -> Result<()> {
@@ -481,6 +484,7 @@ fn ball(args: BallArgs) -> Result<()> {
         args.terrain.as_deref(),
         BALL_TERRAIN,
         "terrains/natural_ball.toml",
+        None,
     )?;
     let (x, y) = (args.at[0], args.at[1]);
     let start_z = grid.height(x, y) + args.drop_height + args.radius;

@@ -20,7 +20,7 @@ use rapier3d::math::Pose;
 use rapier3d::na;
 use rapier3d::prelude::{
     GenericJointBuilder, JointAxesMask, JointAxis, MassProperties, MotorModel, Multibody,
-    MultibodyJointHandle, RigidBodyBuilder, RigidBodyHandle,
+    MultibodyJoint, MultibodyJointHandle, RigidBodyBuilder, RigidBodyHandle,
 };
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -238,14 +238,8 @@ impl Hexapod {
             mb.damping_mut().fill(0.0);
             ndofs = mb.ndofs();
         }
-        for (k, &handle) in self.joints.iter().enumerate() {
-            let (mb, link) = self
-                .engine
-                .multibody_joints
-                .get_mut(handle)
-                .expect("joint exists");
-            let link = mb.link_mut(link).expect("link exists");
-            link.joint.apply_displacement(&[pose[k] as f32]);
+        for (k, &angle) in pose.iter().enumerate() {
+            self.joint_mut(k).apply_displacement(&[angle as f32]);
         }
         let mb = self
             .engine
@@ -278,16 +272,10 @@ impl Hexapod {
     pub fn set_targets(&mut self, targets: &[f64]) {
         self.targets.copy_from_slice(targets);
         let (k, d) = (self.gains.stiffness as f32, self.gains.damping as f32);
-        for (j, &handle) in self.joints.iter().enumerate() {
-            let (mb, link) = self
-                .engine
-                .multibody_joints
-                .get_mut(handle)
-                .expect("joint exists");
-            let link = mb.link_mut(link).expect("link exists");
-            link.joint
+        for (j, &target) in targets.iter().enumerate() {
+            self.joint_mut(j)
                 .data
-                .set_motor_position(JointAxis::AngX, targets[j] as f32, k, d);
+                .set_motor_position(JointAxis::AngX, target as f32, k, d);
         }
     }
 
@@ -311,6 +299,19 @@ impl Hexapod {
         } else {
             pose
         }
+    }
+
+    /// The rapier joint of a model joint.
+    fn joint_mut(&mut self, joint: usize) -> &mut MultibodyJoint {
+        let (mb, link) = self
+            .engine
+            .multibody_joints
+            .get_mut(self.joints[joint])
+            .expect("every model joint is in the multibody");
+        let link = mb
+            .link_mut(link)
+            .expect("a joint's link is in its multibody");
+        &mut link.joint
     }
 
     /// The robot's multibody.
