@@ -8,7 +8,7 @@ use std::path::Path;
 #[derive(Debug, thiserror::Error)]
 pub enum HeightFileError {
     #[error("cannot read: {0}")]
-    Io(#[from] std::io::Error),
+    Io(std::io::Error),
     #[error("line {line}: {message}")]
     Csv { line: u64, message: String },
     #[error("no heights: the file has no data rows")]
@@ -32,7 +32,7 @@ pub enum HeightFileError {
         expected: usize,
     },
     #[error("not a PNG image: {0}")]
-    Image(#[from] image::ImageError),
+    Image(image::ImageError),
     #[error("the PNG is {0:?}, expected a grayscale image (8- or 16-bit, no colour)")]
     NotGrayscale(image::ColorType),
     #[error("not an STL mesh: {0}")]
@@ -43,6 +43,20 @@ pub enum HeightFileError {
     NotAHeightField(String),
     #[error(transparent)]
     Grid(#[from] super::grid::GridError),
+}
+
+// Converted by hand rather than with `#[from]`: the messages already include the cause, which
+// would otherwise be printed twice in an error chain.
+impl From<std::io::Error> for HeightFileError {
+    fn from(e: std::io::Error) -> Self {
+        HeightFileError::Io(e)
+    }
+}
+
+impl From<image::ImageError> for HeightFileError {
+    fn from(e: image::ImageError) -> Self {
+        HeightFileError::Image(e)
+    }
 }
 
 /// Reads a CSV grid of heights: one row per line (row i → y), comma-separated, `#` lines are comments.

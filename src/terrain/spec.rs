@@ -172,10 +172,10 @@ fn sixteen() -> usize {
 /// A terrain file that could not be turned into a terrain; names the file and the field.
 #[derive(Debug, thiserror::Error)]
 pub enum TerrainError {
-    #[error("{file}: cannot read the terrain file: {source}")]
+    #[error("{file}: cannot read the terrain file: {cause}")]
     Read {
         file: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     #[error("{file}: {message}")]
     Parse { file: PathBuf, message: String },
@@ -185,22 +185,22 @@ pub enum TerrainError {
         field: &'static str,
         expected: String,
     },
-    #[error("{file}: height file {data}: {source}")]
+    #[error("{file}: height file {data}: {cause}")]
     Data {
         file: PathBuf,
         data: PathBuf,
-        source: HeightFileError,
+        cause: HeightFileError,
     },
-    #[error("{file}: {source}")]
-    Grid { file: PathBuf, source: GridError },
+    #[error("{file}: {cause}")]
+    Grid { file: PathBuf, cause: GridError },
 }
 
 impl TerrainSpec {
     /// Reads and parses a terrain file (without building the grid).
     pub fn from_file(path: &Path) -> Result<Self, TerrainError> {
-        let text = std::fs::read_to_string(path).map_err(|source| TerrainError::Read {
+        let text = std::fs::read_to_string(path).map_err(|cause| TerrainError::Read {
             file: path.to_path_buf(),
-            source,
+            cause,
         })?;
         Self::from_toml(&text, path)
     }
@@ -227,14 +227,14 @@ impl TerrainSpec {
     pub fn build(&self, origin: &Path) -> Result<HeightGrid, TerrainError> {
         self.validate(origin)?;
         let base = origin.parent().unwrap_or(Path::new("."));
-        let grid_err = |source| TerrainError::Grid {
+        let grid_err = |cause| TerrainError::Grid {
             file: origin.to_path_buf(),
-            source,
+            cause,
         };
-        let data_err = |data: &Path, source| TerrainError::Data {
+        let data_err = |data: &Path, cause| TerrainError::Data {
             file: origin.to_path_buf(),
             data: base.join(data),
-            source,
+            cause,
         };
         let grid = match self.source {
             Source::Natural {
