@@ -1,10 +1,12 @@
 //! hexsim: a hexapod walking-robot simulator on uneven ground, built on the ground contact model of
 //! Burkus & Odry, "Implementation of 3D Ground Contact Model for Uneven Ground".
 
+pub mod batch;
 pub mod contact;
 pub mod gait;
 pub mod record;
 pub mod robot;
 pub mod runner;
+pub mod scenario;
 pub mod sim;
 pub mod terrain;

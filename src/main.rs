@@ -2,13 +2,14 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use hexsim::contact::{ContactModel, FrictionLaw, NormalLaw};
-use hexsim::runner::ball::BallRun;
-use hexsim::sim::{BallConfig, STANDARD_GRAVITY};
-use hexsim::terrain::{self, HeightGrid, Orientation, TerrainSpec};
+use hexsim::scenario::spec::{
+    self, BallSpec, CommandSpec, ContactSpec, RecordSpec, ServoSpec, StartSpec,
+};
+use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Report, Scenario, ScenarioSpec};
+use hexsim::terrain;
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -31,9 +32,60 @@ enum Command {
     Run(Box<RunArgs>),
     /// Drop a ball on a terrain (the paper's experiment) and record it.
     Ball(Box<BallArgs>),
+    /// Run scenario files headless in parallel and check their expectations (exit 0: all met,
+    /// 1: some failed, diverged or regressed, 2: input error, 130: interrupted).
+    Batch(Box<BatchArgs>),
+    /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
+    Merge(MergeArgs),
     /// Inspect or export terrains.
     #[command(subcommand)]
     Terrain(TerrainCommand),
+}
+
+#[derive(Args)]
+struct BatchArgs {
+    /// Scenario files, folders (every .toml below them) or glob patterns.
+    #[arg(required = true)]
+    scenarios: Vec<String>,
+    /// Worker threads, one simulation each. Default: all cores.
+    #[arg(short, long)]
+    jobs: Option<usize>,
+    /// Results file (JSON Lines, one record per scenario, written as each finishes).
+    #[arg(short, long, default_value = "results.jsonl")]
+    output: PathBuf,
+    /// Keep the results already in the output file (same scenario name and content) and run only
+    /// the rest.
+    #[arg(long)]
+    resume: bool,
+    /// Compare the metrics with an earlier results file; a metric that moved beyond its tolerance
+    /// fails the batch.
+    #[arg(long)]
+    baseline: Option<PathBuf>,
+    /// Default relative tolerance for --baseline (scenarios can set `[tolerance.METRIC]`).
+    #[arg(long, default_value_t = 0.05)]
+    rel_tol: f64,
+    /// Run only the I-th of N slices of the scenario list (for a cluster array job).
+    #[arg(long, default_value = "1/1", value_name = "I/N")]
+    shard: hexsim::batch::Shard,
+    /// Folder for the recordings and trajectories that scenarios ask for (`[record]`).
+    #[arg(long, default_value = "recordings")]
+    record_dir: PathBuf,
+    /// List every scenario in the table, however many.
+    #[arg(long)]
+    all: bool,
+    /// No progress output.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// The shards' results files.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// The merged results file.
+    #[arg(short, long, default_value = "results.jsonl")]
+    output: PathBuf,
 }
 
 #[derive(Subcommand)]
@@ -121,51 +173,33 @@ struct ContactArgs {
 }
 
 impl ContactArgs {
-    fn model(&self) -> ContactModel {
-        let normal = match self.normal_law {
-            NormalChoice::SpringDamper => NormalLaw::SpringDamper {
-                stiffness: self.stiffness,
-                damping: self.damping,
+    fn spec(&self) -> ContactSpec {
+        ContactSpec {
+            normal: match self.normal_law {
+                NormalChoice::SpringDamper => spec::NormalChoice::SpringDamper,
+                NormalChoice::HuntCrossley => spec::NormalChoice::HuntCrossley,
             },
-            NormalChoice::HuntCrossley => NormalLaw::HuntCrossley {
-                stiffness: self.stiffness,
-                exponent: self.hc_exponent,
-                damping: self.damping,
+            stiffness: self.stiffness,
+            damping: self.damping,
+            exponent: self.hc_exponent,
+            friction: match self.friction {
+                FrictionChoice::Karnopp => spec::FrictionChoice::Karnopp,
+                FrictionChoice::Coulomb => spec::FrictionChoice::Coulomb,
+                FrictionChoice::Viscous => spec::FrictionChoice::Viscous,
+                FrictionChoice::Stribeck => spec::FrictionChoice::Stribeck,
+                FrictionChoice::None => spec::FrictionChoice::None,
             },
-        };
-        let friction = match self.friction {
-            FrictionChoice::Karnopp => FrictionLaw::Karnopp {
-                mu_static: self.mu_static,
-                mu_kinetic: self.mu_kinetic,
-                stick_band: self.stick_band,
+            mu_static: self.mu_static,
+            mu_kinetic: self.mu_kinetic,
+            stick_band: self.stick_band,
+            width: self.friction_width,
+            viscous: self.viscous,
+            stribeck_velocity: self.stribeck_velocity,
+            orientation: match self.orientation {
+                OrientationChoice::Exact => spec::OrientationChoice::Exact,
+                OrientationChoice::Paper => spec::OrientationChoice::Paper,
             },
-            FrictionChoice::Coulomb => FrictionLaw::Coulomb {
-                mu: self.mu_kinetic,
-                width: self.friction_width,
-            },
-            FrictionChoice::Viscous => FrictionLaw::Viscous {
-                coefficient: self.viscous,
-            },
-            FrictionChoice::Stribeck => FrictionLaw::Stribeck {
-                mu_static: self.mu_static,
-                mu_coulomb: self.mu_kinetic,
-                viscous: self.viscous,
-                stribeck_velocity: self.stribeck_velocity,
-                width: self.friction_width,
-            },
-            FrictionChoice::None => FrictionLaw::None,
-        };
-        let orientation = match self.orientation {
-            OrientationChoice::Exact => Orientation::Exact,
-            OrientationChoice::Paper => Orientation::Paper {
-                xe: self.paper_step,
-                ye: self.paper_step,
-            },
-        };
-        ContactModel {
-            normal,
-            friction,
-            orientation,
+            paper_step: self.paper_step,
         }
     }
 }
@@ -308,47 +342,19 @@ impl Default for RunArgs {
     }
 }
 
-const HEX18: &str = include_str!("../robots/hex18.urdf");
-const NATURAL: &str = include_str!("../terrains/natural.toml");
-const TRIPOD: &str = include_str!("../gaits/tripod.toml");
-
-fn run(args: RunArgs) -> Result<()> {
-    use hexsim::gait::{GaitSpec, VelocityCommand};
-    use hexsim::runner::walk::WalkRun;
-    use hexsim::sim::{HexapodSettings, Placement, ServoGains};
-    use std::io::IsTerminal;
-
-    let robot = match &args.robot {
-        Some(path) => hexsim::robot::load(path)?,
-        None => hexsim::robot::urdf::from_str(HEX18, Path::new("robots/hex18.urdf"))?,
-    };
-    for warning in &robot.warnings {
-        eprintln!("warning: {warning}");
+/// Prints the robot's warnings (missing meshes, …) once.
+fn warn_about(scenario: &Scenario) {
+    if let Some(robot) = scenario.robot() {
+        for warning in &robot.warnings {
+            eprintln!("warning: {warning}");
+        }
     }
-    let (grid, terrain_name) = load_terrain(
-        args.terrain.as_deref(),
-        NATURAL,
-        "terrains/natural.toml",
-        args.seed,
-    )?;
-    let gait = match &args.gait {
-        Some(path) => GaitSpec::from_file(path)?,
-        None => GaitSpec::from_toml(TRIPOD, Path::new("gaits/tripod.toml"))?,
-    };
-    let [x_min, _] = grid.x_range();
-    let [y_min, y_max] = grid.y_range();
-    let (x, y) = match &args.start {
-        Some(v) => (v[0], v[1]),
-        None => (x_min + 0.75, 0.5 * (y_min + y_max)),
-    };
-    let command = VelocityCommand {
-        forward: args.speed.unwrap_or_else(|| gait.nominal_speed()),
-        sideways: args.sideways,
-        yaw_rate: args.turn.to_radians(),
-    };
-    let total = args.settle + args.duration;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(1000);
+}
+
+/// A progress bar on a terminal, nothing otherwise.
+fn progress_bar(steps: u64, what: String) -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(steps);
         bar.set_style(
             indicatif::ProgressStyle::with_template(
                 "{spinner} simulating [{bar:40}] {percent:>3}% ({eta} left) {msg}",
@@ -356,55 +362,84 @@ fn run(args: RunArgs) -> Result<()> {
             .expect("the template is valid")
             .progress_chars("=> "),
         );
-        bar.set_message(format!("{total} s"));
+        bar.set_message(what);
         bar
-    });
-    let progress_bar = bar.clone();
-    let run = WalkRun {
-        robot: Arc::new(robot),
-        terrain: Arc::new(grid),
-        terrain_name: terrain_name.clone(),
-        gait: gait.clone(),
-        command,
-        contact: args.contact.model(),
-        settings: HexapodSettings {
-            dt: args.dt,
-            solver_iterations: args.solver_iterations,
-            gains: ServoGains {
-                stiffness: args.servo_stiffness,
-                damping: args.servo_damping,
-            },
-        },
-        placement: Placement {
-            x,
-            y,
-            yaw: args.heading.to_radians(),
-        },
-        settle_time: args.settle,
-        terrain_following: args.follow_terrain,
+    })
+}
+
+/// Where a command-line run's relative paths resolve from, and what its errors name.
+const COMMAND_LINE: &str = "command line";
+
+fn run(args: RunArgs) -> Result<()> {
+    let spec = ScenarioSpec {
+        name: Some("run".into()),
+        description: String::new(),
+        kind: Kind::Walk,
+        terrain: args.terrain.clone().map(FileOr::File),
+        seed: args.seed,
         duration: args.duration,
+        dt: args.dt,
+        contact: args.contact.spec(),
+        robot: args.robot.clone(),
+        gait: args.gait.clone().map(FileOr::File),
+        settle: Some(args.settle),
+        follow_terrain: Some(args.follow_terrain),
+        solver_iterations: Some(args.solver_iterations),
+        servo: Some(ServoSpec {
+            stiffness: args.servo_stiffness,
+            damping: args.servo_damping,
+        }),
+        start: Some(StartSpec {
+            x: args.start.as_ref().map(|v| v[0]),
+            y: args.start.as_ref().map(|v| v[1]),
+            heading_deg: args.heading,
+        }),
+        command: Some(vec![CommandSpec {
+            at: 0.0,
+            forward: args.speed,
+            sideways: args.sideways,
+            turn_deg_s: args.turn,
+            ramp: 0.0,
+        }]),
+        ball: None,
+        record: RecordSpec {
+            log_rate: Some(args.log_rate),
+            ..Default::default()
+        },
+        expect: Default::default(),
+        tolerance: Default::default(),
+    };
+    let scenario = Scenario::resolve(spec, "run".into(), Path::new(COMMAND_LINE))?;
+    warn_about(&scenario);
+    let gait_name = scenario.gait().map_or(String::new(), |g| g.name.clone());
+    let terrain_name = scenario.terrain_name().to_string();
+    let bar = progress_bar(
+        scenario.total_steps(),
+        format!("{} s", args.settle + args.duration),
+    );
+    let outputs = Outputs {
         record: (!args.no_record).then(|| args.record.clone()),
-        log_rate: args.log_rate,
         trajectory: args.trajectory.clone(),
         metrics: args.metrics.clone(),
-        progress: progress_bar.map(|b| {
-            Box::new(move |f: f64| b.set_position((f * 1000.0) as u64)) as Box<dyn Fn(f64)>
-        }),
+        progress: bar
+            .clone()
+            .map(|b| Box::new(move |done: u64| b.set_position(done)) as Box<dyn Fn(u64)>),
     };
-    let outcome = run.execute();
+    let report = scenario.run(outputs);
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    let outcome = outcome?;
-    let m = &outcome.metrics;
+    let report = report?;
+    let Metrics::Walk(m) = &report.metrics else {
+        unreachable!("a walk scenario reports walk metrics")
+    };
     println!(
-        "{} ({}) on {terrain_name}: walked {:.2} s{}",
-        gait.name,
+        "{gait_name} ({}) on {terrain_name}: walked {:.2} s{}",
         args.robot
             .as_deref()
             .map_or("hex18".into(), |p| p.display().to_string()),
         m.walk_time,
-        if m.complete { "" } else { " (interrupted)" }
+        if m.complete { "" } else { " (stopped early)" }
     );
     println!(
         "  distance {:.3} m (forward {:.3}, sideways {:.3}), mean speed {:.4} m/s, heading change {:.2}°",
@@ -430,14 +465,23 @@ fn run(args: RunArgs) -> Result<()> {
             m.clamped_ik_steps
         );
     }
-    println!("  {:.0} steps/s", outcome.steps_per_second);
-    for path in &outcome.written {
-        println!("  wrote {}", path.display());
-    }
+    println!("  {:.0} steps/s", report.steps_per_second);
+    conclude(&report)?;
     if args.spawn && !args.no_record {
         hexsim::record::rerun::spawn_viewer(&args.record)?;
     }
     Ok(())
+}
+
+/// Lists the files written; a run that stopped early is an error after that.
+fn conclude(report: &Report) -> Result<()> {
+    for path in &report.written {
+        println!("  wrote {}", path.display());
+    }
+    match &report.failure {
+        Some(failure) => Err(hexsim::runner::failure_error(failure, &report.written)),
+        None => Ok(()),
+    }
 }
 
 impl Default for BallArgs {
@@ -450,49 +494,29 @@ impl Default for BallArgs {
     }
 }
 
-/// The ball experiment's default ground: the paper's natural terrain at ball scale.
-const BALL_TERRAIN: &str = include_str!("../terrains/natural_ball.toml");
-
-/// A terrain from its file, or the built-in one; `seed` replaces a generator's seed.
-fn load_terrain(
-    path: Option<&Path>,
-    builtin: &str,
-    builtin_name: &str,
-    seed: Option<u32>,
-) -> Result<(HeightGrid, String)> {
-    let (spec, origin, name) = match path {
-        Some(path) => (
-            TerrainSpec::from_file(path)?,
-            path,
-            path.display().to_string(),
-        ),
-        None => {
-            let origin = Path::new(builtin_name);
-            let spec = TerrainSpec::from_toml(builtin, origin)?;
-            (spec, origin, format!("{builtin_name} (built in)"))
-        }
-    };
-    let spec = match seed {
-        Some(seed) => spec.with_seed(seed),
-        None => spec,
-    };
-    Ok((spec.build(origin)?, name))
-}
-
 fn ball(args: BallArgs) -> Result<()> {
-    let (grid, terrain_name) = load_terrain(
-        args.terrain.as_deref(),
-        BALL_TERRAIN,
-        "terrains/natural_ball.toml",
-        None,
-    )?;
-    let (x, y) = (args.at[0], args.at[1]);
-    let start_z = grid.height(x, y) + args.drop_height + args.radius;
-    let run = BallRun {
-        ball: BallConfig {
+    let spec = ScenarioSpec {
+        name: Some("ball".into()),
+        description: String::new(),
+        kind: Kind::Ball,
+        terrain: args.terrain.clone().map(FileOr::File),
+        seed: None,
+        duration: args.duration,
+        dt: args.dt,
+        contact: args.contact.spec(),
+        robot: None,
+        gait: None,
+        settle: None,
+        follow_terrain: None,
+        solver_iterations: None,
+        servo: None,
+        start: None,
+        command: None,
+        ball: Some(BallSpec {
             radius: args.radius,
             mass: args.mass,
-            position: [x, y, start_z],
+            at: [args.at[0], args.at[1]],
+            drop_height: args.drop_height,
             velocity: [args.velocity[0], args.velocity[1], args.velocity[2]],
             angular_velocity: [
                 args.angular_velocity[0],
@@ -500,24 +524,29 @@ fn ball(args: BallArgs) -> Result<()> {
                 args.angular_velocity[2],
             ],
             lock_rotation: args.lock_rotation,
-            gravity: STANDARD_GRAVITY,
+        }),
+        record: RecordSpec {
+            log_rate: Some(args.log_rate),
+            ..Default::default()
         },
-        terrain: Arc::new(grid),
-        terrain_name: terrain_name.clone(),
-        contact: args.contact.model(),
-        dt: args.dt,
-        duration: args.duration,
+        expect: Default::default(),
+        tolerance: Default::default(),
+    };
+    let scenario = Scenario::resolve(spec, "ball".into(), Path::new(COMMAND_LINE))?;
+    let terrain_name = scenario.terrain_name().to_string();
+    let report = scenario.run(Outputs {
         record: (!args.no_record).then(|| args.record.clone()),
-        log_rate: args.log_rate,
         trajectory: args.trajectory.clone(),
         metrics: args.metrics.clone(),
+        progress: None,
+    })?;
+    let Metrics::Ball(m) = &report.metrics else {
+        unreachable!("a ball scenario reports ball metrics")
     };
-    let outcome = run.execute()?;
-    let m = &outcome.metrics;
     println!(
         "ball on {terrain_name}: {:.2} s simulated{}",
         m.sim_time,
-        if m.complete { "" } else { " (interrupted)" }
+        if m.complete { "" } else { " (stopped early)" }
     );
     println!(
         "  touch-downs {}, max penetration {:.3} mm, max normal force {:.2} N",
@@ -538,12 +567,140 @@ fn ball(args: BallArgs) -> Result<()> {
         m.final_energy,
         m.max_energy_rise
     );
-    for path in &outcome.written {
-        println!("  wrote {}", path.display());
-    }
+    conclude(&report)?;
     if args.spawn && !args.no_record {
         hexsim::record::rerun::spawn_viewer(&args.record)?;
     }
+    Ok(())
+}
+
+/// Exit codes: 0 every expectation met, 1 some failed (or diverged, or regressed against the
+/// baseline), 2 a usage or input error, 130 interrupted.
+fn batch(args: BatchArgs) -> Result<ExitCode> {
+    use hexsim::batch::{self, Progress, results};
+    let files = batch::scenario_files(&args.scenarios)?;
+    let scenarios = match batch::load(&files) {
+        Ok(s) => s,
+        Err(errors) => {
+            for e in &errors {
+                eprintln!("error: {e}");
+            }
+            anyhow::bail!(
+                "{} scenario file problem{}; nothing was run",
+                errors.len(),
+                if errors.len() == 1 { "" } else { "s" }
+            );
+        }
+    };
+    let baseline = match &args.baseline {
+        Some(path) => Some(results::read(path, false)?.0),
+        None => None,
+    };
+    if !(args.rel_tol.is_finite() && args.rel_tol >= 0.0) {
+        anyhow::bail!("--rel-tol: expected a fraction ≥ 0, got {}", args.rel_tol);
+    }
+    let jobs = args.jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
+    if jobs == 0 {
+        anyhow::bail!("--jobs: expected at least 1");
+    }
+    let mine = (0..scenarios.len())
+        .filter(|&i| args.shard.contains(i))
+        .count();
+    eprintln!(
+        "{} scenarios from {} file{}{}; running {mine} on {jobs} thread{} → {}",
+        scenarios.len(),
+        files.len(),
+        if files.len() == 1 { "" } else { "s" },
+        if args.shard == batch::Shard::WHOLE {
+            String::new()
+        } else {
+            format!(", shard {}", args.shard)
+        },
+        if jobs == 1 { "" } else { "s" },
+        args.output.display()
+    );
+    for s in &scenarios {
+        warn_about(s);
+    }
+    let options = batch::Options {
+        jobs,
+        output: args.output.clone(),
+        resume: args.resume,
+        shard: args.shard,
+        record_dir: args.record_dir.clone(),
+        progress: if args.quiet {
+            Progress::Quiet
+        } else if std::io::stderr().is_terminal() {
+            Progress::Bar
+        } else {
+            Progress::Lines
+        },
+    };
+    let outcome = batch::run(&scenarios, &options)?;
+    let (regressions, missing) = match &baseline {
+        Some(b) => batch::compare_with_baseline(&outcome.records, &scenarios, b, args.rel_tol),
+        None => Default::default(),
+    };
+    println!();
+    print!(
+        "{}",
+        batch::summary::table(
+            &outcome.records,
+            &regressions,
+            outcome.records.len() <= 60 || args.all
+        )
+    );
+    if outcome.resumed > 0 {
+        println!(
+            "{} results kept from the earlier run (--resume)",
+            outcome.resumed
+        );
+    }
+    if !missing.is_empty() {
+        println!("not in the baseline: {} (not compared)", missing.join(", "));
+    }
+    println!(
+        "{:.1} s wall, {:.0} steps/s over {jobs} thread{}; results in {}",
+        outcome.wall_time,
+        outcome.throughput(),
+        if jobs == 1 { "" } else { "s" },
+        args.output.display()
+    );
+    use hexsim::batch::results::Status;
+    let any = |s: Status| outcome.records.iter().any(|r| r.status == s);
+    if outcome.interrupted {
+        println!(
+            "interrupted: {} scenarios not run; finish with --resume",
+            outcome.not_run
+        );
+        return Ok(ExitCode::from(130));
+    }
+    Ok(if any(Status::Error) {
+        ExitCode::from(2)
+    } else if any(Status::Failed) || any(Status::Diverged) || !regressions.is_empty() {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn merge(args: MergeArgs) -> Result<()> {
+    use hexsim::batch::{self, results};
+    let mut parts = Vec::new();
+    for path in &args.shards {
+        let (records, _) = results::read(path, false)?;
+        parts.push((path.clone(), records));
+    }
+    let merged = batch::merge(&parts)?;
+    results::write_all(&args.output, &merged)?;
+    println!(
+        "merged {} results from {} files into {}",
+        merged.len(),
+        parts.len(),
+        args.output.display()
+    );
     Ok(())
 }
 
@@ -609,13 +766,15 @@ fn main() -> ExitCode {
         hexsim::runner::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
     });
     let result = match cli.command {
-        None => run(RunArgs::default()),
-        Some(Command::Run(args)) => run(*args),
-        Some(Command::Ball(args)) => ball(*args),
-        Some(Command::Terrain(command)) => terrain_command(command),
+        None => run(RunArgs::default()).map(|()| ExitCode::SUCCESS),
+        Some(Command::Run(args)) => run(*args).map(|()| ExitCode::SUCCESS),
+        Some(Command::Ball(args)) => ball(*args).map(|()| ExitCode::SUCCESS),
+        Some(Command::Batch(args)) => batch(*args),
+        Some(Command::Merge(args)) => merge(args).map(|()| ExitCode::SUCCESS),
+        Some(Command::Terrain(command)) => terrain_command(command).map(|()| ExitCode::SUCCESS),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(error) => {
             eprintln!("error: {error:#}");
             ExitCode::from(2)

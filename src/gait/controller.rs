@@ -113,6 +113,18 @@ impl GaitController {
         std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
     }
 
+    /// Joint angles of the standing pose with each foot lowered or raised to the ground under it
+    /// (see `ground` in [`Self::targets`]): the body stands level on a slope.
+    pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [[f64; 3]; 6] {
+        std::array::from_fn(|k| {
+            let mut foot = self.neutral[k];
+            foot.z += ground(foot);
+            let solution = self.chains[k].solve(foot, self.last[k]);
+            self.last[k] = solution.angles;
+            solution.angles
+        })
+    }
+
     /// Targets at gait time `t` (s since the gait started) for a command, with the stride scaled by
     /// `blend` ∈ [0, 1] (ramped up at start so the feet leave the standing pose smoothly).
     /// `ground` gives, for a point of a foot's path (body frame), how far the terrain under it lies

@@ -87,7 +87,8 @@ impl GaitSpec {
         self.stride_length / (self.duty_factor * self.period)
     }
 
-    fn validate(&self) -> Result<(), String> {
+    /// Checks every field; the error names the field and what was expected.
+    pub fn validate(&self) -> Result<(), String> {
         let positive = |field: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())

@@ -26,9 +26,12 @@ pub struct BallRun {
 }
 
 /// What a run produced.
+/// A run that diverged still wrote its files; `failure` says what happened.
 pub struct BallOutcome {
     pub metrics: BallMetrics,
     pub written: Vec<PathBuf>,
+    pub steps_per_second: f64,
+    pub failure: Option<String>,
 }
 
 impl BallRun {
@@ -109,6 +112,7 @@ impl BallRun {
             Ok(())
         };
         observe(&initial)?;
+        let started = std::time::Instant::now();
         let mut complete = true;
         let mut failure = None;
         for _ in 0..steps {
@@ -135,7 +139,12 @@ impl BallRun {
         if let Some(t) = trajectory {
             written.push(t.finish()?);
         }
-        let written = super::conclude(written, self.metrics.as_deref(), &metrics, failure)?;
-        Ok(BallOutcome { metrics, written })
+        super::conclude(&mut written, self.metrics.as_deref(), &metrics)?;
+        Ok(BallOutcome {
+            steps_per_second: metrics.steps as f64 / started.elapsed().as_secs_f64().max(1e-9),
+            metrics,
+            written,
+            failure,
+        })
     }
 }

@@ -13,14 +13,12 @@ pub fn interrupted() -> bool {
     INTERRUPTED.load(Ordering::Relaxed)
 }
 
-/// Writes the metrics (if asked for) after the recording and trajectory have been finished, and
-/// turns a failure into an error that lists every file the run still wrote.
+/// Writes the metrics (if asked for) after the recording and trajectory have been finished.
 pub(crate) fn conclude(
-    mut written: Vec<std::path::PathBuf>,
+    written: &mut Vec<std::path::PathBuf>,
     metrics_path: Option<&std::path::Path>,
     metrics: &impl serde::Serialize,
-    failure: Option<String>,
-) -> anyhow::Result<Vec<std::path::PathBuf>> {
+) -> anyhow::Result<()> {
     if let Some(path) = metrics_path {
         crate::record::output::write_atomically(
             path,
@@ -28,16 +26,16 @@ pub(crate) fn conclude(
         )?;
         written.push(path.to_path_buf());
     }
-    match failure {
-        None => Ok(written),
-        Some(message) => {
-            let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-            let files = if files.is_empty() {
-                "none".to_string()
-            } else {
-                files.join(", ")
-            };
-            anyhow::bail!("{message} (files written: {files})")
-        }
-    }
+    Ok(())
+}
+
+/// A failed run's error: what happened and every file the run still wrote.
+pub fn failure_error(message: &str, written: &[std::path::PathBuf]) -> anyhow::Error {
+    let files: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    let files = if files.is_empty() {
+        "none".to_string()
+    } else {
+        files.join(", ")
+    };
+    anyhow::anyhow!("{message} (files written: {files})")
 }

@@ -1,7 +1,7 @@
 //! A hexapod run end to end: robot + terrain + gait + contact → walker → recording, CSV, metrics.
 
 use crate::contact::ContactModel;
-use crate::gait::{GaitController, GaitSpec, VelocityCommand};
+use crate::gait::{CommandSchedule, GaitController, GaitSpec};
 use crate::record::hexapod::{HexapodMetrics, HexapodRecorder, HexapodTrajectory};
 use crate::record::output::check_writable;
 use crate::record::rerun::Recording;
@@ -19,7 +19,8 @@ pub struct WalkRun {
     pub terrain: Arc<HeightGrid>,
     pub terrain_name: String,
     pub gait: GaitSpec,
-    pub command: VelocityCommand,
+    /// The velocity commands over the walk.
+    pub commands: CommandSchedule,
     pub contact: ContactModel,
     pub settings: HexapodSettings,
     pub placement: Placement,
@@ -33,14 +34,16 @@ pub struct WalkRun {
     pub log_rate: f64,
     pub trajectory: Option<PathBuf>,
     pub metrics: Option<PathBuf>,
-    /// Called with the fraction done, for a progress bar.
-    pub progress: Option<Box<dyn Fn(f64)>>,
+    /// Called now and then with the steps done so far, for a progress bar.
+    pub progress: Option<Box<dyn Fn(u64)>>,
 }
 
+/// What a run produced. A run that diverged still wrote its files; `failure` says what happened.
 pub struct WalkOutcome {
     pub metrics: HexapodMetrics,
     pub written: Vec<PathBuf>,
     pub steps_per_second: f64,
+    pub failure: Option<String>,
 }
 
 impl WalkRun {
@@ -79,15 +82,7 @@ impl WalkRun {
                 g.damping
             );
         }
-        for (name, v) in [
-            ("speed", self.command.forward),
-            ("sideways", self.command.sideways),
-            ("turn", self.command.yaw_rate),
-        ] {
-            if !v.is_finite() {
-                bail!("{name}: expected a finite number, got {v}");
-            }
-        }
+        CommandSchedule::new(self.commands.changes().to_vec()).map_err(anyhow::Error::msg)?;
         Ok(())
     }
 
@@ -116,7 +111,7 @@ impl WalkRun {
             self.placement,
             &pose,
         );
-        let mut walker = Walker::new(hexapod, controller, self.command, self.settle_time);
+        let mut walker = Walker::new(hexapod, controller, self.commands.at(0.0), self.settle_time);
         walker.terrain_following = self.terrain_following;
         let every = decimation(self.log_rate, dt);
         let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass());
@@ -170,6 +165,7 @@ impl WalkRun {
                 complete = false;
                 break;
             }
+            walker.set_command(self.commands.at(walker.gait_time().max(0.0)));
             let sample = walker.step();
             if !(sample.robot.body.translation.is_finite()
                 && sample.robot.joint_angles.iter().all(|q| q.is_finite()))
@@ -191,9 +187,9 @@ impl WalkRun {
                 t.observe(&sample)?;
             }
             if let Some(progress) = &self.progress
-                && k % 200 == 0
+                && k % 256 == 255
             {
-                progress(k as f64 / steps as f64);
+                progress(k + 1);
             }
         }
         let elapsed = started.elapsed().as_secs_f64();
@@ -206,11 +202,12 @@ impl WalkRun {
         if let Some(t) = trajectory {
             written.push(t.finish()?);
         }
-        let written = super::conclude(written, self.metrics.as_deref(), &metrics, failure)?;
+        super::conclude(&mut written, self.metrics.as_deref(), &metrics)?;
         Ok(WalkOutcome {
             steps_per_second: metrics.steps as f64 / elapsed.max(1e-9),
             metrics,
             written,
+            failure,
         })
     }
 }

@@ -63,6 +63,32 @@ impl Walker {
         self.hexapod.time() - self.settle_time
     }
 
+    /// How far the terrain under a body-frame point lies above the terrain under the body, seen
+    /// with the body's heading only (its tilt is what following the terrain avoids).
+    fn ground_relative(hexapod: &Hexapod) -> impl Fn(glam::DVec3) -> f64 + '_ {
+        let body = hexapod.body_frame();
+        let terrain = hexapod.terrain();
+        let heading =
+            glam::DMat3::from_rotation_z(body.matrix3.x_axis.y.atan2(body.matrix3.x_axis.x));
+        let center = body.translation;
+        let under_body = terrain.height(center.x, center.y);
+        move |p: glam::DVec3| {
+            let w = center + heading * p;
+            terrain.height(w.x, w.y) - under_body
+        }
+    }
+
+    fn set_joint_targets(&mut self, angles: [[f64; 3]; 6]) {
+        for (leg, angles) in self.hexapod.model().legs.iter().zip(angles) {
+            for (j, a) in leg.joints.iter().zip(angles) {
+                self.targets_by_joint[*j] = a;
+            }
+        }
+        let targets_by_joint = std::mem::take(&mut self.targets_by_joint);
+        self.hexapod.set_targets(&targets_by_joint);
+        self.targets_by_joint = targets_by_joint;
+    }
+
     pub fn step(&mut self) -> WalkSample {
         let t = self.gait_time();
         if t >= 0.0 {
@@ -70,35 +96,21 @@ impl Walker {
             // ramp the stride up over the first cycle so the feet leave the standing pose smoothly
             let blend = (t / period).min(1.0);
             let targets = if self.terrain_following {
-                // the terrain under a body-frame point, relative to the terrain under the body,
-                // with the body's heading only (its tilt is what following the terrain avoids)
-                let body = self.hexapod.body_frame();
-                let terrain = self.hexapod.terrain();
-                let heading = glam::DMat3::from_rotation_z(
-                    body.matrix3.x_axis.y.atan2(body.matrix3.x_axis.x),
-                );
-                let center = body.translation;
-                let under_body = terrain.height(center.x, center.y);
-                let ground = |p: glam::DVec3| {
-                    let w = center + heading * p;
-                    terrain.height(w.x, w.y) - under_body
-                };
+                let ground = Self::ground_relative(&self.hexapod);
                 self.controller.targets(t, self.command, blend, ground)
             } else {
                 self.controller.targets(t, self.command, blend, |_| 0.0)
             };
-            for (leg, angles) in self.hexapod.model().legs.iter().zip(targets.joint_angles) {
-                for (j, a) in leg.joints.iter().zip(angles) {
-                    self.targets_by_joint[*j] = a;
-                }
-            }
+            self.set_joint_targets(targets.joint_angles);
             if targets.clamped.iter().any(|&c| c) {
                 self.clamped_steps += 1;
             }
-            let targets_by_joint = std::mem::take(&mut self.targets_by_joint);
-            self.hexapod.set_targets(&targets_by_joint);
-            self.targets_by_joint = targets_by_joint;
             self.last_targets = Some(targets);
+        } else if self.terrain_following {
+            // stand level from the start, so the walk does not begin tilted with the ground
+            let ground = Self::ground_relative(&self.hexapod);
+            let angles = self.controller.standing_on(ground);
+            self.set_joint_targets(angles);
         }
         let robot = self.hexapod.step();
         WalkSample {

@@ -1,0 +1,93 @@
+//! The table printed at the end of a batch.
+
+use super::baseline::Regression;
+use super::results::{Record, Status};
+use super::status_word;
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+fn metric(r: &Record, name: &str) -> Option<f64> {
+    r.metrics.get(name).and_then(|v| v.as_f64())
+}
+
+fn cell(v: Option<f64>, scale: f64, digits: usize) -> String {
+    v.map_or("-".into(), |v| format!("{:.*}", digits, v * scale))
+}
+
+/// One row per result (only the ones that did not pass, when `all` is false), then the counts and
+/// the slowest scenarios.
+pub fn table(
+    records: &[Record],
+    regressions: &BTreeMap<String, Vec<Regression>>,
+    all: bool,
+) -> String {
+    let mut out = String::new();
+    let shown: Vec<&Record> = records
+        .iter()
+        .filter(|r| all || r.status != Status::Passed || regressions.contains_key(&r.name))
+        .collect();
+    if !shown.is_empty() {
+        let width = shown
+            .iter()
+            .map(|r| r.name.chars().count())
+            .max()
+            .unwrap_or(8)
+            .max(8);
+        let _ = writeln!(
+            out,
+            "{:<9} {:<width$} {:>7} {:>8} {:>8} {:>6} {:>7}  notes",
+            "status", "scenario", "wall s", "steps/s", "dist m", "tilt°", "pen mm"
+        );
+        for r in shown {
+            let tilt = match (metric(r, "max_roll_deg"), metric(r, "max_pitch_deg")) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                _ => None,
+            };
+            let mut notes = r.message.clone().unwrap_or_default();
+            let mut status = status_word(r.status).to_string();
+            if let Some(moved) = regressions.get(&r.name) {
+                if r.status == Status::Passed {
+                    status = "REGRESSED".into();
+                }
+                let moved: Vec<String> = moved.iter().map(|m| m.to_string()).collect();
+                if !notes.is_empty() {
+                    notes.push_str("; ");
+                }
+                notes.push_str(&format!("moved: {}", moved.join(", ")));
+            }
+            let _ = writeln!(
+                out,
+                "{status:<9} {:<width$} {:>7.1} {:>8.0} {:>8} {:>6} {:>7}  {notes}",
+                r.name,
+                r.wall_time_s,
+                r.steps_per_second,
+                cell(metric(r, "distance"), 1.0, 3),
+                cell(tilt, 1.0, 1),
+                cell(metric(r, "max_penetration"), 1e3, 2),
+            );
+        }
+        out.push('\n');
+    }
+    let count = |s: Status| records.iter().filter(|r| r.status == s).count();
+    let _ = writeln!(
+        out,
+        "{} scenarios: {} passed, {} failed, {} diverged, {} errors; {} regressed against the baseline",
+        records.len(),
+        count(Status::Passed),
+        count(Status::Failed),
+        count(Status::Diverged),
+        count(Status::Error),
+        regressions.len()
+    );
+    let mut slowest: Vec<&Record> = records.iter().collect();
+    slowest.sort_by(|a, b| b.wall_time_s.total_cmp(&a.wall_time_s));
+    let slowest: Vec<String> = slowest
+        .iter()
+        .take(3)
+        .map(|r| format!("{} ({:.1} s)", r.name, r.wall_time_s))
+        .collect();
+    if !slowest.is_empty() {
+        let _ = writeln!(out, "slowest: {}", slowest.join(", "));
+    }
+    out
+}

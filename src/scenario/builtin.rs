@@ -1,0 +1,32 @@
+//! The files built into the binary, so that every command runs with no files at hand.
+
+/// A built-in file: the path it has in the repository, and its text.
+#[derive(Debug, Clone, Copy)]
+pub struct Builtin {
+    pub path: &'static str,
+    pub text: &'static str,
+}
+
+/// The reference robot (shared/reference §1).
+pub const HEX18: Builtin = Builtin {
+    path: "robots/hex18.urdf",
+    text: include_str!("../../robots/hex18.urdf"),
+};
+
+/// The tripod gait.
+pub const TRIPOD: Builtin = Builtin {
+    path: "gaits/tripod.toml",
+    text: include_str!("../../gaits/tripod.toml"),
+};
+
+/// The paper's natural terrain at hexapod scale, 0.04 m peak to peak over 4 m × 4 m.
+pub const NATURAL: Builtin = Builtin {
+    path: "terrains/natural.toml",
+    text: include_str!("../../terrains/natural.toml"),
+};
+
+/// The paper's natural terrain at ball scale, 0.2 m peak to peak over 4 m × 4 m.
+pub const NATURAL_BALL: Builtin = Builtin {
+    path: "terrains/natural_ball.toml",
+    text: include_str!("../../terrains/natural_ball.toml"),
+};

@@ -1,0 +1,432 @@
+//! Scenario files (TOML, every table `deny_unknown_fields` so a typo is an error): one simulation —
+//! what walks (or falls) on what ground, commanded how, for how long, what to record, and what it
+//! must achieve. Paths inside a scenario resolve relative to the scenario file.
+//!
+//! ```toml
+//! description = "tripod on the paper's natural terrain"
+//! kind = "walk"                        # walk (default) | ball
+//! robot = "../robots/hex18.urdf"       # default: hex18 (built in)
+//! terrain = "../terrains/natural.toml" # a terrain file, or an inline table like a terrain file's
+//! gait = "../gaits/tripod.toml"        # a gait file, or an inline table like a gait file's
+//! duration = 10.0                      # s walked (after `settle`), or simulated for a ball
+//! dt = 0.001
+//! seed = 7                             # replaces the terrain generator's seed
+//! [start]                              # default: 0.75 m inside the terrain's −x edge
+//! x = -1.25
+//! heading_deg = 0.0
+//! [[command]]                          # default: the gait's nominal speed straight ahead
+//! at = 0.0                             # s into the walk
+//! forward = 0.1                        # m/s (default: the gait's nominal speed)
+//! turn_deg_s = 10.0
+//! ramp = 0.5                           # s to blend from the previous command
+//! [contact]                            # default: the reference contact (k = 2e4, c = 150, Karnopp 0.9/0.8)
+//! stiffness = 2e4
+//! [record]
+//! rrd = true                           # write NAME.rrd (and trajectory = true: NAME.csv) in the batch's output folder
+//! [expect]
+//! distance_min = 1.0
+//! max_tilt_deg = 25
+//! max_penetration_mm = 5
+//! ```
+
+use crate::contact::{ContactModel, FrictionLaw, NormalLaw};
+use crate::terrain::{Orientation, TerrainSpec};
+use serde::de::{DeserializeOwned, Error as _};
+use serde::{Deserialize, Deserializer, Serialize};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// What is simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// The hexapod walks a gait.
+    #[default]
+    Walk,
+    /// A ball is dropped on the terrain (the paper's experiment).
+    Ball,
+}
+
+/// A file name, or the file's content written inline as a table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum FileOr<T> {
+    File(PathBuf),
+    Inline(T),
+}
+
+impl<'de, T: DeserializeOwned> Deserialize<'de> for FileOr<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match toml::Value::deserialize(d)? {
+            toml::Value::String(path) => Ok(FileOr::File(path.into())),
+            table @ toml::Value::Table(_) => table
+                .try_into()
+                .map(FileOr::Inline)
+                .map_err(|e| D::Error::custom(format!("inline table: {}", e.message()))),
+            other => Err(D::Error::custom(format!(
+                "expected a file name or an inline table, got a {}",
+                other.type_str()
+            ))),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSpec {
+    /// Default: the file's name without `.toml`.
+    #[serde(default)]
+    pub name: Option<String>,
+    #[serde(default)]
+    pub description: String,
+    #[serde(default)]
+    pub kind: Kind,
+    /// Default: the natural terrain (walk: terrains/natural.toml; ball: terrains/natural_ball.toml).
+    #[serde(default)]
+    pub terrain: Option<FileOr<TerrainSpec>>,
+    /// Replaces the terrain generator's seed (natural, rough).
+    #[serde(default)]
+    pub seed: Option<u32>,
+    /// Seconds walked after settling (walk) or simulated (ball).
+    pub duration: f64,
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    #[serde(default)]
+    pub contact: ContactSpec,
+
+    // --- walk ---
+    /// URDF. Default: robots/hex18.urdf (built in).
+    #[serde(default)]
+    pub robot: Option<PathBuf>,
+    /// Default: gaits/tripod.toml (built in).
+    #[serde(default)]
+    pub gait: Option<FileOr<crate::gait::GaitSpec>>,
+    /// Seconds standing before the gait starts (default 1).
+    #[serde(default)]
+    pub settle: Option<f64>,
+    /// Keep the body level by following the terrain under the feet (default false).
+    #[serde(default)]
+    pub follow_terrain: Option<bool>,
+    /// rapier substeps per step (default 4).
+    #[serde(default)]
+    pub solver_iterations: Option<usize>,
+    #[serde(default)]
+    pub servo: Option<ServoSpec>,
+    #[serde(default)]
+    pub start: Option<StartSpec>,
+    #[serde(default)]
+    pub command: Option<Vec<CommandSpec>>,
+
+    // --- ball ---
+    #[serde(default)]
+    pub ball: Option<BallSpec>,
+
+    #[serde(default)]
+    pub record: RecordSpec,
+    #[serde(default)]
+    pub expect: Expectations,
+    /// Per-metric tolerances when comparing with a baseline: `[tolerance.distance] rel = 0.1`.
+    #[serde(default)]
+    pub tolerance: BTreeMap<String, Tolerance>,
+}
+
+fn default_dt() -> f64 {
+    1e-3
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalChoice {
+    /// The paper's F = k·x + c·ẋ.
+    #[default]
+    SpringDamper,
+    /// F = k·xⁿ·(1 + d·ẋ).
+    HuntCrossley,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionChoice {
+    #[default]
+    Karnopp,
+    Coulomb,
+    Viscous,
+    Stribeck,
+    None,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OrientationChoice {
+    /// The exact normal of the interpolated surface.
+    #[default]
+    Exact,
+    /// The paper's central-difference roll/pitch (eq. 1–4).
+    Paper,
+}
+
+/// The contact's parameters as written in a file or on the command line; defaults are the
+/// reference contact of shared/reference §2.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactSpec {
+    pub normal: NormalChoice,
+    /// k (N/m; Hunt–Crossley N/mⁿ).
+    pub stiffness: f64,
+    /// c (N·s/m; Hunt–Crossley's d in s/m).
+    pub damping: f64,
+    /// Hunt–Crossley's n.
+    pub exponent: f64,
+    pub friction: FrictionChoice,
+    pub mu_static: f64,
+    /// Karnopp's μk, Coulomb's μ, Stribeck's Coulomb level.
+    pub mu_kinetic: f64,
+    /// Karnopp's stick band Δv (m/s).
+    pub stick_band: f64,
+    /// Regularisation width of Coulomb and Stribeck (m/s).
+    pub width: f64,
+    /// Viscous coefficient (N·s/m).
+    pub viscous: f64,
+    pub stribeck_velocity: f64,
+    pub orientation: OrientationChoice,
+    /// The paper's XE = YE (m).
+    pub paper_step: f64,
+}
+
+impl Default for ContactSpec {
+    fn default() -> Self {
+        ContactSpec {
+            normal: NormalChoice::SpringDamper,
+            stiffness: 2.0e4,
+            damping: 150.0,
+            exponent: 1.5,
+            friction: FrictionChoice::Karnopp,
+            mu_static: 0.9,
+            mu_kinetic: 0.8,
+            stick_band: 1e-3,
+            width: 1e-3,
+            viscous: 0.0,
+            stribeck_velocity: 0.05,
+            orientation: OrientationChoice::Exact,
+            paper_step: 0.01,
+        }
+    }
+}
+
+impl ContactSpec {
+    pub fn model(&self) -> ContactModel {
+        let normal = match self.normal {
+            NormalChoice::SpringDamper => NormalLaw::SpringDamper {
+                stiffness: self.stiffness,
+                damping: self.damping,
+            },
+            NormalChoice::HuntCrossley => NormalLaw::HuntCrossley {
+                stiffness: self.stiffness,
+                exponent: self.exponent,
+                damping: self.damping,
+            },
+        };
+        let friction = match self.friction {
+            FrictionChoice::Karnopp => FrictionLaw::Karnopp {
+                mu_static: self.mu_static,
+                mu_kinetic: self.mu_kinetic,
+                stick_band: self.stick_band,
+            },
+            FrictionChoice::Coulomb => FrictionLaw::Coulomb {
+                mu: self.mu_kinetic,
+                width: self.width,
+            },
+            FrictionChoice::Viscous => FrictionLaw::Viscous {
+                coefficient: self.viscous,
+            },
+            FrictionChoice::Stribeck => FrictionLaw::Stribeck {
+                mu_static: self.mu_static,
+                mu_coulomb: self.mu_kinetic,
+                viscous: self.viscous,
+                stribeck_velocity: self.stribeck_velocity,
+                width: self.width,
+            },
+            FrictionChoice::None => FrictionLaw::None,
+        };
+        let orientation = match self.orientation {
+            OrientationChoice::Exact => Orientation::Exact,
+            OrientationChoice::Paper => Orientation::Paper {
+                xe: self.paper_step,
+                ye: self.paper_step,
+            },
+        };
+        ContactModel {
+            normal,
+            friction,
+            orientation,
+        }
+    }
+}
+
+/// Joint servos: τ = k·(q* − q) − c·q̇, limited to the URDF's effort.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ServoSpec {
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+impl Default for ServoSpec {
+    fn default() -> Self {
+        ServoSpec {
+            stiffness: 20.0,
+            damping: 0.05,
+        }
+    }
+}
+
+/// Where the body starts; unset x/y: 0.75 m inside the terrain's −x edge, centred in y.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StartSpec {
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+    pub heading_deg: f64,
+}
+
+/// From `at` seconds into the walk, ramp to this command over `ramp` seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CommandSpec {
+    #[serde(default)]
+    pub at: f64,
+    /// m/s; default: the gait's nominal speed.
+    #[serde(default)]
+    pub forward: Option<f64>,
+    /// m/s, left positive.
+    #[serde(default)]
+    pub sideways: f64,
+    /// deg/s, left positive.
+    #[serde(default)]
+    pub turn_deg_s: f64,
+    #[serde(default = "default_ramp")]
+    pub ramp: f64,
+}
+
+fn default_ramp() -> f64 {
+    0.5
+}
+
+/// The ball of a ball scenario (defaults: the reference ball, 0.05 m and 1 kg, dropped 0.5 m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BallSpec {
+    pub radius: f64,
+    pub mass: f64,
+    /// Centre x, y at the start (m).
+    pub at: [f64; 2],
+    /// Height of the ball's lowest point above the ground below it (m).
+    pub drop_height: f64,
+    pub velocity: [f64; 3],
+    pub angular_velocity: [f64; 3],
+    pub lock_rotation: bool,
+}
+
+impl Default for BallSpec {
+    fn default() -> Self {
+        BallSpec {
+            radius: 0.05,
+            mass: 1.0,
+            at: [0.3, -0.2],
+            drop_height: 0.5,
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            lock_rotation: false,
+        }
+    }
+}
+
+/// What to write besides the results record.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RecordSpec {
+    /// A rerun recording, NAME.rrd.
+    pub rrd: bool,
+    /// The trajectory CSV, NAME.csv.
+    pub trajectory: bool,
+    /// Samples per second (default: walk 50, ball 100).
+    pub log_rate: Option<f64>,
+}
+
+/// What the run must achieve. Unset expectations are not checked, except `no_divergence`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Expectations {
+    /// The run must not diverge (non-finite state).
+    pub no_divergence: bool,
+    /// Deepest penetration of any foot (or the ball), mm.
+    pub max_penetration_mm: Option<f64>,
+    // walk
+    /// Body distance covered, m.
+    pub distance_min: Option<f64>,
+    pub distance_max: Option<f64>,
+    /// Distance along the starting heading, m.
+    pub forward_min: Option<f64>,
+    /// |distance across the starting heading|, m.
+    pub sideways_max: Option<f64>,
+    /// Mean speed over the walk, m/s.
+    pub speed_min: Option<f64>,
+    /// Signed heading change (left positive), degrees.
+    pub heading_change_min_deg: Option<f64>,
+    pub heading_change_max_deg: Option<f64>,
+    /// Largest |roll| or |pitch| of the body, degrees.
+    pub max_tilt_deg: Option<f64>,
+    /// Largest distance any foot slid while on the ground, mm.
+    pub max_foot_slip_mm: Option<f64>,
+    /// Mean body height above the terrain under it, m.
+    pub body_height_min: Option<f64>,
+    pub body_height_max: Option<f64>,
+    pub cost_of_transport_max: Option<f64>,
+    /// No leg target out of reach.
+    pub no_clamped_ik: bool,
+    // ball
+    pub touchdowns_min: Option<f64>,
+    /// Largest rise of the ball's total energy, J (the contact is passive when ≈ 0).
+    pub max_energy_rise_j: Option<f64>,
+    pub final_speed_max: Option<f64>,
+    /// Height of the lowest point at the first apex after the first bounce, m.
+    pub apex_min: Option<f64>,
+    pub apex_max: Option<f64>,
+}
+
+impl Default for Expectations {
+    fn default() -> Self {
+        Expectations {
+            no_divergence: true,
+            max_penetration_mm: None,
+            distance_min: None,
+            distance_max: None,
+            forward_min: None,
+            sideways_max: None,
+            speed_min: None,
+            heading_change_min_deg: None,
+            heading_change_max_deg: None,
+            max_tilt_deg: None,
+            max_foot_slip_mm: None,
+            body_height_min: None,
+            body_height_max: None,
+            cost_of_transport_max: None,
+            no_clamped_ik: false,
+            touchdowns_min: None,
+            max_energy_rise_j: None,
+            final_speed_max: None,
+            apex_min: None,
+            apex_max: None,
+        }
+    }
+}
+
+/// How far a metric may move from its baseline: |new − old| ≤ max(rel·|old|, abs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tolerance {
+    #[serde(default)]
+    pub rel: Option<f64>,
+    #[serde(default)]
+    pub abs: Option<f64>,
+}

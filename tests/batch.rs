@@ -1,0 +1,301 @@
+//! `hexsim batch` and `hexsim merge` end to end: exit codes, resume, shards, threads, baselines.
+//! The scenarios are short (mostly balls, two 1-s walks) so the suite stays fast.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn hexsim(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hexsim"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hexsim-batch-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("scenarios")).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, text: &str) {
+    std::fs::write(dir.join("scenarios").join(name), text).unwrap();
+}
+
+const FLAT: &str = "[terrain.source]\nkind = \"flat\"\nsize = [4.0, 4.0]\n";
+
+/// A sweep of 7 ball drops (uneven across 3 shards) and one that bounces too high for its
+/// expectation.
+fn balls(dir: &Path) {
+    write(
+        dir,
+        "drops.toml",
+        &format!(
+            "kind = \"ball\"\nduration = 0.6\n{FLAT}[expect]\nmax_penetration_mm = 30\n[sweep]\n\"ball.drop_height\" = {{ from = 0.1, to = 0.4, count = 7 }}\n"
+        ),
+    );
+    write(
+        dir,
+        "too_bouncy.toml",
+        &format!(
+            "kind = \"ball\"\nduration = 1.0\n{FLAT}[contact]\ndamping = 28.28\n[expect]\napex_max = 0.2\n"
+        ),
+    );
+}
+
+fn walks(dir: &Path) {
+    for (name, gait) in [("tripod", "tripod"), ("wave", "wave")] {
+        let gaits = Path::new(env!("CARGO_MANIFEST_DIR")).join("gaits");
+        write(
+            dir,
+            &format!("walk_{name}.toml"),
+            &format!(
+                "gait = \"{}/{gait}.toml\"\nduration = 1.0\nsettle = 0.3\n{FLAT}[expect]\nmax_tilt_deg = 10\n",
+                gaits.display()
+            ),
+        );
+    }
+}
+
+fn records(path: &Path) -> Vec<Value> {
+    let mut list: Vec<Value> = std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    list.sort_by_key(|r| r["index"].as_u64());
+    list
+}
+
+/// What must not change between runs of the same scenarios (everything but timings).
+fn results(path: &Path) -> Vec<Value> {
+    records(path)
+        .into_iter()
+        .map(|mut r| {
+            r["wall_time_s"] = Value::Null;
+            r["steps_per_second"] = Value::Null;
+            r
+        })
+        .collect()
+}
+
+fn text(out: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+#[test]
+fn a_failing_expectation_exits_1_and_says_which() {
+    let dir = scratch("fail");
+    balls(&dir);
+    let out = hexsim(&["batch", "scenarios", "-o", "r.jsonl"], &dir);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    let t = text(&out);
+    assert!(t.contains("too_bouncy") && t.contains("apex_max"), "{t}");
+    assert!(t.contains("7 passed, 1 failed"), "{t}");
+    let r = records(&dir.join("r.jsonl"));
+    assert_eq!(r.len(), 8);
+    let bouncy = r.iter().find(|r| r["name"] == "too_bouncy").unwrap();
+    assert_eq!(bouncy["status"], "failed");
+    let apex = &bouncy["expectations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["expectation"] == "apex_max")
+        .unwrap();
+    assert_eq!(apex["passed"], false);
+    assert!(apex["value"].as_f64().unwrap() > 0.2);
+    // names come from the sweep's parameters
+    assert!(r.iter().any(|r| r["name"] == "drops[drop_height=0.1]"));
+}
+
+#[test]
+fn resume_keeps_finished_results_and_reruns_the_rest() {
+    let dir = scratch("resume");
+    balls(&dir);
+    hexsim(&["batch", "scenarios", "-o", "r.jsonl"], &dir);
+    let first = std::fs::read_to_string(dir.join("r.jsonl")).unwrap();
+    // as if the batch had been killed while writing its last line, and had not run two others
+    let lines: Vec<&str> = first.lines().collect();
+    let cut = format!("{}\n{}", lines[..5].join("\n"), &lines[5][..20]);
+    std::fs::write(dir.join("r.jsonl"), cut).unwrap();
+    let out = hexsim(&["batch", "scenarios", "-o", "r.jsonl", "--resume"], &dir);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    assert!(text(&out).contains("5 results kept"), "{}", text(&out));
+    let after = records(&dir.join("r.jsonl"));
+    assert_eq!(after.len(), 8);
+    // the kept ones are the very same lines (same wall time), the rest were run again
+    for line in &lines[..5] {
+        let kept: Value = serde_json::from_str(line).unwrap();
+        assert!(after.contains(&kept), "{} was run again", kept["name"]);
+    }
+    assert_eq!(results(&dir.join("r.jsonl")).len(), 8);
+}
+
+#[test]
+fn shards_merged_equal_the_whole_batch_and_merge_refuses_gaps_and_repeats() {
+    let dir = scratch("shards");
+    balls(&dir);
+    hexsim(
+        &["batch", "scenarios", "-o", "whole.jsonl", "-j", "1"],
+        &dir,
+    );
+    for i in 1..=3 {
+        let shard = format!("{i}/3");
+        let file = format!("s{i}.jsonl");
+        let out = hexsim(
+            &["batch", "scenarios", "--shard", &shard, "-o", &file],
+            &dir,
+        );
+        assert!(out.status.code().is_some(), "{}", text(&out));
+        assert!(records(&dir.join(&file)).len() >= 2);
+    }
+    let out = hexsim(
+        &[
+            "merge",
+            "s1.jsonl",
+            "s2.jsonl",
+            "s3.jsonl",
+            "-o",
+            "merged.jsonl",
+        ],
+        &dir,
+    );
+    assert!(out.status.success(), "{}", text(&out));
+    let strip_shard = |mut v: Vec<Value>| {
+        for r in &mut v {
+            r["shard"] = Value::Null;
+        }
+        v
+    };
+    assert_eq!(
+        strip_shard(results(&dir.join("merged.jsonl"))),
+        strip_shard(results(&dir.join("whole.jsonl")))
+    );
+    let missing = hexsim(&["merge", "s1.jsonl", "s3.jsonl", "-o", "m.jsonl"], &dir);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(
+        text(&missing).contains("shard 2/3 is missing"),
+        "{}",
+        text(&missing)
+    );
+    let twice = hexsim(
+        &["merge", "s1.jsonl", "s2.jsonl", "s3.jsonl", "s2.jsonl"],
+        &dir,
+    );
+    assert_eq!(twice.status.code(), Some(2));
+    assert!(text(&twice).contains("appears twice"), "{}", text(&twice));
+}
+
+#[test]
+fn one_thread_or_two_give_identical_results() {
+    let dir = scratch("jobs");
+    balls(&dir);
+    walks(&dir);
+    let one = hexsim(&["batch", "scenarios", "-o", "one.jsonl", "-j", "1"], &dir);
+    let two = hexsim(&["batch", "scenarios", "-o", "two.jsonl", "-j", "2"], &dir);
+    assert_eq!(one.status.code(), Some(1), "{}", text(&one));
+    assert_eq!(two.status.code(), Some(1), "{}", text(&two));
+    let (a, b) = (
+        results(&dir.join("one.jsonl")),
+        results(&dir.join("two.jsonl")),
+    );
+    assert_eq!(a.len(), 10);
+    let walk = a.iter().find(|r| r["name"] == "walk_tripod").unwrap();
+    assert!(
+        walk["metrics"]["distance"].as_f64().unwrap() > 0.02,
+        "{walk}"
+    );
+    assert_eq!(a, b, "results differ between --jobs 1 and --jobs 2");
+}
+
+#[test]
+fn a_moved_metric_fails_against_the_baseline() {
+    let dir = scratch("baseline");
+    balls(&dir);
+    std::fs::remove_file(dir.join("scenarios/too_bouncy.toml")).unwrap();
+    let out = hexsim(&["batch", "scenarios", "-o", "base.jsonl"], &dir);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let same = hexsim(
+        &[
+            "batch",
+            "scenarios",
+            "-o",
+            "r.jsonl",
+            "--baseline",
+            "base.jsonl",
+        ],
+        &dir,
+    );
+    assert_eq!(same.status.code(), Some(0), "{}", text(&same));
+    // an earlier build in which one drop bounced 2 cm higher and penetrated 3 mm less
+    let mut base = records(&dir.join("base.jsonl"));
+    let r = base
+        .iter_mut()
+        .find(|r| r["name"] == "drops[drop_height=0.3]")
+        .unwrap();
+    let apex = r["metrics"]["first_apex_height"].as_f64().unwrap();
+    r["metrics"]["first_apex_height"] = (apex - 0.02).into();
+    let lines: Vec<String> = base.iter().map(|r| r.to_string()).collect();
+    std::fs::write(dir.join("old.jsonl"), lines.join("\n")).unwrap();
+    let out = hexsim(
+        &[
+            "batch",
+            "scenarios",
+            "-o",
+            "r.jsonl",
+            "--baseline",
+            "old.jsonl",
+        ],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out));
+    let t = text(&out);
+    assert!(
+        t.contains("REGRESSED")
+            && t.contains("drops[drop_height=0.3]")
+            && t.contains("first_apex_height"),
+        "{t}"
+    );
+    assert!(t.contains("1 regressed"), "{t}");
+}
+
+#[test]
+fn a_broken_scenario_is_an_input_error_naming_file_and_field() {
+    let dir = scratch("broken");
+    write(&dir, "typo.toml", "duration = 1.0\nsetle = 0.5\n");
+    write(&dir, "bad_dt.toml", "duration = 1.0\ndt = 0.5\n");
+    write(
+        &dir,
+        "wrong_kind.toml",
+        "kind = \"ball\"\nduration = 1.0\ngait = \"x.toml\"\n",
+    );
+    write(
+        &dir,
+        "bad_sweep.toml",
+        "duration = 1.0\nterrain = \"t.toml\"\n[sweep]\n\"terrain.source.peak_to_peak\" = [0.1]\n",
+    );
+    let out = hexsim(&["batch", "scenarios"], &dir);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    let t = text(&out);
+    for expected in [
+        "typo.toml",
+        "unknown field `setle`",
+        "bad_dt.toml: dt: expected a time step in (0, 0.01] s, got 0.5",
+        "wrong_kind.toml: gait: applies to walk scenarios",
+        "bad_sweep.toml",
+        "`terrain` is a string",
+        "4 scenario file problems; nothing was run",
+    ] {
+        assert!(t.contains(expected), "missing {expected:?} in:\n{t}");
+    }
+    assert!(!dir.join("results.jsonl").exists());
+    let none = hexsim(&["batch", "no/such/folder"], &dir);
+    assert_eq!(none.status.code(), Some(2));
+    assert!(text(&none).contains("no/such/folder: no such scenario file or folder"));
+}
