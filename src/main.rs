@@ -76,6 +76,9 @@ struct BatchArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors.
+    #[arg(long)]
+    strict: bool,
 }
 
 #[derive(Args)]
@@ -257,6 +260,9 @@ struct BallArgs {
     /// Open the recording in the rerun viewer when done.
     #[arg(long)]
     spawn: bool,
+    /// Run even if dt is above the contact spring's stability limit.
+    #[arg(long)]
+    allow_unstable_dt: bool,
 }
 
 #[derive(Args)]
@@ -330,6 +336,12 @@ struct RunArgs {
     /// Open the recording in the rerun viewer when done.
     #[arg(long)]
     spawn: bool,
+    /// Run even if dt is above the contact spring's stability limit.
+    #[arg(long)]
+    allow_unstable_dt: bool,
+    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors.
+    #[arg(long)]
+    strict: bool,
 }
 
 impl Default for RunArgs {
@@ -342,13 +354,22 @@ impl Default for RunArgs {
     }
 }
 
-/// Prints the robot's warnings (missing meshes, …) once.
-fn warn_about(scenario: &Scenario) {
-    if let Some(robot) = scenario.robot() {
-        for warning in &robot.warnings {
-            eprintln!("warning: {warning}");
-        }
+/// Prints the scenarios' warnings (a missing visual mesh, a gait with too few feet down), each
+/// once; with `strict` they are errors.
+fn warn_about<'a>(scenarios: impl IntoIterator<Item = &'a Scenario>, strict: bool) -> Result<()> {
+    let warnings: std::collections::BTreeSet<&String> =
+        scenarios.into_iter().flat_map(|s| &s.warnings).collect();
+    for warning in &warnings {
+        eprintln!("{}: {warning}", if strict { "error" } else { "warning" });
     }
+    if strict && !warnings.is_empty() {
+        anyhow::bail!(
+            "{} warning{} treated as errors (--strict); nothing was run",
+            warnings.len(),
+            if warnings.len() == 1 { "" } else { "s" }
+        );
+    }
+    Ok(())
 }
 
 /// A progress bar on a terminal, nothing otherwise.
@@ -367,10 +388,11 @@ fn progress_bar(steps: u64, what: String) -> Option<indicatif::ProgressBar> {
     })
 }
 
-/// Where a command-line run's relative paths resolve from, and what its errors name.
-const COMMAND_LINE: &str = "command line";
+/// A command-line run has no scenario file: relative paths resolve from the working folder, and
+/// errors name the option's own file.
+const COMMAND_LINE: &str = "";
 
-fn run(args: RunArgs) -> Result<()> {
+fn run(args: RunArgs) -> Result<ExitCode> {
     let spec = ScenarioSpec {
         name: Some("run".into()),
         description: String::new(),
@@ -380,6 +402,7 @@ fn run(args: RunArgs) -> Result<()> {
         duration: args.duration,
         dt: args.dt,
         contact: args.contact.spec(),
+        allow_unstable_dt: args.allow_unstable_dt,
         robot: args.robot.clone(),
         gait: args.gait.clone().map(FileOr::File),
         settle: Some(args.settle),
@@ -410,7 +433,7 @@ fn run(args: RunArgs) -> Result<()> {
         tolerance: Default::default(),
     };
     let scenario = Scenario::resolve(spec, "run".into(), Path::new(COMMAND_LINE))?;
-    warn_about(&scenario);
+    warn_about([&scenario], args.strict)?;
     let gait_name = scenario.gait().map_or(String::new(), |g| g.name.clone());
     let terrain_name = scenario.terrain_name().to_string();
     let bar = progress_bar(
@@ -466,21 +489,30 @@ fn run(args: RunArgs) -> Result<()> {
         );
     }
     println!("  {:.0} steps/s", report.steps_per_second);
-    conclude(&report)?;
+    let code = conclude(&report);
     if args.spawn && !args.no_record {
         hexsim::record::rerun::spawn_viewer(&args.record)?;
     }
-    Ok(())
+    Ok(code)
 }
 
-/// Lists the files written; a run that stopped early is an error after that.
-fn conclude(report: &Report) -> Result<()> {
+/// Lists the files written. Exit code: 0 done, 1 diverged (the message says when, where and why),
+/// 130 interrupted (Ctrl-C, SIGTERM); the files hold the run so far either way.
+fn conclude(report: &Report) -> ExitCode {
     for path in &report.written {
         println!("  wrote {}", path.display());
     }
-    match &report.failure {
-        Some(failure) => Err(hexsim::runner::failure_error(failure, &report.written)),
-        None => Ok(()),
+    if let Some(failure) = &report.failure {
+        eprintln!(
+            "error: {:#}",
+            hexsim::runner::failure_error(failure, &report.written)
+        );
+        ExitCode::from(1)
+    } else if !report.metrics.complete() {
+        eprintln!("interrupted: the files hold the run so far, marked incomplete");
+        ExitCode::from(130)
+    } else {
+        ExitCode::SUCCESS
     }
 }
 
@@ -494,7 +526,7 @@ impl Default for BallArgs {
     }
 }
 
-fn ball(args: BallArgs) -> Result<()> {
+fn ball(args: BallArgs) -> Result<ExitCode> {
     let spec = ScenarioSpec {
         name: Some("ball".into()),
         description: String::new(),
@@ -504,6 +536,7 @@ fn ball(args: BallArgs) -> Result<()> {
         duration: args.duration,
         dt: args.dt,
         contact: args.contact.spec(),
+        allow_unstable_dt: args.allow_unstable_dt,
         robot: None,
         gait: None,
         settle: None,
@@ -567,11 +600,11 @@ fn ball(args: BallArgs) -> Result<()> {
         m.final_energy,
         m.max_energy_rise
     );
-    conclude(&report)?;
+    let code = conclude(&report);
     if args.spawn && !args.no_record {
         hexsim::record::rerun::spawn_viewer(&args.record)?;
     }
-    Ok(())
+    Ok(code)
 }
 
 /// Exit codes: 0 every expectation met, 1 some failed (or diverged, or regressed against the
@@ -621,9 +654,7 @@ fn batch(args: BatchArgs) -> Result<ExitCode> {
         if jobs == 1 { "" } else { "s" },
         args.output.display()
     );
-    for s in &scenarios {
-        warn_about(s);
-    }
+    warn_about(&scenarios, args.strict)?;
     let options = batch::Options {
         jobs,
         output: args.output.clone(),
@@ -766,9 +797,9 @@ fn main() -> ExitCode {
         hexsim::runner::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
     });
     let result = match cli.command {
-        None => run(RunArgs::default()).map(|()| ExitCode::SUCCESS),
-        Some(Command::Run(args)) => run(*args).map(|()| ExitCode::SUCCESS),
-        Some(Command::Ball(args)) => ball(*args).map(|()| ExitCode::SUCCESS),
+        None => run(RunArgs::default()),
+        Some(Command::Run(args)) => run(*args),
+        Some(Command::Ball(args)) => ball(*args),
         Some(Command::Batch(args)) => batch(*args),
         Some(Command::Merge(args)) => merge(args).map(|()| ExitCode::SUCCESS),
         Some(Command::Terrain(command)) => terrain_command(command).map(|()| ExitCode::SUCCESS),

@@ -178,3 +178,102 @@ fn run_walks_and_writes_recording_trajectory_and_metrics() {
         "{metrics}"
     );
 }
+
+/// Ctrl-C mid-run: the run stops at the next step, and the recording (decodable to its end), the
+/// trajectory and the metrics (marked incomplete) hold the run so far; exit code 130.
+#[test]
+fn sigint_leaves_a_readable_recording_and_incomplete_metrics() {
+    let dir = scratch("sigint");
+    let (rrd, csv, json) = (dir.join("i.rrd"), dir.join("i.csv"), dir.join("i.json"));
+    let child = hexsim()
+        .args(["run", "--duration", "600", "--settle", "0.2"])
+        .arg("--record")
+        .arg(&rrd)
+        .arg("--trajectory")
+        .arg(&csv)
+        .arg("--metrics")
+        .arg(&json)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // wait until it is stepping (the partial trajectory has rows), then interrupt it
+    let partial = dir.join("i.csv.partial");
+    let started = std::time::Instant::now();
+    while std::fs::read(&partial).map_or(0, |b| b.len()) < 50_000 {
+        assert!(
+            started.elapsed().as_secs() < 120,
+            "the run never started writing"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    // the shell's own `kill`, so no procps is needed
+    let status = Command::new("sh")
+        .args(["-c", &format!("kill -INT {}", child.id())])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["complete"], false);
+    let steps = metrics["steps"].as_u64().unwrap();
+    assert!(steps > 200 && steps < 600_000, "{steps} steps");
+    let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
+    assert!(rows > 10, "{rows} trajectory rows");
+    let messages = hexsim::record::rerun::count_messages(&rrd).unwrap();
+    assert!(messages > 10, "{messages} messages in the recording");
+    for leftover in ["i.rrd.partial", "i.csv.partial", "i.json.partial"] {
+        assert!(!dir.join(leftover).exists(), "{leftover} left behind");
+    }
+}
+
+/// An absurd stiffness with a large step (allowed on purpose) diverges: the run stops with when,
+/// where and the likely cause, exits 1, and still writes its metrics marked incomplete.
+#[test]
+fn a_diverging_run_is_caught_with_when_where_and_why() {
+    let dir = scratch("diverge");
+    let json = dir.join("d.json");
+    let out = hexsim()
+        .args([
+            "run",
+            "--terrain",
+            "terrains/flat.toml",
+            "--stiffness",
+            "2e6",
+            "--dt",
+            "0.004",
+            "--allow-unstable-dt",
+            "--no-record",
+            "--duration",
+            "5",
+        ])
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    for fragment in [
+        "the simulation diverged at t = ",
+        "likely cause: dt = 0.004 s",
+        "stability limit",
+        "reduce dt or the stiffness",
+    ] {
+        assert!(stderr.contains(fragment), "no {fragment:?} in {stderr}");
+    }
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["complete"], false);
+    // without the flag the step is refused before anything runs, with the limit
+    let out = hexsim()
+        .args(["run", "--stiffness", "2e6", "--dt", "0.004", "--no-record"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("dt < 3.16e-4 s"), "{stderr}");
+}

@@ -102,7 +102,14 @@ impl NormalLaw {
             if v.is_finite() && v >= min {
                 Ok(())
             } else {
-                Err((name, format!("expected a finite number ≥ {min}, got {v}")))
+                Err((
+                    name,
+                    if min > 0.0 {
+                        format!("expected a finite number > 0, got {v}")
+                    } else {
+                        format!("expected a finite number ≥ {min}, got {v}")
+                    },
+                ))
             }
         };
         match *self {

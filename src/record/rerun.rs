@@ -154,3 +154,20 @@ pub fn spawn_viewer(file: &Path) -> Result<()> {
         ),
     }
 }
+
+/// Reads a recording back and counts its messages: a recording that decodes to its end is one the
+/// viewer can open (used to check that interrupted runs leave readable files).
+pub fn count_messages(path: &std::path::Path) -> anyhow::Result<usize> {
+    use rerun::external::re_log_encoding::DecoderApp;
+    let file = std::fs::File::open(path)
+        .map_err(|e| anyhow::anyhow!("{}: cannot open: {e}", path.display()))?;
+    let mut count = 0;
+    for message in DecoderApp::decode_eager(std::io::BufReader::new(file))
+        .map_err(|e| anyhow::anyhow!("{}: not a recording: {e}", path.display()))?
+    {
+        let _message =
+            message.map_err(|e| anyhow::anyhow!("{}: message {count}: {e}", path.display()))?;
+        count += 1;
+    }
+    Ok(count)
+}

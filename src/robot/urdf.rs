@@ -281,6 +281,7 @@ fn build(
 ) -> Result<RobotModel, String> {
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
+    let mut mesh_collisions = Vec::new();
     // Walk the tree from the root, parents before children. Each URDF link maps to a body (itself,
     // or the body it is welded to by fixed joints) and its pose in that body's frame.
     let mut body_of = vec![usize::MAX; robot.links.len()];
@@ -383,6 +384,13 @@ fn build(
             });
         }
         for collision in urdf_link.collision.iter().filter(|_| feet.is_none()) {
+            if let urdf_rs::Geometry::Mesh { filename, .. } = &collision.geometry {
+                mesh_collisions.push((
+                    urdf_link.name.clone(),
+                    filename.clone(),
+                    base.to_path_buf(),
+                ));
+            }
             if let urdf_rs::Geometry::Sphere { radius } = collision.geometry {
                 if !(radius.is_finite() && radius > 0.0) {
                     return Err(format!(
@@ -418,7 +426,7 @@ fn build(
             ));
         }
     }
-    let legs = find_legs(&links, &joints)?;
+    let legs = find_legs(&links, &joints, &mesh_collisions)?;
     Ok(RobotModel {
         name: robot.name.clone(),
         source: PathBuf::new(),
@@ -463,7 +471,13 @@ fn outer(a: DVec3, b: DVec3) -> DMat3 {
 
 /// The legs: every body with a foot, traced back to the root; each must hang from the root by
 /// exactly three joints, three on each side of the body.
-fn find_legs(links: &[Link], joints: &[Joint]) -> Result<Vec<Leg>, String> {
+/// `mesh_collisions`: (link, mesh file, folder it resolves from) of every collision mesh, to say
+/// what is wrong with a leg whose foot is a mesh.
+fn find_legs(
+    links: &[Link],
+    joints: &[Joint],
+    mesh_collisions: &[(String, String, std::path::PathBuf)],
+) -> Result<Vec<Leg>, String> {
     let mut found = Vec::new();
     for (k, link) in links.iter().enumerate() {
         let Some(foot) = link.foot else { continue };
@@ -487,6 +501,21 @@ fn find_legs(links: &[Link], joints: &[Joint]) -> Result<Vec<Leg>, String> {
     for (k, link) in links.iter().enumerate() {
         let is_leaf = !joints.iter().any(|j| j.parent == k);
         if is_leaf && k != 0 && link.foot.is_none() {
+            if let Some((_, file, base)) = mesh_collisions.iter().find(|(l, ..)| *l == link.name) {
+                let relative = file
+                    .trim_start_matches("package://")
+                    .trim_start_matches("file://");
+                let path = base.join(relative);
+                let problem = if path.is_file() {
+                    "hexsim's feet are spheres".to_string()
+                } else {
+                    format!("{} does not exist", path.display())
+                };
+                return Err(format!(
+                    "link `{}` ends a leg and its foot is a collision mesh ({file}): {problem}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
+                    link.name
+                ));
+            }
             return Err(format!(
                 "link `{}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot",
                 link.name

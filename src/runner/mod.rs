@@ -3,6 +3,7 @@
 
 pub mod ball;
 pub mod walk;
+pub mod watchdog;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

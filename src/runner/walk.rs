@@ -157,6 +157,12 @@ impl WalkRun {
             None => None,
         };
         let steps = ((self.settle_time + self.duration) / dt).round() as u64;
+        let watchdog = super::watchdog::Watchdog::walk(
+            &self.robot,
+            self.contact.normal,
+            dt,
+            crate::sim::STANDARD_GRAVITY,
+        );
         let started = std::time::Instant::now();
         let mut complete = true;
         let mut failure = None;
@@ -167,14 +173,14 @@ impl WalkRun {
             }
             walker.set_command(self.commands.at(walker.gait_time().max(0.0)));
             let sample = walker.step();
-            if !(sample.robot.body.translation.is_finite()
-                && sample.robot.joint_angles.iter().all(|q| q.is_finite()))
-            {
+            if let Some(message) = watchdog.check_walk(&sample.robot) {
                 complete = false;
-                failure = Some(format!(
-                    "the simulation diverged at t = {:.4} s (non-finite body or joint state); reduce dt or the contact stiffness/damping",
-                    sample.robot.time
-                ));
+                failure = Some(message);
+                // the diverged step is still observed: the recording shows where it went wrong
+                let _ = metrics.observe(&sample);
+                if let Some(t) = trajectory.as_mut() {
+                    let _ = t.observe(&sample);
+                }
                 break;
             }
             metrics.observe(&sample)?;

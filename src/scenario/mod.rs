@@ -20,13 +20,25 @@ use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// A scenario that cannot be used; names the file and what is wrong.
-#[derive(Debug, thiserror::Error)]
-#[error("{file}: {message}")]
+/// A scenario that cannot be used; names the file (empty for one made on the command line) and
+/// what is wrong.
+#[derive(Debug)]
 pub struct ScenarioError {
     pub file: PathBuf,
     pub message: String,
 }
+
+impl std::fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.file.as_os_str().is_empty() {
+            write!(f, "{}", self.message)
+        } else {
+            write!(f, "{}: {}", self.file.display(), self.message)
+        }
+    }
+}
+
+impl std::error::Error for ScenarioError {}
 
 /// A scenario resolved against its files: robot and gait loaded, terrain parsed (built when run).
 pub struct Scenario {
@@ -38,6 +50,8 @@ pub struct Scenario {
     pub spec: ScenarioSpec,
     /// The terrain generator's seed, if it has one.
     pub seed: Option<u32>,
+    /// What is doubtful but allowed (a missing visual mesh, a gait that lifts too many feet).
+    pub warnings: Vec<String>,
     terrain: TerrainSource,
     setup: Setup,
 }
@@ -221,6 +235,7 @@ impl Scenario {
             hasher.update(read_bytes(&data_base.join(path)));
         }
 
+        let mut warnings = Vec::new();
         let walk_only = [
             ("robot", spec.robot.is_some()),
             ("gait", spec.gait.is_some()),
@@ -252,9 +267,9 @@ impl Scenario {
                     return Err(fail(format!("ball.{field}: {expected}")));
                 }
                 let limit = contact.normal.stable_time_step(b.mass, b.radius * 0.1);
-                if spec.dt >= limit {
+                if spec.dt >= limit && !spec.allow_unstable_dt {
                     return Err(fail(format!(
-                        "dt = {} s is too large for the contact spring on a {} kg ball: the explicit spring needs dt < {limit:.2e} s (2/√(k/m))",
+                        "dt = {} s is too large for the contact spring on a {} kg ball: the explicit spring needs dt < {limit:.2e} s (2/√(k/m)); reduce dt or the stiffness (or set allow_unstable_dt = true to run it anyway)",
                         spec.dt, b.mass
                     )));
                 }
@@ -287,15 +302,49 @@ impl Scenario {
                         GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))
                             .map_err(|e| fail(e.to_string()))?
                     }
-                    Some(FileOr::File(file)) => {
-                        GaitSpec::from_file(&base.join(file)).map_err(|e| fail(e.to_string()))?
-                    }
+                    Some(FileOr::File(file)) => GaitSpec::from_file(&base.join(file))
+                        .map_err(|e| fail(format!("gait: {e}")))?,
                     Some(FileOr::Inline(gait)) => {
                         gait.validate().map_err(|e| fail(format!("gait: {e}")))?;
                         gait.clone()
                     }
                 };
                 hasher.update(serde_json::to_vec(&gait).expect("a spec is plain data"));
+                let gait_name = match &spec.gait {
+                    None => format!("gait {} (built in)", builtin::TRIPOD.path),
+                    Some(FileOr::File(file)) => format!("gait {}", base.join(file).display()),
+                    Some(FileOr::Inline(_)) => "gait (inline)".to_string(),
+                };
+                crate::gait::GaitController::new(&robot, gait.clone())
+                    .map_err(|e| fail(format!("{gait_name}: {e}")))?;
+                let support = crate::gait::minimum_support(&gait.offsets(), gait.duty_factor);
+                if support < 3 {
+                    warnings.push(format!(
+                        "{gait_name}: at times only {support} feet are on the ground (a hexapod needs 3 to stand statically); check its duty_factor and phase_offsets"
+                    ));
+                }
+                warnings.extend(robot.warnings.iter().cloned());
+                // the lightest foot link bounds the effective mass the contact spring acts on
+                if let Some((foot, mass)) = robot
+                    .legs
+                    .iter()
+                    .map(|leg| {
+                        (
+                            &robot.links[leg.foot_link].name,
+                            robot.links[leg.foot_link].mass,
+                        )
+                    })
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                {
+                    let radius = robot.legs[0].foot.radius;
+                    let limit = contact.normal.stable_time_step(mass, radius * 0.1);
+                    if spec.dt >= limit && !spec.allow_unstable_dt {
+                        return Err(fail(format!(
+                            "dt = {} s is too large for the contact spring on the lightest foot link (`{foot}`, {mass} kg): the explicit spring needs dt < {limit:.2e} s (2/√(k/m)); reduce dt or the stiffness (or set allow_unstable_dt = true to run it anyway)",
+                            spec.dt
+                        )));
+                    }
+                }
                 let settle = spec.settle.unwrap_or(1.0);
                 if !(settle.is_finite() && settle >= 0.0) {
                     return Err(fail(format!(
@@ -364,6 +413,7 @@ impl Scenario {
             hash,
             spec,
             seed,
+            warnings,
             terrain,
             setup,
         })

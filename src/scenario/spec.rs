@@ -93,6 +93,9 @@ pub struct ScenarioSpec {
     pub dt: f64,
     #[serde(default)]
     pub contact: ContactSpec,
+    /// Run even when dt is above the contact spring's stability limit (to study the instability).
+    #[serde(default)]
+    pub allow_unstable_dt: bool,
 
     // --- walk ---
     /// URDF. Default: robots/hex18.urdf (built in).

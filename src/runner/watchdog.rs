@@ -1,0 +1,157 @@
+//! Divergence: a state that has left physics (non-finite numbers, a body sunk through the ground,
+//! runaway speed) stops the run with when, where and the likely cause.
+
+use crate::contact::NormalLaw;
+use crate::robot::RobotModel;
+use crate::sim::{BallSample, HexapodSample};
+
+/// Faster than a walking robot's body moves (a fall from 1 m lands at 4.4 m/s): the integration
+/// has run away.
+const WALK_RUNAWAY_SPEED: f64 = 5.0;
+const WALK_RUNAWAY_SPIN: f64 = 50.0;
+/// A passive ball's total energy may rise by this fraction of its start (plus 0.5 J) before it is
+/// called runaway; the contact is passive, so a stable run stays well below (V9: 0.4 %).
+const BALL_ENERGY_RISE: f64 = 0.1;
+
+/// Checks each step's state against what the contact and bodies allow.
+pub struct Watchdog {
+    dt: f64,
+    law: NormalLaw,
+    /// Per foot (or the ball): its name, its radius, and the mass the contact spring acts on at
+    /// least (the foot link's; the ball's).
+    bodies: Vec<(String, f64, f64)>,
+    /// Weight carried by the contacts (N), to tell a soft ground from an unstable step.
+    weight: f64,
+    /// The ball's total energy at the start (J).
+    start_energy: Option<f64>,
+}
+
+impl Watchdog {
+    pub fn walk(robot: &RobotModel, law: NormalLaw, dt: f64, gravity: f64) -> Self {
+        Watchdog {
+            dt,
+            law,
+            bodies: robot
+                .legs
+                .iter()
+                .map(|leg| {
+                    (
+                        format!("foot {}", leg.name),
+                        leg.foot.radius,
+                        robot.links[leg.foot_link].mass,
+                    )
+                })
+                .collect(),
+            weight: robot.total_mass() * gravity / 3.0, // a tripod carries it on three feet
+            start_energy: None,
+        }
+    }
+
+    pub fn ball(
+        start: &BallSample,
+        radius: f64,
+        mass: f64,
+        law: NormalLaw,
+        dt: f64,
+        gravity: f64,
+    ) -> Self {
+        Watchdog {
+            dt,
+            law,
+            bodies: vec![("ball".into(), radius, mass)],
+            weight: mass * gravity,
+            start_energy: Some(start.total_energy()),
+        }
+    }
+
+    /// Why a state is not physical, if it is not: what, and which body.
+    pub fn check_walk(&self, s: &HexapodSample) -> Option<String> {
+        if !(s.body.translation.is_finite()
+            && s.body_velocity.is_finite()
+            && s.body_angular_velocity.is_finite()
+            && s.joint_angles.iter().all(|q| q.is_finite()))
+        {
+            return Some(self.report(s.time, "non-finite state", "body and joints", None));
+        }
+        for (k, contact) in s.foot_contacts.iter().enumerate() {
+            if let Some(c) = contact
+                && (!c.force.is_finite() || c.penetration > self.bodies[k].1)
+            {
+                let what = format!(
+                    "sank {:.1} mm into the ground, deeper than its {:.1} mm radius",
+                    c.penetration * 1e3,
+                    self.bodies[k].1 * 1e3
+                );
+                return Some(self.report(s.time, &what, &self.bodies[k].0, Some(k)));
+            }
+        }
+        let speed = s.body_velocity.length();
+        let spin = s.body_angular_velocity.length();
+        if speed > WALK_RUNAWAY_SPEED || spin > WALK_RUNAWAY_SPIN {
+            let what = format!("runaway motion: {speed:.1} m/s, {spin:.1} rad/s");
+            return Some(self.report(s.time, &what, "body", None));
+        }
+        None
+    }
+
+    pub fn check_ball(&self, s: &BallSample) -> Option<String> {
+        if !(s.position.is_finite() && s.velocity.is_finite() && s.angular_velocity.is_finite()) {
+            return Some(self.report(s.time, "non-finite state", "ball", None));
+        }
+        if let Some(c) = &s.contact
+            && c.penetration > self.bodies[0].1
+        {
+            let what = format!(
+                "sank {:.1} mm into the ground, deeper than its {:.1} mm radius",
+                c.penetration * 1e3,
+                self.bodies[0].1 * 1e3
+            );
+            return Some(self.report(s.time, &what, "ball", Some(0)));
+        }
+        let start = self.start_energy.unwrap_or(0.0);
+        let energy = s.total_energy();
+        if energy > start + BALL_ENERGY_RISE * start.abs() + 0.5 {
+            let what = format!(
+                "runaway energy: {energy:.2} J against {start:.2} J at the start (the contact is passive)"
+            );
+            return Some(self.report(s.time, &what, "ball", None));
+        }
+        None
+    }
+
+    fn report(&self, time: f64, what: &str, place: &str, body: Option<usize>) -> String {
+        let (name, radius, mass) = match body {
+            Some(k) => self.bodies[k].clone(),
+            None => self
+                .bodies
+                .iter()
+                .min_by(|a, b| a.2.total_cmp(&b.2))
+                .cloned()
+                .expect("a watchdog watches something"),
+        };
+        let limit = self.law.stable_time_step(mass, radius * 0.1);
+        let stiffness = match self.law {
+            NormalLaw::SpringDamper { stiffness, .. }
+            | NormalLaw::HuntCrossley { stiffness, .. } => stiffness,
+        };
+        let cause = if self.dt > 0.5 * limit {
+            format!(
+                "dt = {} s is at or above half the contact spring's stability limit {limit:.2e} s (2/√(k/m) for k = {stiffness} N/m on the {mass} kg {name}); reduce dt or the stiffness",
+                self.dt
+            )
+        } else if matches!(self.law, NormalLaw::SpringDamper { .. })
+            && self.weight / stiffness > 0.5 * radius
+        {
+            format!(
+                "the ground is too soft for the load: k = {stiffness} N/m sinks {:.1} mm under {:.1} N; raise the stiffness",
+                1e3 * self.weight / stiffness,
+                self.weight
+            )
+        } else {
+            "the servo gains, the command or the contact parameters drive the system beyond what the time step resolves; reduce dt".to_string()
+        };
+        format!(
+            "the simulation diverged at t = {time:.4} s: {place}: {what}; likely cause: {cause}"
+        )
+    }
+}
