@@ -7,7 +7,7 @@ use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::sim::{BallConfig, BallSim};
 use crate::terrain::HeightGrid;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -35,29 +35,9 @@ pub struct BallOutcome {
 }
 
 impl BallRun {
-    /// Validates the set-up; errors name the field.
-    pub fn validate(&self) -> Result<()> {
-        if let Err((field, expected)) = self.ball.validate() {
-            bail!("ball.{field}: {expected}");
-        }
-        if let Err((field, expected)) = self.contact.validate() {
-            bail!("contact.{field}: {expected}");
-        }
-        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 0.01) {
-            bail!("dt: expected a time step in (0, 0.01] s, got {}", self.dt);
-        }
-        if !(self.duration.is_finite() && self.duration >= 0.0) {
-            bail!(
-                "duration: expected a finite number ≥ 0 s, got {}",
-                self.duration
-            );
-        }
-        // the contact spring's stability limit is checked with the scenario (which may allow it)
-        Ok(())
-    }
-
+    /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
+    /// (every command builds its runs from a scenario).
     pub fn execute(&self) -> Result<BallOutcome> {
-        self.validate()?;
         for path in [&self.record, &self.trajectory, &self.metrics]
             .into_iter()
             .flatten()

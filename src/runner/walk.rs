@@ -9,7 +9,7 @@ use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
 use crate::sim::{Hexapod, HexapodSettings, Placement, Walker};
 use crate::terrain::HeightGrid;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -47,47 +47,9 @@ pub struct WalkOutcome {
 }
 
 impl WalkRun {
-    pub fn validate(&self) -> Result<()> {
-        if let Err((field, expected)) = self.contact.validate() {
-            bail!("contact.{field}: {expected}");
-        }
-        let dt = self.settings.dt;
-        if !(dt.is_finite() && dt > 0.0 && dt <= 0.01) {
-            bail!("dt: expected a time step in (0, 0.01] s, got {dt}");
-        }
-        if !(self.duration.is_finite() && self.duration >= 0.0) {
-            bail!(
-                "duration: expected a finite number ≥ 0 s, got {}",
-                self.duration
-            );
-        }
-        if !(self.settle_time.is_finite() && self.settle_time >= 0.0) {
-            bail!(
-                "settle: expected a finite number ≥ 0 s, got {}",
-                self.settle_time
-            );
-        }
-        if self.settings.solver_iterations == 0 {
-            bail!("solver_iterations: expected at least 1");
-        }
-        let g = self.settings.gains;
-        if !(g.stiffness.is_finite()
-            && g.stiffness > 0.0
-            && g.damping.is_finite()
-            && g.damping >= 0.0)
-        {
-            bail!(
-                "servo gains: expected stiffness > 0 and damping ≥ 0, got {} and {}",
-                g.stiffness,
-                g.damping
-            );
-        }
-        CommandSchedule::new(self.commands.changes().to_vec()).map_err(anyhow::Error::msg)?;
-        Ok(())
-    }
-
+    /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
+    /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<WalkOutcome> {
-        self.validate()?;
         for path in [&self.record, &self.trajectory, &self.metrics]
             .into_iter()
             .flatten()
