@@ -2,6 +2,7 @@
 //! Burkus & Odry, "Implementation of 3D Ground Contact Model for Uneven Ground".
 
 pub mod batch;
+pub mod bench;
 pub mod contact;
 pub mod gait;
 pub mod record;

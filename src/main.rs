@@ -6,6 +6,7 @@ use hexsim::scenario::spec::{
     self, BallSpec, CommandSpec, ContactSpec, RecordSpec, ServoSpec, StartSpec,
 };
 use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Report, Scenario, ScenarioSpec};
+use hexsim::sim::Articulation;
 use hexsim::terrain;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -35,11 +36,30 @@ enum Command {
     /// Run scenario files headless in parallel and check their expectations (exit 0: all met,
     /// 1: some failed, diverged or regressed, 2: input error, 130: interrupted).
     Batch(Box<BatchArgs>),
+    /// Measure simulated steps per second on the reference workloads (build with --release):
+    /// the walk with the recording off and on, a batch on every core, and the ball.
+    Bench(BenchArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(MergeArgs),
     /// Inspect or export terrains.
     #[command(subcommand)]
     Terrain(TerrainCommand),
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// Which articulations to measure.
+    #[arg(long, value_enum, default_values_t = [Articulation::Multibody, Articulation::Impulse])]
+    articulation: Vec<Articulation>,
+    /// Seconds walked (after 1 s settling), and seconds of the ball.
+    #[arg(long, default_value_t = 20.0)]
+    duration: f64,
+    /// Threads for the batch figure. Default: all cores.
+    #[arg(short, long)]
+    jobs: Option<usize>,
+    /// Also write the figures and the configuration as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -315,9 +335,17 @@ struct RunArgs {
     /// Servo damping (N·m·s/rad).
     #[arg(long, default_value_t = 0.05)]
     servo_damping: f64,
-    /// rapier substeps per step.
-    #[arg(long, default_value_t = 4)]
+    /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
+    /// impulse joints (several times faster; the joints drift by micrometres)
+    #[arg(long, value_enum, default_value_t = Articulation::Multibody)]
+    articulation: Articulation,
+    /// rapier substeps per step (each rebuilds the multibody's mass matrix).
+    #[arg(long, default_value_t = hexsim::sim::DEFAULT_SOLVER_ITERATIONS)]
     solver_iterations: usize,
+    /// Constraint-solver sweeps per substep. Default: 1 for the multibody (it has no
+    /// constraints), 6 for impulse joints (with fewer the feet slide: the joints are held by the solver)
+    #[arg(long)]
+    pgs_iterations: Option<usize>,
     /// Recording file (.rrd) for the rerun viewer.
     #[arg(long, default_value = "hexsim.rrd")]
     record: PathBuf,
@@ -407,7 +435,9 @@ fn run(args: RunArgs) -> Result<ExitCode> {
         gait: args.gait.clone().map(FileOr::File),
         settle: Some(args.settle),
         follow_terrain: Some(args.follow_terrain),
+        articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),
+        pgs_iterations: args.pgs_iterations,
         servo: Some(ServoSpec {
             stiffness: args.servo_stiffness,
             damping: args.servo_damping,
@@ -541,7 +571,9 @@ fn ball(args: BallArgs) -> Result<ExitCode> {
         gait: None,
         settle: None,
         follow_terrain: None,
+        articulation: None,
         solver_iterations: None,
+        pgs_iterations: None,
         servo: None,
         start: None,
         command: None,
@@ -717,6 +749,77 @@ fn batch(args: BatchArgs) -> Result<ExitCode> {
     })
 }
 
+fn bench(args: BenchArgs) -> Result<()> {
+    if !(args.duration.is_finite() && args.duration > 0.0) {
+        anyhow::bail!("--duration: expected seconds > 0, got {}", args.duration);
+    }
+    if let Some(path) = &args.json {
+        hexsim::record::output::check_writable(path)?;
+    }
+    let options = hexsim::bench::BenchOptions {
+        articulations: args.articulation.clone(),
+        duration: args.duration,
+        threads: args
+            .jobs
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+            .max(1),
+        scratch: std::env::temp_dir().join(format!("hexsim-bench-{}.rrd", std::process::id())),
+    };
+    for (key, value) in hexsim::bench::configuration(&options) {
+        println!("{key:>13}: {value}");
+    }
+    println!();
+    println!(
+        "{:<30} {:<10} {:>7} {:>9} {:>8} {:>12}  notes",
+        "workload", "joints", "threads", "steps", "wall s", "steps/s"
+    );
+    let report = hexsim::bench::run_bench(&options, |f| {
+        let mut notes = Vec::new();
+        if let Some(ok) = f.v13 {
+            notes.push(if ok { "V13 met" } else { "V13 NOT MET" }.to_string());
+        }
+        if let Some(d) = f.max_joint_drift {
+            notes.push(format!("joint drift ≤ {:.1} µm", d * 1e6));
+        }
+        println!(
+            "{:<30} {:<10} {:>7} {:>9} {:>8.2} {:>12.0}  {}",
+            f.workload,
+            f.articulation.as_deref().unwrap_or("-"),
+            f.threads,
+            f.steps,
+            f.wall_time,
+            f.steps_per_second,
+            notes.join(", ")
+        );
+    })?;
+    for a in &args.articulation {
+        let single = report
+            .figures
+            .iter()
+            .find(|f| f.workload == "walk" && f.articulation.as_deref() == Some(a.name()));
+        let batch = report.figures.iter().find(|f| {
+            f.workload.starts_with("batch") && f.articulation.as_deref() == Some(a.name())
+        });
+        if let (Some(s), Some(b)) = (single, batch) {
+            println!(
+                "{}: batch on {} threads = {:.2}× one thread",
+                a.name(),
+                b.threads,
+                b.steps_per_second / s.steps_per_second
+            );
+        }
+    }
+    println!(
+        "V1–V15 in both articulations: cargo test --release --test validation_hexapod --test validation_ball"
+    );
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
 fn merge(args: MergeArgs) -> Result<()> {
     use hexsim::batch::{self, results};
     let mut parts = Vec::new();
@@ -802,6 +905,7 @@ fn main() -> ExitCode {
         Some(Command::Ball(args)) => ball(*args),
         Some(Command::Batch(args)) => batch(*args),
         Some(Command::Merge(args)) => merge(args).map(|()| ExitCode::SUCCESS),
+        Some(Command::Bench(args)) => bench(args).map(|()| ExitCode::SUCCESS),
         Some(Command::Terrain(command)) => terrain_command(command).map(|()| ExitCode::SUCCESS),
     };
     match result {

@@ -6,7 +6,7 @@ use hexsim::contact::ContactModel;
 use hexsim::gait::VelocityCommand;
 use hexsim::gait::{GaitController, GaitSpec};
 use hexsim::robot::{self, RobotModel};
-use hexsim::sim::{Hexapod, HexapodSample, HexapodSettings, Placement, Walker};
+use hexsim::sim::{Articulation, Hexapod, HexapodSample, HexapodSettings, Placement, Walker};
 use hexsim::terrain::{self, HeightGrid};
 use std::sync::Arc;
 
@@ -18,10 +18,18 @@ fn tripod() -> GaitSpec {
     GaitSpec::from_file(&project_file("gaits/tripod.toml")).unwrap()
 }
 
+fn settings(articulation: Articulation) -> HexapodSettings {
+    HexapodSettings {
+        articulation,
+        ..Default::default()
+    }
+}
+
 fn standing(
     model: &Arc<RobotModel>,
     ground: HeightGrid,
     placement: Placement,
+    articulation: Articulation,
 ) -> (Hexapod, GaitController) {
     let controller = GaitController::new(model, tripod()).unwrap();
     let pose: Vec<f64> = standing_pose(model, &controller);
@@ -29,7 +37,7 @@ fn standing(
         model.clone(),
         Arc::new(ground),
         ContactModel::default(),
-        HexapodSettings::default(),
+        settings(articulation),
         placement,
         &pose,
     );
@@ -68,8 +76,7 @@ fn hex18_loads_as_the_reference_robot() {
     assert_eq!(model.links[model.legs[0].foot_link].name, "lf_tibia");
 }
 
-#[test]
-fn v11_standing_load_equals_weight() {
+fn v11_standing_load_equals_weight(articulation: Articulation) {
     let model = hex18();
     let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
     let (mut hexapod, _) = standing(
@@ -80,6 +87,7 @@ fn v11_standing_load_equals_weight() {
             y: 0.0,
             yaw: 0.0,
         },
+        articulation,
     );
     let samples = run(&mut hexapod, 3.0);
     let last = samples.last().unwrap();
@@ -126,6 +134,7 @@ fn walker(
     placement: Placement,
     gait: GaitSpec,
     settle: f64,
+    articulation: Articulation,
 ) -> Walker {
     let command = VelocityCommand {
         forward: gait.nominal_speed(),
@@ -137,7 +146,7 @@ fn walker(
         model,
         Arc::new(ground),
         ContactModel::default(),
-        HexapodSettings::default(),
+        settings(articulation),
         placement,
         &pose,
     );
@@ -150,15 +159,15 @@ fn walk(
     placement: Placement,
     gait: GaitSpec,
     seconds: f64,
+    articulation: Articulation,
 ) -> Vec<HexapodSample> {
-    let mut walker = walker(hex18(), ground, placement, gait, 1.0);
+    let mut walker = walker(hex18(), ground, placement, gait, 1.0, articulation);
     let total = ((1.0 + seconds) / DT).round() as usize;
     let samples: Vec<HexapodSample> = (0..total).map(|_| walker.step().robot).collect();
     samples[(1.0 / DT) as usize - 1..].to_vec()
 }
 
-#[test]
-fn v12_tripod_walks_on_flat_ground() {
+fn v12_tripod_walks_on_flat_ground(articulation: Articulation) {
     let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
     let samples = walk(
         ground,
@@ -169,6 +178,7 @@ fn v12_tripod_walks_on_flat_ground() {
         },
         tripod(),
         20.0,
+        articulation,
     );
     let (start, end) = (samples.first().unwrap(), samples.last().unwrap());
     let moved = end.body.translation - start.body.translation;
@@ -207,8 +217,7 @@ fn v12_tripod_walks_on_flat_ground() {
     }
 }
 
-#[test]
-fn v13_tripod_walks_on_the_natural_terrain() {
+fn v13_tripod_walks_on_the_natural_terrain(articulation: Articulation) {
     let ground = terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
     let samples = walk(
         ground,
@@ -219,6 +228,7 @@ fn v13_tripod_walks_on_the_natural_terrain() {
         },
         tripod(),
         20.0,
+        articulation,
     );
     let (start, end) = (samples.first().unwrap(), samples.last().unwrap());
     let forward = end.body.translation.x - start.body.translation.x;
@@ -245,8 +255,7 @@ fn v13_tripod_walks_on_the_natural_terrain() {
     assert!(deepest <= 0.005, "V13: a foot sank {:.2} mm", deepest * 1e3);
 }
 
-#[test]
-fn v14_stands_on_a_15_degree_slope() {
+fn v14_stands_on_a_15_degree_slope(articulation: Articulation) {
     let model = hex18();
     let ground = terrain::slope([4.0, 4.0], [0.0, 0.0], 15f64.to_radians(), 0.0).unwrap();
     let (mut hexapod, _) = standing(
@@ -257,6 +266,7 @@ fn v14_stands_on_a_15_degree_slope() {
             y: 0.0,
             yaw: 0.0,
         },
+        articulation,
     );
     // let it land, then measure 10 s
     let landing = run(&mut hexapod, 1.0);
@@ -270,8 +280,7 @@ fn v14_stands_on_a_15_degree_slope() {
     assert!(moved < 0.005, "V14: the body moved {:.3} mm", moved * 1e3);
 }
 
-#[test]
-fn v15_same_scenario_same_result_bit_for_bit() {
+fn v15_same_scenario_same_result_bit_for_bit(articulation: Articulation) {
     let ground = || terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
     let a = walk(
         ground(),
@@ -282,6 +291,7 @@ fn v15_same_scenario_same_result_bit_for_bit() {
         },
         tripod(),
         3.0,
+        articulation,
     );
     let b = walk(
         ground(),
@@ -292,6 +302,7 @@ fn v15_same_scenario_same_result_bit_for_bit() {
         },
         tripod(),
         3.0,
+        articulation,
     );
     assert_eq!(a, b, "V15: two identical runs differ");
     println!("V15: {} samples identical", a.len());
@@ -336,6 +347,7 @@ fn feet_touch_the_ground_when_the_gait_says_stance() {
         },
         spec.clone(),
         0.5,
+        Articulation::Multibody,
     );
     let (mut agree, mut total) = (0, 0);
     for _ in 0..5500 {
@@ -398,6 +410,7 @@ fn a_hexapod_of_another_design_loads_and_walks() {
         },
         gait.clone(),
         1.0,
+        Articulation::Multibody,
     );
     let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
     let start = samples[999].body.translation;
@@ -432,6 +445,7 @@ fn terrain_following_keeps_the_body_level_on_a_slope() {
             },
             spec.clone(),
             1.0,
+            Articulation::Multibody,
         );
         walker.terrain_following = following;
         let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
@@ -482,4 +496,83 @@ fn feet_can_be_named_in_a_robot_file_beside_the_urdf() {
     .unwrap();
     let model = robot::load(&dir.join("bare.urdf")).unwrap();
     assert_eq!(model.legs, hex18().legs);
+}
+
+/// V11–V15 in each articulation: `multibody::v11_…` and `impulse::v11_…`.
+macro_rules! in_both_articulations {
+    ($($case:ident),* $(,)?) => {
+        mod multibody {
+            use super::*;
+            $(#[test] fn $case() { super::$case(Articulation::Multibody) })*
+        }
+        mod impulse {
+            use super::*;
+            $(#[test] fn $case() { super::$case(Articulation::Impulse) })*
+        }
+    };
+}
+
+in_both_articulations!(
+    v11_standing_load_equals_weight,
+    v12_tripod_walks_on_flat_ground,
+    v13_tripod_walks_on_the_natural_terrain,
+    v14_stands_on_a_15_degree_slope,
+    v15_same_scenario_same_result_bit_for_bit,
+    servo_torques_hold_the_standing_robot,
+);
+
+/// The servos' reported torques are the torques applied: standing still, each leg's joints carry
+/// its foot's load, so both articulations (one reporting its implicit springs' law, the other
+/// rapier's motor impulses) must report the same static torques, and the torques must balance
+/// the foot forces' moments about each femur joint.
+fn servo_torques_hold_the_standing_robot(articulation: Articulation) {
+    let model = hex18();
+    let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
+    let place = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let (mut hexapod, _) = standing(&model, ground, place, articulation);
+    let samples = run(&mut hexapod, 3.0);
+    let tail = &samples[samples.len() - 500..];
+    let mean = |j: usize| tail.iter().map(|s| s.joint_torques[j]).sum::<f64>() / tail.len() as f64;
+    for (k, leg) in model.legs.iter().enumerate() {
+        let femur = leg.joints[1];
+        let joint = &model.joints[femur];
+        // the foot force's moment about the femur axis (statics: the servo holds it)
+        let frames = hexapod.link_frames();
+        let parent = frames[joint.parent] * joint.origin;
+        let axis = parent.matrix3 * joint.axis;
+        let moment: f64 = tail
+            .iter()
+            .map(|s| {
+                let c = s.foot_contacts[k].expect("standing feet touch");
+                (c.point - parent.translation).cross(c.force).dot(axis)
+            })
+            .sum::<f64>()
+            / tail.len() as f64;
+        // and the weight of the femur and tibia links
+        let weight: f64 = [joint.child, leg.foot_link]
+            .iter()
+            .map(|&l| {
+                let link = &model.links[l];
+                let com = frames[l].transform_point3(link.com);
+                let force = glam::DVec3::new(0.0, 0.0, -link.mass * G);
+                (com - parent.translation).cross(force).dot(axis)
+            })
+            .sum();
+        let moment = moment + weight;
+        let torque = mean(femur);
+        println!(
+            "{articulation:?} leg {}: femur torque {torque:.4} N·m, foot force moment {moment:.4} N·m",
+            leg.name
+        );
+        assert!(
+            (torque + moment).abs() < 0.05 * moment.abs() + 2e-3,
+            "leg {}: the servo reports {torque:.4} N·m, the foot's load needs {:.4}",
+            leg.name,
+            -moment
+        );
+    }
 }

@@ -28,7 +28,7 @@
 //! limited to F_stop when they would otherwise reverse the slip within one step (which explicit
 //! friction on a light foot does at once). That limit only ever removes energy.
 
-use glam::{DMat2, DVec2};
+use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -238,23 +238,10 @@ fn karnopp(
     }
 }
 
-/// The stopping force F_stop = −L − M·v/h, with the tangential load L measured from the previous
-/// step (`previous` = (friction force, slip) there) or taken as zero on the first step of a contact.
-pub fn stopping_force(
-    mass: DMat2,
-    slip: DVec2,
-    dt: f64,
-    previous: Option<(DVec2, DVec2)>,
-) -> DVec2 {
-    match previous {
-        Some((force, prev_slip)) => force - mass * (2.0 * slip - prev_slip) / dt,
-        None => -(mass * slip) / dt,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DMat2;
 
     const FN: f64 = 10.0;
 
@@ -313,13 +300,9 @@ mod tests {
     #[test]
     fn karnopp_cancels_a_load_below_the_static_limit() {
         let law = FrictionLaw::default();
-        // at rest, under a load of 5 N along x: F_stop = −L
-        let stop = stopping_force(
-            DMat2::IDENTITY,
-            DVec2::ZERO,
-            1e-3,
-            Some((DVec2::new(-5.0, 0.0), DVec2::ZERO)),
-        );
+        // at rest, under a load of 5 N along x that friction held last step:
+        // F_stop = F_prev − M·(2v − v_prev)/h = F_prev = −L
+        let stop = DVec2::new(-5.0, 0.0);
         let out = law.force(DVec2::ZERO, FN, stop);
         assert!(out.sticking);
         assert!((out.force - DVec2::new(-5.0, 0.0)).length() < 1e-12);
@@ -337,7 +320,8 @@ mod tests {
     fn karnopp_slides_kinetically_outside_the_band() {
         let law = FrictionLaw::default();
         let slip = DVec2::new(0.3, 0.4);
-        let stop = stopping_force(DMat2::from_diagonal(DVec2::splat(2.0)), slip, 1e-3, None);
+        // a contact's first step: F_stop = −M·v/h
+        let stop = -(DMat2::from_diagonal(DVec2::splat(2.0)) * slip) / 1e-3;
         let out = law.force(slip, FN, stop);
         assert!(!out.sticking);
         assert!((out.force + 8.0 * slip / 0.5).length() < 1e-12);
@@ -348,7 +332,7 @@ mod tests {
         // 20 g contact sliding at 1 cm/s, no load: every law may at most stop it.
         let mass = DMat2::from_diagonal(DVec2::splat(0.02));
         let slip = DVec2::new(0.01, 0.0);
-        let stop = stopping_force(mass, slip, 1e-3, None);
+        let stop = -(mass * slip) / 1e-3;
         for law in [
             FrictionLaw::Coulomb {
                 mu: 0.8,

@@ -30,8 +30,8 @@ pub fn sphere_geometry(
     orientation: Orientation,
 ) -> SphereGeometry {
     let (mut x, mut y) = (center.x, center.y);
-    let mut frame = terrain.ground_frame(x, y, orientation);
-    let mut surface = DVec3::new(x, y, terrain.height(x, y));
+    let (height, mut frame) = terrain.height_and_frame(x, y, orientation);
+    let mut surface = DVec3::new(x, y, height);
     let mut distance = (center - surface).dot(frame.normal);
     for _ in 1..CLOSEST_POINT_ITERATIONS {
         let foot = center - distance * frame.normal;
@@ -39,8 +39,9 @@ pub fn sphere_geometry(
             break;
         }
         (x, y) = (foot.x, foot.y);
-        frame = terrain.ground_frame(x, y, orientation);
-        surface = DVec3::new(x, y, terrain.height(x, y));
+        let height;
+        (height, frame) = terrain.height_and_frame(x, y, orientation);
+        surface = DVec3::new(x, y, height);
         distance = (center - surface).dot(frame.normal);
     }
     SphereGeometry {

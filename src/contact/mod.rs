@@ -11,10 +11,12 @@
 
 mod friction;
 mod geometry;
+pub mod joint;
 mod normal;
 
-pub use friction::{FrictionLaw, FrictionOutcome, stopping_force};
+pub use friction::{FrictionLaw, FrictionOutcome};
 pub use geometry::{SphereGeometry, sphere_geometry};
+pub use joint::respond_jointly;
 pub use normal::{NormalLaw, exact_decay_factor};
 
 use crate::terrain::{GroundFrame, Orientation};
@@ -68,6 +70,44 @@ impl EffectiveMass {
     }
 }
 
+/// A contact between [`ContactModel::begin`] and [`ContactModel::finish`]: its normal force is
+/// known; its in-plane force waits for the stopping force F_stop = `previous_friction` − M·`demand`
+/// (in-plane components in the contact's ground frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PendingContact {
+    pub point: DVec3,
+    pub frame: GroundFrame,
+    pub penetration: f64,
+    pub normal_velocity: f64,
+    pub slip: DVec2,
+    pub normal_force: f64,
+    pub previous_friction: DVec2,
+    /// The in-plane velocity change per second that would bring the contact to rest (and undo
+    /// part of its drift) by the end of the step, given last step's load.
+    pub demand: DVec2,
+    /// The normal force's change since last step (through the body, it pushes other contacts).
+    pub normal_change: f64,
+}
+
+impl PendingContact {
+    /// F_stop for a contact alone, whose in-plane effective mass is `mass`.
+    pub fn stopping_force(&self, mass: DMat2) -> DVec2 {
+        self.previous_friction - mass * self.demand
+    }
+
+    /// What the friction law does given the stopping force (no friction without a normal force).
+    pub fn friction(&self, law: &FrictionLaw, stop: DVec2) -> FrictionOutcome {
+        if self.normal_force > 0.0 {
+            law.force(self.slip, self.normal_force, stop)
+        } else {
+            FrictionOutcome {
+                force: DVec2::ZERO,
+                sticking: false,
+            }
+        }
+    }
+}
+
 /// Fraction of the drift accumulated while sticking that the stick force undoes per step.
 const DRIFT_RECOVERY: f64 = 0.5;
 
@@ -78,6 +118,8 @@ pub struct ContactState {
     previous: Option<(DVec3, DVec3)>,
     /// How far the contact's material point has slid since friction last held it (world frame).
     drift: DVec3,
+    /// Last step's normal force (0 before the contact).
+    normal_force: f64,
 }
 
 impl ContactState {
@@ -122,9 +164,24 @@ impl ContactModel {
         dt: f64,
         state: &mut ContactState,
     ) -> Option<ContactForce> {
+        let pending = self.begin(geometry, point_velocity, mass.normal, dt, state)?;
+        let stop = pending.stopping_force(mass.tangential);
+        Some(self.finish(&pending, stop, dt, state))
+    }
+
+    /// The first half of [`Self::respond`]: the normal force and what stopping the contact asks
+    /// for, before the in-plane force is chosen (alone, or jointly with other contacts on the same
+    /// body: [`respond_jointly`]). `None` (and `state` reset) when the sphere does not touch.
+    pub fn begin(
+        &self,
+        geometry: &SphereGeometry,
+        point_velocity: DVec3,
+        normal_mass: f64,
+        dt: f64,
+        state: &mut ContactState,
+    ) -> Option<PendingContact> {
         if geometry.penetration <= 0.0 {
-            state.previous = None;
-            state.drift = DVec3::ZERO;
+            *state = ContactState::default();
             return None;
         }
         let frame = &geometry.frame;
@@ -133,43 +190,61 @@ impl ContactModel {
         let slip = DVec2::new(local.x, local.y);
         let normal_force =
             self.normal
-                .force(geometry.penetration, -normal_velocity, mass.normal, dt);
+                .force(geometry.penetration, -normal_velocity, normal_mass, dt);
         let in_plane = |v: DVec3| DVec2::new(frame.tangent_x.dot(v), frame.tangent_y.dot(v));
-        let previous = state
-            .previous
-            .map(|(force, slip)| (in_plane(force), in_plane(slip)));
-        // and undo a fraction of the drift accumulated while sticking: the load is estimated one
-        // step late, which under a changing load (a walking robot's foot) lets the foot creep
-        let drift = in_plane(state.drift);
-        let stop = stopping_force(mass.tangential, slip, dt, previous)
-            - mass.tangential * drift * (DRIFT_RECOVERY / (dt * dt));
-        let outcome = if normal_force > 0.0 {
-            self.friction.force(slip, normal_force, stop)
-        } else {
-            FrictionOutcome {
-                force: DVec2::ZERO,
-                sticking: false,
-            }
+        // F_stop = F_prev − M·u (see `friction`): u = (2v − v_prev)/h with last step's load, v/h
+        // on a contact's first step; plus a fraction of the drift accumulated while sticking (the
+        // load is estimated one step late, which under a changing load — a walking robot's foot —
+        // lets the foot creep)
+        let (previous_friction, demand) = match state.previous {
+            Some((force, prev_slip)) => (in_plane(force), (2.0 * slip - in_plane(prev_slip)) / dt),
+            None => (DVec2::ZERO, slip / dt),
         };
+        let demand = demand + in_plane(state.drift) * (DRIFT_RECOVERY / (dt * dt));
+        Some(PendingContact {
+            point: geometry.point,
+            frame: *frame,
+            penetration: geometry.penetration,
+            normal_velocity,
+            slip,
+            normal_force,
+            previous_friction,
+            demand,
+            normal_change: normal_force - state.normal_force,
+        })
+    }
+
+    /// The second half of [`Self::respond`]: the friction law given the stopping force `stop`
+    /// (in-plane components), and the state for the next step.
+    pub fn finish(
+        &self,
+        pending: &PendingContact,
+        stop: DVec2,
+        dt: f64,
+        state: &mut ContactState,
+    ) -> ContactForce {
+        let outcome = pending.friction(&self.friction, stop);
+        let frame = &pending.frame;
         let friction = frame.to_world(outcome.force.extend(0.0));
-        let slip_world = frame.to_world(slip.extend(0.0));
+        let slip_world = frame.to_world(pending.slip.extend(0.0));
         state.previous = Some((friction, slip_world));
+        state.normal_force = pending.normal_force;
         state.drift = if outcome.sticking {
             state.drift + slip_world * dt
         } else {
             DVec3::ZERO
         };
-        Some(ContactForce {
-            point: geometry.point,
-            force: normal_force * frame.normal + friction,
-            normal_force,
+        ContactForce {
+            point: pending.point,
+            force: pending.normal_force * frame.normal + friction,
+            normal_force: pending.normal_force,
             friction,
-            penetration: geometry.penetration,
-            normal_velocity,
+            penetration: pending.penetration,
+            normal_velocity: pending.normal_velocity,
             slip: slip_world,
             sticking: outcome.sticking,
             frame: *frame,
-        })
+        }
     }
 
     /// Checks every parameter, naming the bad one (`normal.damping`, `friction.mu_static`, …).

@@ -346,6 +346,10 @@ pub struct HexapodMetrics {
     pub cost_of_transport: f64,
     /// Steps in which some leg's target was out of reach and was clamped.
     pub clamped_ik_steps: u64,
+    /// Impulse joints: the largest distance between a joint's two anchors (m) and rotation about
+    /// a locked axis (deg) over the run; zero for the multibody.
+    pub max_joint_drift: f64,
+    pub max_joint_drift_deg: f64,
     #[serde(skip)]
     acc: Accumulators,
 }
@@ -388,6 +392,10 @@ impl Observer<WalkSample> for HexapodMetrics {
         let r = &s.robot;
         self.steps = r.step;
         self.sim_time = r.time;
+        self.max_joint_drift = self.max_joint_drift.max(r.joint_drift.anchor);
+        self.max_joint_drift_deg = self
+            .max_joint_drift_deg
+            .max(r.joint_drift.angle.to_degrees());
         if s.gait.is_none() {
             return Ok(()); // settling: not part of the walk
         }

@@ -1,6 +1,7 @@
 //! Observers of the step loop: the rerun recording, the trajectory CSV and the metrics. Physics
 //! hands each step's sample to the observers and knows nothing of what they write.
 
+pub mod background;
 pub mod ball;
 pub mod hexapod;
 pub mod output;

@@ -2,14 +2,16 @@
 
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, GaitController, GaitSpec};
+use crate::record::background::Background;
 use crate::record::hexapod::{HexapodMetrics, HexapodRecorder, HexapodTrajectory};
 use crate::record::output::check_writable;
 use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
-use crate::sim::{Hexapod, HexapodSettings, Placement, Walker};
+use crate::sim::{Hexapod, HexapodSettings, Placement, WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
+use glam::DAffine3;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -77,7 +79,7 @@ impl WalkRun {
         walker.terrain_following = self.terrain_following;
         let every = decimation(self.log_rate, dt);
         let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass());
-        let mut recorder = match &self.record {
+        let recorder = match &self.record {
             Some(path) => {
                 let layout: &[(&str, &[&str])] = &[
                     (
@@ -110,7 +112,15 @@ impl WalkRun {
                     layout,
                 )?;
                 recording.log_terrain("world/terrain", &self.terrain)?;
-                Some(HexapodRecorder::new(recording, &self.robot, every)?)
+                let recorder = HexapodRecorder::new(recording, &self.robot, every)?;
+                let robot = self.robot.clone();
+                Some(Background::spawn(
+                    recorder,
+                    move |r, (sample, frames): (WalkSample, Vec<DAffine3>)| {
+                        r.observe_with(&sample, &robot, &frames)
+                    },
+                    HexapodRecorder::finish,
+                ))
             }
             None => None,
         };
@@ -146,10 +156,12 @@ impl WalkRun {
                 break;
             }
             metrics.observe(&sample)?;
-            if let Some(r) = recorder.as_mut()
+            if let Some(r) = &recorder
                 && sample.robot.step.is_multiple_of(every)
+                && r.send((sample.clone(), walker.hexapod().link_frames()))
+                    .is_err()
             {
-                r.observe_with(&sample, &self.robot, &walker.hexapod().link_frames())?;
+                break; // the writer failed: `finish` below reports why
             }
             if let Some(t) = trajectory.as_mut() {
                 t.observe(&sample)?;

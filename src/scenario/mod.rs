@@ -14,7 +14,9 @@ use crate::gait::{CommandChange, CommandSchedule, GaitSpec, VelocityCommand};
 use crate::robot::RobotModel;
 use crate::runner::ball::BallRun;
 use crate::runner::walk::WalkRun;
-use crate::sim::{BallConfig, HexapodSettings, Placement, STANDARD_GRAVITY, ServoGains};
+use crate::sim::{
+    BallConfig, DEFAULT_SOLVER_ITERATIONS, HexapodSettings, Placement, STANDARD_GRAVITY, ServoGains,
+};
 use crate::terrain::{HeightGrid, Source, TerrainSpec};
 use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
@@ -241,7 +243,9 @@ impl Scenario {
             ("gait", spec.gait.is_some()),
             ("settle", spec.settle.is_some()),
             ("follow_terrain", spec.follow_terrain.is_some()),
+            ("articulation", spec.articulation.is_some()),
             ("solver_iterations", spec.solver_iterations.is_some()),
+            ("pgs_iterations", spec.pgs_iterations.is_some()),
             ("servo", spec.servo.is_some()),
             ("start", spec.start.is_some()),
             ("command", spec.command.is_some()),
@@ -353,6 +357,9 @@ impl Scenario {
                 }
                 if spec.solver_iterations == Some(0) {
                     return Err(fail("solver_iterations: expected at least 1".into()));
+                }
+                if spec.pgs_iterations == Some(0) {
+                    return Err(fail("pgs_iterations: expected at least 1".into()));
                 }
                 let servo = spec.servo.unwrap_or_default();
                 if !(servo.stiffness.is_finite()
@@ -489,8 +496,12 @@ impl Scenario {
                     commands: w.commands.clone(),
                     contact: spec.contact.model(),
                     settings: HexapodSettings {
+                        articulation: spec.articulation.unwrap_or_default(),
                         dt: spec.dt,
-                        solver_iterations: spec.solver_iterations.unwrap_or(4),
+                        solver_iterations: spec
+                            .solver_iterations
+                            .unwrap_or(DEFAULT_SOLVER_ITERATIONS),
+                        pgs_iterations: spec.pgs_iterations,
                         gains: ServoGains {
                             stiffness: servo.stiffness,
                             damping: servo.damping,

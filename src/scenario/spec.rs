@@ -110,9 +110,15 @@ pub struct ScenarioSpec {
     /// Keep the body level by following the terrain under the feet (default false).
     #[serde(default)]
     pub follow_terrain: Option<bool>,
-    /// rapier substeps per step (default 4).
+    /// How the links are joined: `multibody` (default) or `impulse` (faster; joints drift a little).
+    #[serde(default)]
+    pub articulation: Option<crate::sim::Articulation>,
+    /// rapier substeps per step (default 1).
     #[serde(default)]
     pub solver_iterations: Option<usize>,
+    /// Constraint-solver sweeps per substep (default: 1 for the multibody, 6 for impulse joints).
+    #[serde(default)]
+    pub pgs_iterations: Option<usize>,
     #[serde(default)]
     pub servo: Option<ServoSpec>,
     #[serde(default)]

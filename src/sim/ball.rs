@@ -117,7 +117,7 @@ impl BallSim {
         contact: ContactModel,
         dt: f64,
     ) -> Self {
-        let mut engine = Engine::new(dt, config.gravity, 1);
+        let mut engine = Engine::new(dt, config.gravity, 1, 1, 1);
         let inertia = config.inertia() as f32;
         let mut builder = RigidBodyBuilder::dynamic()
             .translation(DVec3::from(config.position).as_vec3())

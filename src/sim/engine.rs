@@ -29,13 +29,23 @@ pub struct Engine {
 }
 
 impl Engine {
-    /// A world stepping `dt` seconds with `solver_iterations` substeps per step.
-    pub fn new(dt: f64, gravity: f64, solver_iterations: usize) -> Self {
+    /// A world stepping `dt` seconds with `solver_iterations` substeps per step,
+    /// `pgs_iterations` sweeps of the constraint solver per substep, and
+    /// `stabilization_iterations` bias-free sweeps after them (rapier's default: 1).
+    pub fn new(
+        dt: f64,
+        gravity: f64,
+        solver_iterations: usize,
+        pgs_iterations: usize,
+        stabilization_iterations: usize,
+    ) -> Self {
         let params = IntegrationParameters {
             dt: dt as f32,
             num_solver_iterations: solver_iterations,
             // no colliders, so no CCD either
             max_ccd_substeps: 0,
+            num_internal_pgs_iterations: pgs_iterations,
+            num_internal_stabilization_iterations: stabilization_iterations,
             ..IntegrationParameters::default()
         };
         Engine {
@@ -57,6 +67,11 @@ impl Engine {
 
     pub fn dt(&self) -> f64 {
         self.dt
+    }
+
+    /// rapier's substeps per step (`num_solver_iterations`).
+    pub fn substeps(&self) -> usize {
+        self.params.num_solver_iterations
     }
 
     /// Advances the world by one step.

@@ -1,29 +1,69 @@
-//! The hexapod in rapier: the URDF model as a reduced-coordinate multibody with a floating base,
-//! servos as joint motors, and the paper's contact model under each foot as the only ground force.
+//! The hexapod in rapier: the URDF model's links as rigid bodies, joined either as one
+//! reduced-coordinate multibody ([`Articulation::Multibody`], the default; see `multibody`) or by
+//! impulse joints ([`Articulation::Impulse`], faster, the joints drift a little; see `impulse`),
+//! with servos at every joint and the paper's contact model under each foot as the only ground force.
 //!
 //! - Links carry no colliders: rapier computes no contacts at all (neither with the ground nor
 //!   between links). Each step, each foot's force from [`crate::contact`] is applied to its link.
-//! - Servos are rapier's ForceBased joint motors: an implicit PD law in physical units,
-//!   τ = k·(q* − q) − d·q̇, limited to the URDF's `effort`. (The default AccelerationBased model
-//!   scales the gains by each joint's small effective inertia and lets the robot sag.) Rapier does
-//!   not report motor torques for multibodies, so the sample carries the PD law's torque.
-//! - Rapier's default damping of 0.1 on every multibody degree of freedom is removed: air drag on
-//!   the body is not part of the model, and joint damping is the servo's.
+//! - Servos follow the implicit PD law in physical units, τ = k·(q* − q) − d·q̇, limited to the
+//!   URDF's `effort`; the sample carries the torque actually applied.
 //! - Nothing sleeps.
 
 use super::engine::{Engine, STANDARD_GRAVITY};
-use crate::contact::{ContactForce, ContactModel, ContactState, EffectiveMass, sphere_geometry};
-use crate::robot::RobotModel;
-use crate::terrain::HeightGrid;
-use glam::{DAffine3, DMat2, DQuat, DVec2, DVec3};
+use super::impulse::{ImpulseRobot, JointDrift};
+use super::multibody::MultibodyRobot;
+use crate::contact::joint::JointContact;
+use crate::contact::{ContactForce, ContactModel, ContactState, respond_jointly, sphere_geometry};
+use crate::robot::{Joint, RobotModel};
+use crate::terrain::{GroundFrame, HeightGrid};
+use glam::{DAffine3, DQuat, DVec3};
 use rapier3d::math::Pose;
-use rapier3d::na;
-use rapier3d::prelude::{
-    GenericJointBuilder, JointAxesMask, JointAxis, MassProperties, MotorModel, Multibody,
-    MultibodyJoint, MultibodyJointHandle, RigidBodyBuilder, RigidBodyHandle,
-};
+use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
+
+/// How the links are joined in rapier.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Articulation {
+    /// One reduced-coordinate multibody: joints exact by construction.
+    #[default]
+    Multibody,
+    /// Impulse joints between free bodies: several times faster; the joints drift by micrometres.
+    Impulse,
+}
+
+impl Articulation {
+    /// Constraint-solver sweeps per substep unless set: the multibody has no constraints to
+    /// solve (its servos are implicit springs), so one; impulse joints are held by the solver:
+    /// with fewer than 6 a foot slides over 3 mm per stance (V12 with 4: 3.00 mm; 3: 5.70 mm) (measured;
+    /// see the README's Performance section).
+    pub fn default_pgs_iterations(self) -> usize {
+        match self {
+            Articulation::Multibody => 1,
+            Articulation::Impulse => IMPULSE_PGS_ITERATIONS,
+        }
+    }
+
+    /// rapier's bias-free sweeps after the constraint solve. Impulse joints: none. rapier's one
+    /// sweep removes the velocity its position correction added, so under a steady load (a robot
+    /// standing on a slope) the unconverged joint error is corrected afresh each step and the
+    /// robot creeps: 46 mm in 10 s on V14's 15° slope with 8 PGS sweeps and one stabilization
+    /// sweep, 0.2 mm with 6 PGS sweeps and none.
+    pub fn stabilization_iterations(self) -> usize {
+        match self {
+            Articulation::Multibody => 1,
+            Articulation::Impulse => 0,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Articulation::Multibody => "multibody",
+            Articulation::Impulse => "impulse",
+        }
+    }
+}
 
 /// Servo gains (the reference's: 20 N·m/rad, 0.05 N·m·s/rad).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -44,20 +84,36 @@ impl Default for ServoGains {
     }
 }
 
-/// How the robot is simulated: step, solver substeps, servo gains.
+/// Steps between two measurements of the impulse joints' drift (it changes slowly).
+const DRIFT_EVERY: u64 = 10;
+
+/// Constraint-solver sweeps per substep for impulse joints by default.
+pub const IMPULSE_PGS_ITERATIONS: usize = 6;
+
+/// rapier substeps per step by default: one — V1–V15 hold with it (see the README's Performance
+/// section), and each substep rebuilds the multibody's mass matrix.
+pub const DEFAULT_SOLVER_ITERATIONS: usize = 1;
+
+/// How the robot is simulated: articulation, step, solver substeps, servo gains.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HexapodSettings {
+    pub articulation: Articulation,
     pub dt: f64,
     /// rapier's substeps per step (each rebuilds the multibody's dynamics).
     pub solver_iterations: usize,
+    /// Constraint-solver sweeps per substep (the impulse joints' stiffness; `None`: the
+    /// articulation's default, [`Articulation::default_pgs_iterations`]).
+    pub pgs_iterations: Option<usize>,
     pub gains: ServoGains,
 }
 
 impl Default for HexapodSettings {
     fn default() -> Self {
         HexapodSettings {
+            articulation: Articulation::default(),
             dt: 1e-3,
-            solver_iterations: 4,
+            solver_iterations: DEFAULT_SOLVER_ITERATIONS,
+            pgs_iterations: None,
             gains: ServoGains::default(),
         }
     }
@@ -94,6 +150,8 @@ pub struct HexapodSample {
     /// Per leg, in the model's leg order.
     pub foot_positions: [DVec3; 6],
     pub foot_contacts: [Option<ContactForce>; 6],
+    /// How far apart the joints have come (zero for the multibody; measured every 10 steps).
+    pub joint_drift: JointDrift,
 }
 
 impl HexapodSample {
@@ -109,28 +167,73 @@ pub struct Hexapod {
     model: Arc<RobotModel>,
     terrain: Arc<HeightGrid>,
     contact: ContactModel,
-    gains: ServoGains,
     /// rapier body per model link
     bodies: Vec<RigidBodyHandle>,
-    /// rapier joint per model joint
-    joints: Vec<MultibodyJointHandle>,
+    joints: Joints,
     /// the root's rapier frame is the base link frame shifted to its centre of mass
     root_com: DVec3,
     targets: Vec<f64>,
+    /// Joint angles and rates now (read once per step: both the servos and the sample use them).
+    angles: Vec<f64>,
+    rates: Vec<f64>,
+    /// The joints' drift, measured every [`DRIFT_EVERY`] steps (impulse joints).
+    drift: JointDrift,
     foot_states: [ContactState; 6],
     last_contacts: [Option<ContactForce>; 6],
     step: u64,
 }
 
-fn pose_of(a: &DAffine3) -> Pose {
+/// A foot touching the ground: its link, the contact point, the link's centre of mass and the
+/// ground frame there (world).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ContactPoint {
+    pub link: usize,
+    pub body: RigidBodyHandle,
+    pub point: DVec3,
+    pub com: DVec3,
+    pub frame: GroundFrame,
+}
+
+impl Default for ContactPoint {
+    fn default() -> Self {
+        ContactPoint {
+            link: 0,
+            body: RigidBodyHandle::invalid(),
+            point: DVec3::ZERO,
+            com: DVec3::ZERO,
+            frame: GroundFrame::from_normal(DVec3::Z),
+        }
+    }
+}
+
+/// The links' joining, by articulation.
+enum Joints {
+    Multibody(MultibodyRobot),
+    Impulse(ImpulseRobot),
+}
+
+pub(super) fn pose_of(a: &DAffine3) -> Pose {
     Pose::from_parts(
         a.translation.as_vec3(),
         DQuat::from_mat3(&a.matrix3).normalize().as_quat(),
     )
 }
 
-fn affine_of(p: &Pose) -> DAffine3 {
+pub(super) fn affine_of(p: &Pose) -> DAffine3 {
     DAffine3::from_rotation_translation(p.rotation.as_dquat(), p.translation.as_dvec3())
+}
+
+/// A joint's frames in its parent's and its child's rapier body frames. rapier's revolute turns
+/// about the frames' x axis, so x is rotated onto the URDF axis; the root's body frame sits at
+/// its centre of mass.
+pub(super) fn joint_frames(joint: &Joint, root_com: DVec3) -> (DAffine3, DAffine3) {
+    let parent_shift = if joint.parent == 0 {
+        DAffine3::from_translation(-root_com)
+    } else {
+        DAffine3::IDENTITY
+    };
+    let to_axis = DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::X, joint.axis));
+    (parent_shift * joint.origin * to_axis, to_axis)
 }
 
 impl Hexapod {
@@ -144,7 +247,16 @@ impl Hexapod {
         placement: Placement,
         pose: &[f64],
     ) -> Self {
-        let mut engine = Engine::new(settings.dt, STANDARD_GRAVITY, settings.solver_iterations);
+        let pgs = settings
+            .pgs_iterations
+            .unwrap_or(settings.articulation.default_pgs_iterations());
+        let mut engine = Engine::new(
+            settings.dt,
+            STANDARD_GRAVITY,
+            settings.solver_iterations,
+            pgs,
+            settings.articulation.stabilization_iterations(),
+        );
         // body height: each foot just above the ground under it
         let heading = DQuat::from_rotation_z(placement.yaw);
         let link_poses = model.link_poses(pose);
@@ -179,77 +291,55 @@ impl Hexapod {
                 .build();
             bodies.push(engine.bodies.insert(rb));
         }
-        let mut joints = Vec::with_capacity(model.joints.len());
-        for joint in &model.joints {
-            let parent_shift = if joint.parent == 0 {
-                DAffine3::from_translation(-root_com)
-            } else {
-                DAffine3::IDENTITY
-            };
-            // rapier's revolute turns about the joint frames' x axis: rotate x onto the URDF axis
-            let to_axis = DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::X, joint.axis));
-            let data = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-                .local_frame1(pose_of(&(parent_shift * joint.origin * to_axis)))
-                .local_frame2(pose_of(&to_axis))
-                .contacts_enabled(false)
-                .limits(JointAxis::AngX, [joint.lower as f32, joint.upper as f32])
-                .motor_model(JointAxis::AngX, MotorModel::ForceBased)
-                .motor_max_force(JointAxis::AngX, joint.effort as f32)
-                .build();
-            let handle = engine
-                .multibody_joints
-                .insert(bodies[joint.parent], bodies[joint.child], data, true)
-                .expect("the model is a tree, so every joint attaches a new child");
-            joints.push(handle);
-        }
+        let joints = match settings.articulation {
+            Articulation::Multibody => Joints::Multibody(MultibodyRobot::build(
+                &mut engine,
+                &model,
+                &bodies,
+                root_com,
+                pose,
+                settings.gains,
+            )),
+            Articulation::Impulse => Joints::Impulse(ImpulseRobot::build(
+                &mut engine,
+                &model,
+                &bodies,
+                root_com,
+                pose,
+                settings.gains,
+            )),
+        };
+        let n = model.joints.len();
         let mut hexapod = Hexapod {
             engine,
             model,
             terrain,
             contact,
-            gains: settings.gains,
             bodies,
             joints,
             root_com,
             targets: pose.to_vec(),
+            angles: vec![0.0; n],
+            rates: vec![0.0; n],
+            drift: JointDrift::default(),
             foot_states: Default::default(),
             last_contacts: [None; 6],
             step: 0,
         };
-        hexapod.initialise_multibody(pose);
+        hexapod.read_joints();
         hexapod
     }
 
-    /// Sets the joint coordinates to `pose`, clears rapier's default damping, moves the links.
-    fn initialise_multibody(&mut self, pose: &[f64]) {
-        let link_id = self
-            .engine
-            .multibody_joints
-            .rigid_body_link(self.bodies[0])
-            .copied();
-        let link_id = link_id.expect("the root belongs to the multibody");
-        let ndofs;
-        {
-            let mb = self
-                .engine
-                .multibody_joints
-                .get_multibody_mut(link_id.multibody)
-                .expect("the multibody exists");
-            mb.damping_mut().fill(0.0);
-            ndofs = mb.ndofs();
+    /// Reads every joint's angle and rate from rapier.
+    fn read_joints(&mut self) {
+        for j in 0..self.model.joints.len() {
+            let (q, qd) = match &self.joints {
+                Joints::Multibody(r) => r.joint_state(&self.engine, j),
+                Joints::Impulse(r) => r.joint_state(&self.engine, &self.model, &self.bodies, j),
+            };
+            self.angles[j] = q;
+            self.rates[j] = qd;
         }
-        for (k, &angle) in pose.iter().enumerate() {
-            self.joint_mut(k).apply_displacement(&[angle as f32]);
-        }
-        let mb = self
-            .engine
-            .multibody_joints
-            .get_multibody_mut(link_id.multibody)
-            .expect("the multibody exists");
-        debug_assert_eq!(ndofs, 6 + self.model.joints.len());
-        mb.forward_kinematics(&self.engine.bodies, true);
-        mb.update_rigid_bodies(&mut self.engine.bodies, true);
-        self.set_targets(pose);
     }
 
     pub fn model(&self) -> &RobotModel {
@@ -268,15 +358,16 @@ impl Hexapod {
         self.step as f64 * self.engine.dt()
     }
 
-    /// Sets the servos' position targets (per model joint).
+    pub fn articulation(&self) -> Articulation {
+        match self.joints {
+            Joints::Multibody(_) => Articulation::Multibody,
+            Joints::Impulse(_) => Articulation::Impulse,
+        }
+    }
+
+    /// Sets the servos' position targets (per model joint), used from the next step on.
     pub fn set_targets(&mut self, targets: &[f64]) {
         self.targets.copy_from_slice(targets);
-        let (k, d) = (self.gains.stiffness as f32, self.gains.damping as f32);
-        for (j, &target) in targets.iter().enumerate() {
-            self.joint_mut(j)
-                .data
-                .set_motor_position(JointAxis::AngX, target as f32, k, d);
-        }
     }
 
     /// The body (root link) frame in the world.
@@ -291,6 +382,14 @@ impl Hexapod {
             .collect()
     }
 
+    /// How far apart the joints have come (always zero for the multibody).
+    pub fn joint_drift(&self) -> JointDrift {
+        match &self.joints {
+            Joints::Multibody(_) => JointDrift::default(),
+            Joints::Impulse(r) => r.joint_drift(&self.engine, &self.model, &self.bodies),
+        }
+    }
+
     /// World pose of a model link's frame.
     fn link_frame(&self, link: usize) -> DAffine3 {
         let pose = affine_of(self.engine.bodies[self.bodies[link]].position());
@@ -301,39 +400,7 @@ impl Hexapod {
         }
     }
 
-    /// The rapier joint of a model joint.
-    fn joint_mut(&mut self, joint: usize) -> &mut MultibodyJoint {
-        let (mb, link) = self
-            .engine
-            .multibody_joints
-            .get_mut(self.joints[joint])
-            .expect("every model joint is in the multibody");
-        let link = mb
-            .link_mut(link)
-            .expect("a joint's link is in its multibody");
-        &mut link.joint
-    }
-
-    /// The robot's multibody.
-    fn multibody(&self) -> &Multibody {
-        let root = self.engine.multibody_joints.rigid_body_link(self.bodies[0]);
-        let root = root.expect("the root belongs to the multibody");
-        self.engine
-            .multibody_joints
-            .get_multibody(root.multibody)
-            .expect("the multibody exists")
-    }
-
-    /// The multibody link of a model link.
-    fn multibody_link(&self, link: usize) -> usize {
-        let id = self
-            .engine
-            .multibody_joints
-            .rigid_body_link(self.bodies[link]);
-        id.expect("every model link is in the multibody").id
-    }
-
-    /// Computes each foot's ground force, applies it, and advances one step.
+    /// Computes each foot's ground force, applies it with the servos', and advances one step.
     pub fn step(&mut self) -> HexapodSample {
         let dt = self.dt();
         for &h in &self.bodies {
@@ -341,7 +408,26 @@ impl Hexapod {
             body.reset_forces(false);
             body.reset_torques(false);
         }
-        let mut contacts = [None; 6];
+        match &mut self.joints {
+            Joints::Multibody(r) => r.drive(
+                &mut self.engine,
+                &self.model,
+                &self.bodies,
+                &self.targets,
+                (&self.angles, &self.rates),
+            ),
+            Joints::Impulse(r) => r.drive(
+                &mut self.engine,
+                &self.model,
+                &self.targets,
+                (&self.angles, &self.rates),
+            ),
+        }
+        // the feet touching the ground, then their forces together (they push each other)
+        let mut geometries = [None; 6];
+        let mut points = [ContactPoint::default(); 6];
+        let mut legs = [0; 6];
+        let mut n = 0;
         for (k, leg) in self.model.legs.iter().enumerate() {
             let frame = self.link_frame(leg.foot_link);
             let center = frame.transform_point3(leg.foot.center);
@@ -355,65 +441,82 @@ impl Hexapod {
                 self.foot_states[k] = ContactState::default();
                 continue;
             }
-            let com = frame.transform_point3(self.model.links[leg.foot_link].com);
-            let mb = self.multibody();
-            let mb_link = self.multibody_link(leg.foot_link);
-            let point_jacobian =
-                PointJacobian::new(mb.body_jacobian(mb_link), geometry.point - com);
-            let velocity = point_jacobian.velocity(&mb.generalized_velocity());
-            let frame_axes = [
-                geometry.frame.tangent_x,
-                geometry.frame.tangent_y,
-                geometry.frame.normal,
-            ];
-            let mass = point_jacobian.effective_mass(mb.inv_augmented_mass(), frame_axes);
-            let response =
-                self.contact
-                    .respond(&geometry, velocity, &mass, dt, &mut self.foot_states[k]);
-            if let Some(c) = response {
-                let body = &mut self.engine.bodies[self.bodies[leg.foot_link]];
-                body.add_force(c.force.as_vec3(), true);
-                body.add_torque((c.point - com).cross(c.force).as_vec3(), true);
+            points[n] = ContactPoint {
+                link: leg.foot_link,
+                body: self.bodies[leg.foot_link],
+                point: geometry.point,
+                com: frame.transform_point3(self.model.links[leg.foot_link].com),
+                frame: geometry.frame,
+            };
+            geometries[n] = Some(geometry);
+            legs[n] = k;
+            n += 1;
+        }
+        let mut velocities = [DVec3::ZERO; 6];
+        let mut mobility = [glam::DMat3::ZERO; 36];
+        match &mut self.joints {
+            Joints::Multibody(r) => {
+                r.contact_mobility(&self.engine, &points[..n], &mut velocities, &mut mobility)
             }
-            contacts[k] = response;
+            Joints::Impulse(r) => r.contact_mobility(
+                &self.engine,
+                &self.model,
+                &points[..n],
+                &mut velocities,
+                &mut mobility,
+            ),
+        }
+        let inputs: Vec<JointContact> = (0..n)
+            .map(|i| JointContact {
+                geometry: geometries[i].as_ref().expect("touching"),
+                velocity: velocities[i],
+            })
+            .collect();
+        let mut states = [ContactState::default(); 6];
+        for i in 0..n {
+            states[i] = self.foot_states[legs[i]];
+        }
+        let mut forces = [None; 6];
+        respond_jointly(
+            &self.contact,
+            &inputs,
+            |i, j| mobility[i * n + j],
+            dt,
+            &mut states[..n],
+            &mut forces[..n],
+        );
+        let mut contacts = [None; 6];
+        for i in 0..n {
+            self.foot_states[legs[i]] = states[i];
+            if let Some(c) = forces[i] {
+                let body = &mut self.engine.bodies[points[i].body];
+                body.add_force(c.force.as_vec3(), true);
+                body.add_torque((c.point - points[i].com).cross(c.force).as_vec3(), true);
+            }
+            contacts[legs[i]] = forces[i];
         }
         self.engine.step();
         self.step += 1;
+        self.read_joints();
+        if self.step.is_multiple_of(DRIFT_EVERY) {
+            self.drift = self.joint_drift();
+        }
         self.last_contacts = contacts;
         self.sample()
     }
 
     /// The current state.
     pub fn sample(&self) -> HexapodSample {
-        let mb = self.multibody();
-        let velocities = mb.generalized_velocity();
-        let mut joint_angles = Vec::with_capacity(self.joints.len());
-        let mut joint_velocities = Vec::with_capacity(self.joints.len());
-        let mut joint_torques = Vec::with_capacity(self.joints.len());
-        for (j, joint) in self.model.joints.iter().enumerate() {
-            let link = mb
-                .link(self.multibody_link(joint.child))
-                .expect("link exists");
-            let q = link.joint().coords()[3] as f64;
-            let qd = mb.joint_velocity(link)[0] as f64;
-            let effort = joint.effort;
-            let torque = (self.gains.stiffness * (self.targets[j] - q) - self.gains.damping * qd)
-                .clamp(-effort, effort);
-            joint_angles.push(q);
-            joint_velocities.push(qd);
-            joint_torques.push(torque);
-        }
-        // root: generalized velocities 0..3 are the root (centre of mass) linear velocity, 3..6 angular
-        let v_com = DVec3::new(
-            velocities[0] as f64,
-            velocities[1] as f64,
-            velocities[2] as f64,
-        );
-        let omega = DVec3::new(
-            velocities[3] as f64,
-            velocities[4] as f64,
-            velocities[5] as f64,
-        );
+        let joint_torques = (0..self.model.joints.len())
+            .map(|j| match &self.joints {
+                Joints::Multibody(r) => r.applied_torque(j, self.targets[j], self.rates[j]),
+                Joints::Impulse(r) => r.applied_torque(&self.engine, j),
+            })
+            .collect();
+        let (v_com, omega) = match &self.joints {
+            Joints::Multibody(r) => r.base_velocity(&self.engine),
+            Joints::Impulse(r) => r.base_velocity(&self.engine, self.bodies[0]),
+        };
         let body = self.link_frame(0);
         let com_offset = body.matrix3 * self.root_com;
         let mut foot_positions = [DVec3::ZERO; 6];
@@ -431,58 +534,13 @@ impl Hexapod {
             body_rotation: DQuat::from_mat3(&body.matrix3).normalize(),
             body_velocity: v_com - omega.cross(com_offset),
             body_angular_velocity: omega,
-            joint_angles,
-            joint_velocities,
+            joint_angles: self.angles.clone(),
+            joint_velocities: self.rates.clone(),
             joint_targets: self.targets.clone(),
             joint_torques,
             foot_positions,
             foot_contacts: self.last_contacts,
-        }
-    }
-}
-
-/// The Jacobian of a material point on a multibody link: its velocity is J·q̇, with
-/// J = J_v − [r]×·J_ω from the link's centre-of-mass Jacobian and the arm r from that centre.
-struct PointJacobian {
-    rows: na::Matrix3xX<f32>,
-}
-
-impl PointJacobian {
-    fn new(body_jacobian: &na::Matrix6xX<f32>, arm: DVec3) -> Self {
-        let linear = body_jacobian.fixed_rows::<3>(0);
-        let angular = body_jacobian.fixed_rows::<3>(3);
-        let r = na::Vector3::new(arm.x as f32, arm.y as f32, arm.z as f32);
-        let rows = linear - r.cross_matrix() * angular;
-        PointJacobian { rows }
-    }
-
-    fn velocity(&self, q_dot: &na::DVectorView<f32>) -> DVec3 {
-        let v = &self.rows * q_dot;
-        DVec3::new(v.x as f64, v.y as f64, v.z as f64)
-    }
-
-    /// Effective masses along the ground frame's axes [t₁, t₂, n]: W = A·M⁻¹·Aᵀ with A the point
-    /// Jacobian projected on the axes; the in-plane block is inverted as a 2×2 matrix.
-    fn effective_mass(
-        &self,
-        inverse_mass: &na::LU<f32, na::Dyn, na::Dyn>,
-        axes: [DVec3; 3],
-    ) -> EffectiveMass {
-        let projected: [na::DVector<f32>; 3] = axes.map(|a| {
-            let d = na::Vector3::new(a.x as f32, a.y as f32, a.z as f32);
-            self.rows.tr_mul(&d)
-        });
-        let solved: [na::DVector<f32>; 3] = [0, 1, 2].map(|k| {
-            let mut w = projected[k].clone();
-            inverse_mass.solve_mut(&mut w);
-            w
-        });
-        let w = |a: usize, b: usize| projected[a].dot(&solved[b]) as f64;
-        let w12 = 0.5 * (w(0, 1) + w(1, 0));
-        let inverse = DMat2::from_cols(DVec2::new(w(0, 0), w12), DVec2::new(w12, w(1, 1)));
-        EffectiveMass {
-            normal: 1.0 / w(2, 2),
-            tangential: inverse.inverse(),
+            joint_drift: self.drift,
         }
     }
 }

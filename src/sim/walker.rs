@@ -20,6 +20,7 @@ pub struct Walker {
 }
 
 /// A step of the walker: the robot's state and the gait's targets for it.
+#[derive(Debug, Clone)]
 pub struct WalkSample {
     pub robot: HexapodSample,
     /// None while settling.

@@ -81,6 +81,19 @@ impl HeightGrid {
         (alpha, beta)
     }
 
+    /// The surface height at (x, y) and the ground frame there, from one evaluation of the
+    /// interpolant for the exact normal (the contact's closest-point search calls this per foot
+    /// and iteration, so it is on the hot path).
+    pub fn height_and_frame(&self, x: f64, y: f64, orientation: Orientation) -> (f64, GroundFrame) {
+        match orientation {
+            Orientation::Exact => {
+                let s = self.surface(x, y);
+                (s.height, GroundFrame::from_normal(s.normal()))
+            }
+            Orientation::Paper { .. } => (self.height(x, y), self.ground_frame(x, y, orientation)),
+        }
+    }
+
     /// The ground frame at (x, y) by the chosen method.
     pub fn ground_frame(&self, x: f64, y: f64, orientation: Orientation) -> GroundFrame {
         match orientation {

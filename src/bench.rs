@@ -1,0 +1,266 @@
+//! `hexsim bench`: simulated steps per second on the reference workloads, in the configuration the
+//! validation tests pass in.
+//!
+//! Workloads (all on built-in files, so the benchmark needs nothing at hand):
+//! - **walk**: hex18, tripod gait, the natural terrain (0.04 m peak to peak), dt = 1 ms, 1 s settling
+//!   + the walk, one thread; with the recording off, and on at the default 50 Hz;
+//! - **batch**: the walk on every core at once, one world per thread: total steps/s;
+//! - **ball**: the paper's ball on the natural terrain.
+//!
+//! Each walk also checks V13's criteria on its own result, so a figure from a configuration whose
+//! physics broke is flagged as such.
+
+use crate::scenario::{Metrics, Outputs, Report, Scenario, ScenarioSpec};
+use crate::sim::Articulation;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// What to measure.
+#[derive(Debug, Clone)]
+pub struct BenchOptions {
+    pub articulations: Vec<Articulation>,
+    /// Seconds walked (after 1 s settling) and seconds of the ball.
+    pub duration: f64,
+    /// Threads for the batch figure.
+    pub threads: usize,
+    /// Where the recording of the "recording on" run goes (deleted afterwards).
+    pub scratch: PathBuf,
+}
+
+/// One measured figure.
+#[derive(Debug, Clone, Serialize)]
+pub struct Figure {
+    pub workload: String,
+    pub articulation: Option<String>,
+    pub threads: usize,
+    pub steps: u64,
+    pub wall_time: f64,
+    pub steps_per_second: f64,
+    /// V13's criteria on this run's own result (walks only).
+    pub v13: Option<bool>,
+    /// Impulse joints: the largest joint anchor separation over the run (m).
+    pub max_joint_drift: Option<f64>,
+}
+
+/// The whole benchmark.
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchReport {
+    pub configuration: Vec<(String, String)>,
+    pub figures: Vec<Figure>,
+}
+
+fn walk_spec(articulation: Articulation, duration: f64) -> Result<ScenarioSpec> {
+    let text = format!(
+        "kind = \"walk\"\nduration = {duration}\narticulation = \"{}\"\n",
+        articulation.name()
+    );
+    Ok(toml::from_str(&text)?)
+}
+
+fn ball_spec(duration: f64) -> Result<ScenarioSpec> {
+    Ok(toml::from_str(&format!(
+        "kind = \"ball\"\nduration = {duration}\n"
+    ))?)
+}
+
+fn resolve(spec: ScenarioSpec, name: &str) -> Result<Scenario> {
+    Scenario::resolve(spec, name.into(), Path::new("")).map_err(anyhow::Error::from)
+}
+
+fn run(scenario: &Scenario, record: Option<PathBuf>) -> Result<Report> {
+    let report = scenario.run(Outputs {
+        record,
+        trajectory: None,
+        metrics: None,
+        progress: None,
+    })?;
+    if let Some(failure) = &report.failure {
+        anyhow::bail!("{}: {failure}", scenario.name);
+    }
+    Ok(report)
+}
+
+/// V13 (shared/reference §4): forward ≥ 70 % of the nominal stride/(duty·period)·t, roll and
+/// pitch under 25°, no foot deeper than 5 mm.
+fn v13(scenario: &Scenario, report: &Report) -> Option<bool> {
+    let (Metrics::Walk(m), Some(gait)) = (&report.metrics, scenario.gait()) else {
+        return None;
+    };
+    let nominal = gait.stride_length / (gait.duty_factor * gait.period) * m.walk_time;
+    Some(
+        m.forward_distance >= 0.7 * nominal
+            && m.max_roll_deg < 25.0
+            && m.max_pitch_deg < 25.0
+            && m.max_penetration < 5e-3,
+    )
+}
+
+fn figure(
+    workload: &str,
+    articulation: Option<Articulation>,
+    threads: usize,
+    steps: u64,
+    wall_time: f64,
+) -> Figure {
+    Figure {
+        workload: workload.into(),
+        articulation: articulation.map(|a| a.name().into()),
+        threads,
+        steps,
+        wall_time,
+        steps_per_second: steps as f64 / wall_time.max(1e-9),
+        v13: None,
+        max_joint_drift: None,
+    }
+}
+
+/// Runs the benchmark; `report` is called with each figure as it is measured.
+pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Result<BenchReport> {
+    let mut figures = Vec::new();
+    let mut push = |f: Figure, figures: &mut Vec<Figure>| {
+        report(&f);
+        figures.push(f);
+    };
+    for &articulation in &options.articulations {
+        let scenario = resolve(walk_spec(articulation, options.duration)?, "bench walk")?;
+        let walk = |record: Option<PathBuf>| -> Result<Figure> {
+            let r = run(&scenario, record)?;
+            let mut f = figure(
+                "walk",
+                Some(articulation),
+                1,
+                r.steps,
+                r.steps as f64 / r.steps_per_second,
+            );
+            f.v13 = v13(&scenario, &r);
+            if let (Metrics::Walk(m), Articulation::Impulse) = (&r.metrics, articulation) {
+                f.max_joint_drift = Some(m.max_joint_drift);
+            }
+            Ok(f)
+        };
+        push(walk(None)?, &mut figures);
+        let mut recorded = walk(Some(options.scratch.clone()))?;
+        recorded.workload = "walk, recording at 50 Hz".into();
+        std::fs::remove_file(&options.scratch)
+            .with_context(|| format!("removing {}", options.scratch.display()))?;
+        push(recorded, &mut figures);
+        // batch: one world per thread, all at once
+        let scenarios: Vec<Scenario> = (0..options.threads)
+            .map(|_| resolve(walk_spec(articulation, options.duration)?, "bench walk"))
+            .collect::<Result<_>>()?;
+        let started = std::time::Instant::now();
+        let steps = std::thread::scope(|s| -> Result<u64> {
+            let handles: Vec<_> = scenarios
+                .iter()
+                .map(|sc| s.spawn(move || run(sc, None).map(|r| r.steps)))
+                .collect();
+            let mut total = 0;
+            for h in handles {
+                total += h.join().expect("a bench thread does not panic")?;
+            }
+            Ok(total)
+        })?;
+        let wall = started.elapsed().as_secs_f64();
+        push(
+            figure(
+                "batch, one world per thread",
+                Some(articulation),
+                options.threads,
+                steps,
+                wall,
+            ),
+            &mut figures,
+        );
+    }
+    let ball = resolve(ball_spec(options.duration)?, "bench ball")?;
+    let r = run(&ball, None)?;
+    push(
+        figure(
+            "ball on the natural terrain",
+            None,
+            1,
+            r.steps,
+            r.steps as f64 / r.steps_per_second,
+        ),
+        &mut figures,
+    );
+    Ok(BenchReport {
+        configuration: configuration(options),
+        figures,
+    })
+}
+
+/// What was measured, in words: build, machine, solver, contact scheme.
+pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let articulations = options
+        .articulations
+        .iter()
+        .map(|a| {
+            format!(
+                "{} ({} substep{} of {} constraint sweep{})",
+                a.name(),
+                crate::sim::DEFAULT_SOLVER_ITERATIONS,
+                if crate::sim::DEFAULT_SOLVER_ITERATIONS == 1 {
+                    ""
+                } else {
+                    "s"
+                },
+                a.default_pgs_iterations(),
+                if a.default_pgs_iterations() == 1 {
+                    ""
+                } else {
+                    "s"
+                },
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    let build = if cfg!(debug_assertions) {
+        "debug (numbers meaningless: use --release)"
+    } else {
+        "release"
+    };
+    [
+        ("hexsim", env!("CARGO_PKG_VERSION").to_string()),
+        ("build", build.to_string()),
+        ("machine", format!("{cpu}, {cores} cores")),
+        (
+            "physics",
+            "rapier3d 0.36.1, f32, default features (no simd, no parallel)".into(),
+        ),
+        ("articulation", articulations),
+        (
+            "servos",
+            "multibody: implicit joint springs (k·dt², d·dt on the mass matrix), torque limit \
+             as an explicit torque; impulse: ForceBased motors; limits only near a limit"
+                .into(),
+        ),
+        (
+            "contact",
+            "paper spring-damper k = 2e4 N/m, c = 150 N·s/m; Karnopp μs 0.9, μk 0.8; exact \
+             normal; stance feet's stopping forces solved jointly; no rapier colliders"
+                .into(),
+        ),
+        (
+            "workload",
+            format!(
+                "hex18, tripod, natural terrain 0.04 m p-p, dt = 1 ms, 1 s settle + {} s",
+                options.duration
+            ),
+        ),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}

@@ -1,0 +1,296 @@
+//! The robot as one reduced-coordinate multibody (rapier's `MultibodyJointSet`): a floating base and
+//! one coordinate per URDF joint, so the joints cannot drift apart.
+//!
+//! Why it is driven the way it is: each rapier substep rebuilds the multibody's 24×24 mass matrix
+//! and factorises it (the bulk of a step), and every joint motor or limit adds a constraint whose
+//! set-up is one more 24-wide solve. So:
+//! - **Servos are implicit joint springs**, not motor constraints: rapier integrates a spring
+//!   −k·(q − q*) and a damper −d·q̇ on a joint coordinate by backward Euler (k·dt² and d·dt on the
+//!   mass matrix' diagonal), so the applied torque is τ = k·(q* − qₙ) − (k·dt + d)·q̇ₙ₊₁ — the
+//!   ForceBased motor's law, with no constraint to build. When the torque this predicts would
+//!   exceed the URDF's `effort`, the spring is switched off for the step and ±effort is applied as
+//!   an explicit torque pair on the joint's two links, so the torque limit holds exactly.
+//! - **A limit constraint exists only where it can bind**: rapier's limit pushes back only once a
+//!   joint is past its limit, so a constraint is enabled when the joint is within one step's travel
+//!   (plus a margin) of a limit, and is inert — costless — otherwise.
+
+use super::engine::Engine;
+use crate::robot::RobotModel;
+use glam::{DMat3, DVec3};
+use rapier3d::na;
+use rapier3d::prelude::{
+    GenericJointBuilder, JointAxesMask, JointAxis, Multibody, MultibodyJointHandle,
+    MultibodyJointSet, RigidBodyHandle,
+};
+
+use super::hexapod::{ContactPoint, ServoGains, joint_frames, pose_of};
+
+/// rapier's index of the revolute coordinate (AngX) in a joint's spatial layout.
+const ANG_X: usize = 3;
+
+/// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.
+const LIMIT_MARGIN: f64 = 1e-3;
+
+pub struct MultibodyRobot {
+    /// rapier joint per model joint
+    joints: Vec<MultibodyJointHandle>,
+    /// per model joint: its multibody link and degree of freedom
+    links: Vec<usize>,
+    dofs: Vec<usize>,
+    root: RigidBodyHandle,
+    /// Per model joint, this step's servo: `None` = implicit spring, `Some(τ)` = saturated torque.
+    saturated: Vec<Option<f64>>,
+    /// Per model joint, the coordinate at the start of the step (for the applied torque).
+    start_angles: Vec<f64>,
+    gains: ServoGains,
+    dt: f64,
+    /// Scratch for the contact mobility: per contact and axis, A_i·e_a and M⁻¹·(A_i·e_a).
+    projected: Vec<na::DVector<f32>>,
+    solved: Vec<na::DVector<f32>>,
+}
+
+impl MultibodyRobot {
+    /// Joins the links with multibody joints and sets the joint coordinates to `pose`.
+    pub fn build(
+        engine: &mut Engine,
+        model: &RobotModel,
+        bodies: &[RigidBodyHandle],
+        root_com: DVec3,
+        pose: &[f64],
+        gains: ServoGains,
+    ) -> Self {
+        let mut joints = Vec::with_capacity(model.joints.len());
+        for joint in &model.joints {
+            let (frame1, frame2) = joint_frames(joint, root_com);
+            let data = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+                .local_frame1(pose_of(&frame1))
+                .local_frame2(pose_of(&frame2))
+                .contacts_enabled(false)
+                .build();
+            let handle = engine
+                .multibody_joints
+                .insert(bodies[joint.parent], bodies[joint.child], data, true)
+                .expect("the model is a tree, so every joint attaches a new child");
+            joints.push(handle);
+        }
+        let mut robot = MultibodyRobot {
+            links: Vec::new(),
+            dofs: Vec::new(),
+            joints,
+            root: bodies[0],
+            saturated: vec![None; model.joints.len()],
+            start_angles: pose.to_vec(),
+            gains,
+            dt: engine.dt(),
+            projected: vec![na::DVector::zeros(6 + model.joints.len()); 3 * model.legs.len()],
+            solved: vec![na::DVector::zeros(6 + model.joints.len()); 3 * model.legs.len()],
+        };
+        for joint in &model.joints {
+            let link = robot.multibody_link(engine, bodies[joint.child]);
+            let dof = robot
+                .multibody(engine)
+                .link(link)
+                .expect("link")
+                .assembly_id();
+            robot.links.push(link);
+            robot.dofs.push(dof);
+        }
+        let mb = robot.multibody_mut(&mut engine.multibody_joints);
+        // rapier's default damping of 0.1 on every degree of freedom is not part of the model:
+        // air drag on the body is not modelled, and joint damping is the servo's
+        mb.damping_mut().fill(0.0);
+        for (j, &angle) in pose.iter().enumerate() {
+            robot
+                .joint_mut(engine, j)
+                .apply_displacement(&[angle as f32]);
+        }
+        let mb = robot.multibody_mut(&mut engine.multibody_joints);
+        debug_assert_eq!(mb.ndofs(), 6 + model.joints.len());
+        mb.forward_kinematics(&engine.bodies, true);
+        mb.update_rigid_bodies(&mut engine.bodies, true);
+        robot
+    }
+
+    fn multibody_link(&self, engine: &Engine, body: RigidBodyHandle) -> usize {
+        let id = engine.multibody_joints.rigid_body_link(body);
+        id.expect("every model link is in the multibody").id
+    }
+
+    fn multibody<'a>(&self, engine: &'a Engine) -> &'a Multibody {
+        let root = engine.multibody_joints.rigid_body_link(self.root);
+        let root = root.expect("the root belongs to the multibody");
+        engine
+            .multibody_joints
+            .get_multibody(root.multibody)
+            .expect("the multibody exists")
+    }
+
+    fn multibody_mut<'a>(&self, joints: &'a mut MultibodyJointSet) -> &'a mut Multibody {
+        let root = joints.rigid_body_link(self.root).copied();
+        let root = root.expect("the root belongs to the multibody");
+        joints
+            .get_multibody_mut(root.multibody)
+            .expect("the multibody exists")
+    }
+
+    fn joint_mut<'a>(
+        &self,
+        engine: &'a mut Engine,
+        joint: usize,
+    ) -> &'a mut rapier3d::prelude::MultibodyJoint {
+        let (mb, link) = engine
+            .multibody_joints
+            .get_mut(self.joints[joint])
+            .expect("every model joint is in the multibody");
+        &mut mb.link_mut(link).expect("a joint's link exists").joint
+    }
+
+    /// A joint's angle (rad) and rate (rad/s).
+    pub fn joint_state(&self, engine: &Engine, joint: usize) -> (f64, f64) {
+        let mb = self.multibody(engine);
+        let link = mb.link(self.links[joint]).expect("link exists");
+        let q = link.joint().coords()[ANG_X] as f64;
+        let qd = mb.generalized_velocity()[self.dofs[joint]] as f64;
+        (q, qd)
+    }
+
+    /// The root's centre-of-mass velocity and angular velocity (world).
+    pub fn base_velocity(&self, engine: &Engine) -> (DVec3, DVec3) {
+        // generalized velocities 0..3: the root's centre-of-mass velocity; 3..6: its angular velocity
+        let v = self.multibody(engine).generalized_velocity();
+        (
+            DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64),
+            DVec3::new(v[3] as f64, v[4] as f64, v[5] as f64),
+        )
+    }
+
+    /// For each contact, its material point's velocity, and the contact mobility of the
+    /// articulated robot, W_ij = A_i·M⁻¹·A_jᵀ (A the point Jacobians projected on each contact's
+    /// ground-frame axes), row-major n×n blocks in `mobility`.
+    pub fn contact_mobility(
+        &mut self,
+        engine: &Engine,
+        contacts: &[ContactPoint],
+        velocities: &mut [DVec3],
+        mobility: &mut [DMat3],
+    ) {
+        let mb = self.multibody(engine);
+        let n = contacts.len();
+        let q_dot = mb.generalized_velocity();
+        let inverse_mass = mb.inv_augmented_mass();
+        for (i, c) in contacts.iter().enumerate() {
+            let link = self.multibody_link(engine, c.body);
+            let jacobian = PointJacobian::new(mb.body_jacobian(link), c.point - c.com);
+            velocities[i] = jacobian.velocity(&q_dot);
+            let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal];
+            for (a, axis) in axes.iter().enumerate() {
+                let d = na::Vector3::new(axis.x as f32, axis.y as f32, axis.z as f32);
+                let row = &mut self.projected[3 * i + a];
+                jacobian.rows.tr_mul_to(&d, row);
+                let solved = &mut self.solved[3 * i + a];
+                solved.copy_from(row);
+                inverse_mass.solve_mut(solved);
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let w = |a: usize, b: usize| {
+                    self.projected[3 * i + a].dot(&self.solved[3 * j + b]) as f64
+                };
+                mobility[i * n + j] =
+                    DMat3::from_cols_array_2d(&[0, 1, 2].map(|b| [0, 1, 2].map(|a| w(a, b))));
+            }
+        }
+    }
+
+    /// Sets each servo for the coming step (see the module docs): an implicit spring towards its
+    /// target, or the effort limit as an explicit torque; and each limit constraint that can bind.
+    pub fn drive(
+        &mut self,
+        engine: &mut Engine,
+        model: &RobotModel,
+        bodies: &[RigidBodyHandle],
+        targets: &[f64],
+        (angles, rates): (&[f64], &[f64]),
+    ) {
+        let ServoGains {
+            stiffness: k,
+            damping: d,
+        } = self.gains;
+        let dt = self.dt;
+        for (j, joint) in model.joints.iter().enumerate() {
+            let (q, qd) = (angles[j], rates[j]);
+            self.start_angles[j] = q;
+            // the implicit law's torque, with this step's end velocity estimated by the current one
+            let predicted = k * (targets[j] - q) - (k * dt + d) * qd;
+            let saturated =
+                (predicted.abs() > joint.effort).then(|| joint.effort.copysign(predicted));
+            self.saturated[j] = saturated;
+            let near_limit = q - joint.lower < qd.abs() * dt + LIMIT_MARGIN
+                || joint.upper - q < qd.abs() * dt + LIMIT_MARGIN;
+            let rapier_joint = self.joint_mut(engine, j);
+            match saturated {
+                None => rapier_joint.set_spring(ANG_X, k as f32, targets[j] as f32),
+                Some(_) => rapier_joint.set_spring(ANG_X, 0.0, 0.0),
+            }
+            if near_limit {
+                rapier_joint
+                    .data
+                    .set_limits(JointAxis::AngX, [joint.lower as f32, joint.upper as f32]);
+            } else {
+                rapier_joint.data.limit_axes.remove(JointAxesMask::ANG_X);
+            }
+            let dof = self.dofs[j];
+            self.multibody_mut(&mut engine.multibody_joints)
+                .damping_mut()[dof] = if saturated.is_some() { 0.0 } else { d as f32 };
+            if let Some(torque) = saturated {
+                let axis = self.joint_axis(engine, j);
+                let t = (axis * torque).as_vec3();
+                engine.bodies[bodies[joint.child]].add_torque(t, true);
+                engine.bodies[bodies[joint.parent]].add_torque(-t, true);
+            }
+        }
+    }
+
+    /// A joint's axis in the world (the child link's side).
+    fn joint_axis(&self, engine: &Engine, joint: usize) -> DVec3 {
+        let mb = self.multibody(engine);
+        let link = mb.link(self.links[joint]).expect("link exists");
+        let frame = link.local_to_world().rotation * link.joint().data.local_frame2.rotation;
+        (frame * glam::Vec3::X).as_dvec3()
+    }
+
+    /// The torque the servo applied over the last step (N·m): the implicit spring-damper's
+    /// k·(q* − qₙ) − (k·dt + d)·q̇ₙ₊₁, or the saturated effort.
+    pub fn applied_torque(&self, joint: usize, target: f64, qd: f64) -> f64 {
+        if let Some(torque) = self.saturated[joint] {
+            return torque;
+        }
+        let ServoGains {
+            stiffness: k,
+            damping: d,
+        } = self.gains;
+        k * (target - self.start_angles[joint]) - (k * self.dt + d) * qd
+    }
+}
+
+/// The Jacobian of a material point on a multibody link: its velocity is J·q̇, with
+/// J = J_v − [r]×·J_ω from the link's centre-of-mass Jacobian and the arm r from that centre.
+struct PointJacobian {
+    rows: na::Matrix3xX<f32>,
+}
+
+impl PointJacobian {
+    fn new(body_jacobian: &na::Matrix6xX<f32>, arm: DVec3) -> Self {
+        let linear = body_jacobian.fixed_rows::<3>(0);
+        let angular = body_jacobian.fixed_rows::<3>(3);
+        let r = na::Vector3::new(arm.x as f32, arm.y as f32, arm.z as f32);
+        let rows = linear - r.cross_matrix() * angular;
+        PointJacobian { rows }
+    }
+
+    fn velocity(&self, q_dot: &na::DVectorView<f32>) -> DVec3 {
+        let v = &self.rows * q_dot;
+        DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+    }
+}
