@@ -24,6 +24,8 @@ pub struct BenchOptions {
     pub duration: f64,
     /// Threads for the batch figure.
     pub threads: usize,
+    /// Each figure is the median of this many runs (these machines are noisy).
+    pub repeats: usize,
     /// Where the recording of the "recording on" run goes (deleted afterwards).
     pub scratch: PathBuf,
 }
@@ -115,6 +117,15 @@ fn figure(
     }
 }
 
+/// The run with the median wall time of `repeats` runs of `measure`.
+fn median(repeats: usize, mut measure: impl FnMut() -> Result<Figure>) -> Result<Figure> {
+    let mut runs = (0..repeats.max(1))
+        .map(|_| measure())
+        .collect::<Result<Vec<_>>>()?;
+    runs.sort_by(|a, b| a.wall_time.total_cmp(&b.wall_time));
+    Ok(runs.swap_remove(runs.len() / 2))
+}
+
 /// Runs the benchmark; `report` is called with each figure as it is measured.
 pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Result<BenchReport> {
     let mut figures = Vec::new();
@@ -139,52 +150,54 @@ pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Res
             }
             Ok(f)
         };
-        push(walk(None)?, &mut figures);
-        let mut recorded = walk(Some(options.scratch.clone()))?;
+        push(median(options.repeats, || walk(None))?, &mut figures);
+        let mut recorded = median(options.repeats, || {
+            let f = walk(Some(options.scratch.clone()));
+            std::fs::remove_file(&options.scratch)
+                .with_context(|| format!("removing {}", options.scratch.display()))?;
+            f
+        })?;
         recorded.workload = "walk, recording at 50 Hz".into();
-        std::fs::remove_file(&options.scratch)
-            .with_context(|| format!("removing {}", options.scratch.display()))?;
         push(recorded, &mut figures);
         // batch: one world per thread, all at once
         let scenarios: Vec<Scenario> = (0..options.threads)
             .map(|_| resolve(walk_spec(articulation, options.duration)?, "bench walk"))
             .collect::<Result<_>>()?;
-        let started = std::time::Instant::now();
-        let steps = std::thread::scope(|s| -> Result<u64> {
-            let handles: Vec<_> = scenarios
-                .iter()
-                .map(|sc| s.spawn(move || run(sc, None).map(|r| r.steps)))
-                .collect();
-            let mut total = 0;
-            for h in handles {
-                total += h.join().expect("a bench thread does not panic")?;
-            }
-            Ok(total)
-        })?;
-        let wall = started.elapsed().as_secs_f64();
-        push(
-            figure(
+        let batch = median(options.repeats, || {
+            let started = std::time::Instant::now();
+            let steps = std::thread::scope(|s| -> Result<u64> {
+                let handles: Vec<_> = scenarios
+                    .iter()
+                    .map(|sc| s.spawn(move || run(sc, None).map(|r| r.steps)))
+                    .collect();
+                let mut total = 0;
+                for h in handles {
+                    total += h.join().expect("a bench thread does not panic")?;
+                }
+                Ok(total)
+            })?;
+            Ok(figure(
                 "batch, one world per thread",
                 Some(articulation),
                 options.threads,
                 steps,
-                wall,
-            ),
-            &mut figures,
-        );
+                started.elapsed().as_secs_f64(),
+            ))
+        })?;
+        push(batch, &mut figures);
     }
     let ball = resolve(ball_spec(options.duration)?, "bench ball")?;
-    let r = run(&ball, None)?;
-    push(
-        figure(
+    let ball = median(options.repeats, || {
+        let r = run(&ball, None)?;
+        Ok(figure(
             "ball on the natural terrain",
             None,
             1,
             r.steps,
             r.steps as f64 / r.steps_per_second,
-        ),
-        &mut figures,
-    );
+        ))
+    })?;
+    push(ball, &mut figures);
     Ok(BenchReport {
         configuration: configuration(options),
         figures,
@@ -235,6 +248,10 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
         ("hexsim", env!("CARGO_PKG_VERSION").to_string()),
         ("build", build.to_string()),
         ("machine", format!("{cpu}, {cores} cores")),
+        (
+            "method",
+            format!("median of {} runs per figure", options.repeats.max(1)),
+        ),
         (
             "physics",
             "rapier3d 0.36.1, f32, default features (no simd, no parallel)".into(),

@@ -57,6 +57,9 @@ struct BenchArgs {
     /// Threads for the batch figure. Default: all cores.
     #[arg(short, long)]
     jobs: Option<usize>,
+    /// Runs per figure; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
     /// Also write the figures and the configuration as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -763,6 +766,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             .jobs
             .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
             .max(1),
+        repeats: args.repeats,
         scratch: std::env::temp_dir().join(format!("hexsim-bench-{}.rrd", std::process::id())),
     };
     for (key, value) in hexsim::bench::configuration(&options) {

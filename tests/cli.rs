@@ -277,3 +277,53 @@ fn a_diverging_run_is_caught_with_when_where_and_why() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("dt < 3.16e-4 s"), "{stderr}");
 }
+
+#[test]
+fn bench_measures_both_articulations_and_says_what_it_measured() {
+    let dir = scratch("bench");
+    let json = dir.join("bench.json");
+    let out = hexsim()
+        .args([
+            "bench",
+            "--duration",
+            "0.3",
+            "--repeats",
+            "1",
+            "--jobs",
+            "2",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for needle in [
+        "articulation",
+        "multibody",
+        "impulse",
+        "contact",
+        "steps/s",
+        "ball",
+    ] {
+        assert!(stdout.contains(needle), "no {needle:?} in:\n{stdout}");
+    }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let figures = report["figures"].as_array().unwrap();
+    // walk, walk recorded, batch — per articulation — and the ball
+    assert_eq!(figures.len(), 7, "{figures:?}");
+    for f in figures {
+        assert!(f["steps_per_second"].as_f64().unwrap() > 0.0);
+    }
+    let batch = figures
+        .iter()
+        .find(|f| f["workload"].as_str().unwrap().starts_with("batch"))
+        .unwrap();
+    assert_eq!(batch["threads"], 2);
+    assert_eq!(batch["steps"], 2 * 1300, "two worlds of 1.3 s at 1 ms");
+}

@@ -64,6 +64,10 @@ impl LegChain {
     /// ∂(foot position)/∂q, column k = axis_k × (foot − joint_k).
     pub fn jacobian(&self, q: [f64; 3]) -> DMat3 {
         let (joints, foot) = self.frames(q);
+        Self::jacobian_of(&joints, foot)
+    }
+
+    fn jacobian_of(joints: &[(DVec3, DVec3); 3], foot: DVec3) -> DMat3 {
         DMat3::from_cols(
             joints[0].1.cross(foot - joints[0].0),
             joints[1].1.cross(foot - joints[1].0),
@@ -78,39 +82,41 @@ impl LegChain {
     /// Joint angles that put the foot at `target` (body frame), starting from `guess` (use the
     /// last answer: it keeps the knee on the same side). Damped least squares, within the
     /// joints' limits; if the target is out of reach the closest reachable answer is returned
-    /// with its error.
+    /// with its error. (The gait solves six legs every step: each trial's forward kinematics
+    /// also gives the next iteration's Jacobian.)
     pub fn solve(&self, target: DVec3, guess: [f64; 3]) -> IkSolution {
         let mut q = self.clamp(guess);
-        let mut error = target - self.foot_position(q);
+        let (mut joints, foot) = self.frames(q);
+        let mut error = target - foot;
+        let mut foot = foot;
         for _ in 0..50 {
             if error.length() < IK_TOLERANCE * 0.1 {
                 break;
             }
-            let j = self.jacobian(q);
+            let j = Self::jacobian_of(&joints, foot);
             // a small damping keeps the step finite where the leg is stretched (singular)
             let lambda2 = 1e-6;
             let step = j.transpose()
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
-            let next = self.clamp([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            let next_error = target - self.foot_position(next);
-            if next_error.length() >= error.length() {
+            let mut next = self.clamp([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
+            let (mut next_joints, mut next_foot) = self.frames(next);
+            if (target - next_foot).length() >= error.length() {
                 // no progress: try a half step once, then stop
-                let half = self.clamp([
+                next = self.clamp([
                     q[0] + 0.5 * step.x,
                     q[1] + 0.5 * step.y,
                     q[2] + 0.5 * step.z,
                 ]);
-                let half_error = target - self.foot_position(half);
-                if half_error.length() >= error.length() {
+                (next_joints, next_foot) = self.frames(next);
+                if (target - next_foot).length() >= error.length() {
                     break;
                 }
-                q = half;
-                error = half_error;
-                continue;
             }
             q = next;
-            error = next_error;
+            joints = next_joints;
+            foot = next_foot;
+            error = target - foot;
         }
         IkSolution {
             angles: q,
