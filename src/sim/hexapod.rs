@@ -223,6 +223,17 @@ pub(super) fn affine_of(p: &Pose) -> DAffine3 {
     DAffine3::from_rotation_translation(p.rotation.as_dquat(), p.translation.as_dvec3())
 }
 
+/// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.
+const LIMIT_MARGIN: f64 = 1e-3;
+
+/// Whether a joint at angle `q` moving at `qd` can reach a limit within the step. rapier's limit
+/// constraint pushes only once the joint is past the limit, yet costs a constraint set-up (on the
+/// multibody, a 24-wide solve) every step it exists: it is enabled only where it can bind.
+pub(super) fn limit_can_bind(joint: &Joint, q: f64, qd: f64, dt: f64) -> bool {
+    let reach = qd.abs() * dt + LIMIT_MARGIN;
+    q - joint.lower < reach || joint.upper - q < reach
+}
+
 /// A joint's frames in its parent's and its child's rapier body frames. rapier's revolute turns
 /// about the frames' x axis, so x is rotated onto the URDF axis; the root's body frame sits at
 /// its centre of mass.

@@ -11,15 +11,12 @@
 //! τ = k·(q* − q) − d·q̇ solved implicitly, with the impulse bounded by the URDF's `effort`.
 
 use super::engine::Engine;
-use super::hexapod::{ContactPoint, ServoGains, joint_frames, pose_of};
+use super::hexapod::{ContactPoint, ServoGains, joint_frames, limit_can_bind, pose_of};
 use crate::robot::RobotModel;
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::prelude::{
     GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, MotorModel, RigidBodyHandle,
 };
-
-/// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.
-const LIMIT_MARGIN: f64 = 1e-3;
 
 pub struct ImpulseRobot {
     joints: Vec<ImpulseJointHandle>,
@@ -166,8 +163,7 @@ impl ImpulseRobot {
         let dt = engine.dt();
         for (j, joint) in model.joints.iter().enumerate() {
             let (q, qd) = (angles[j], rates[j]);
-            let near_limit = q - joint.lower < qd.abs() * dt + LIMIT_MARGIN
-                || joint.upper - q < qd.abs() * dt + LIMIT_MARGIN;
+            let near_limit = limit_can_bind(joint, q, qd, dt);
             let data = &mut engine
                 .impulse_joints
                 .get_mut(self.joints[j], false)

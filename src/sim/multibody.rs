@@ -23,13 +23,10 @@ use rapier3d::prelude::{
     MultibodyJointSet, RigidBodyHandle,
 };
 
-use super::hexapod::{ContactPoint, ServoGains, joint_frames, pose_of};
+use super::hexapod::{ContactPoint, ServoGains, joint_frames, limit_can_bind, pose_of};
 
 /// rapier's index of the revolute coordinate (AngX) in a joint's spatial layout.
 const ANG_X: usize = 3;
-
-/// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.
-const LIMIT_MARGIN: f64 = 1e-3;
 
 pub struct MultibodyRobot {
     /// rapier joint per model joint
@@ -226,8 +223,7 @@ impl MultibodyRobot {
             let saturated =
                 (predicted.abs() > joint.effort).then(|| joint.effort.copysign(predicted));
             self.saturated[j] = saturated;
-            let near_limit = q - joint.lower < qd.abs() * dt + LIMIT_MARGIN
-                || joint.upper - q < qd.abs() * dt + LIMIT_MARGIN;
+            let near_limit = limit_can_bind(joint, q, qd, dt);
             let rapier_joint = self.joint_mut(engine, j);
             match saturated {
                 None => rapier_joint.set_spring(ANG_X, k as f32, targets[j] as f32),
