@@ -8,7 +8,7 @@ use crate::record::output::check_writable;
 use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
-use crate::sim::{Hexapod, HexapodSettings, Placement, WalkSample, Walker};
+use crate::sim::{Articulation, Hexapod, HexapodSettings, Placement, WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
 use glam::DAffine3;
@@ -107,7 +107,15 @@ impl WalkRun {
                 ];
                 let recording = Recording::create(
                     path,
-                    format!("{} on {}", self.gait.name, self.terrain_name),
+                    match self.settings.articulation {
+                        Articulation::Multibody => {
+                            format!("{} on {}", self.gait.name, self.terrain_name)
+                        }
+                        Articulation::Impulse => format!(
+                            "{} on {} (impulse joints)",
+                            self.gait.name, self.terrain_name
+                        ),
+                    },
                     dt,
                     layout,
                 )?;
