@@ -519,7 +519,43 @@ in_both_articulations!(
     v14_stands_on_a_15_degree_slope,
     v15_same_scenario_same_result_bit_for_bit,
     servo_torques_hold_the_standing_robot,
+    servo_torque_stops_at_the_effort_limit,
 );
+
+/// A target far from the pose asks for k·Δq = 20 N·m/rad · 0.5 rad = 10 N·m, over hex18's 3 N·m
+/// effort: the servos must apply exactly the effort (multibody: an explicit torque in place of the
+/// spring; impulse joints: the motor's bounded impulse), and never more.
+fn servo_torque_stops_at_the_effort_limit(articulation: Articulation) {
+    let model = hex18();
+    let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
+    let place = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let (mut hexapod, _) = standing(&model, ground, place, articulation);
+    let first = run(&mut hexapod, 0.2).pop().unwrap();
+    let targets: Vec<f64> = first.joint_angles.iter().map(|q| q + 0.5).collect();
+    hexapod.set_targets(&targets);
+    let samples = run(&mut hexapod, 0.005);
+    for (j, joint) in model.joints.iter().enumerate() {
+        let torque = samples[0].joint_torques[j];
+        assert!(
+            (torque - joint.effort).abs() < 1e-3 * joint.effort,
+            "{articulation:?} {}: {torque:.5} N·m on the first step, expected the effort {}",
+            joint.name,
+            joint.effort
+        );
+        for s in &samples {
+            assert!(
+                s.joint_torques[j].abs() <= joint.effort * (1.0 + 1e-6),
+                "{articulation:?} {}: {:.5} N·m over the effort",
+                joint.name,
+                s.joint_torques[j]
+            );
+        }
+    }
+}
 
 /// The servos' reported torques are the torques applied: standing still, each leg's joints carry
 /// its foot's load, so both articulations (one reporting its implicit springs' law, the other
