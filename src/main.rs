@@ -339,7 +339,7 @@ struct RunArgs {
     #[arg(long, default_value_t = 0.05)]
     servo_damping: f64,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
-    /// impulse joints (several times faster; the joints drift by micrometres)
+    /// impulse joints (about 3× faster; the joints drift apart by up to ~0.3 mm)
     #[arg(long, value_enum, default_value_t = Articulation::Multibody)]
     articulation: Articulation,
     /// rapier substeps per step (each rebuilds the multibody's mass matrix).
