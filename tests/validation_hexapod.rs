@@ -44,6 +44,17 @@ fn standing(
     (hexapod, controller)
 }
 
+/// hex18 standing at the origin of flat ground.
+fn standing_on_flat_ground(model: &Arc<RobotModel>, articulation: Articulation) -> Hexapod {
+    let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
+    let place = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    standing(model, ground, place, articulation).0
+}
+
 /// The standing pose as per-joint angles.
 fn standing_pose(model: &RobotModel, controller: &GaitController) -> Vec<f64> {
     let mut pose = vec![0.0; model.joints.len()];
@@ -527,13 +538,7 @@ in_both_articulations!(
 /// spring; impulse joints: the motor's bounded impulse), and never more.
 fn servo_torque_stops_at_the_effort_limit(articulation: Articulation) {
     let model = hex18();
-    let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
-    let place = Placement {
-        x: 0.0,
-        y: 0.0,
-        yaw: 0.0,
-    };
-    let (mut hexapod, _) = standing(&model, ground, place, articulation);
+    let mut hexapod = standing_on_flat_ground(&model, articulation);
     let first = run(&mut hexapod, 0.2).pop().unwrap();
     let targets: Vec<f64> = first.joint_angles.iter().map(|q| q + 0.5).collect();
     hexapod.set_targets(&targets);
@@ -563,13 +568,7 @@ fn servo_torque_stops_at_the_effort_limit(articulation: Articulation) {
 /// the foot forces' moments about each femur joint.
 fn servo_torques_hold_the_standing_robot(articulation: Articulation) {
     let model = hex18();
-    let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
-    let place = Placement {
-        x: 0.0,
-        y: 0.0,
-        yaw: 0.0,
-    };
-    let (mut hexapod, _) = standing(&model, ground, place, articulation);
+    let mut hexapod = standing_on_flat_ground(&model, articulation);
     let samples = run(&mut hexapod, 3.0);
     let tail = &samples[samples.len() - 500..];
     let mean = |j: usize| tail.iter().map(|s| s.joint_torques[j]).sum::<f64>() / tail.len() as f64;
