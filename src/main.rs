@@ -57,8 +57,8 @@ struct BenchArgs {
     /// Threads for the batch figure. Default: all cores.
     #[arg(short, long)]
     jobs: Option<usize>,
-    /// Runs per figure; the median is reported.
-    #[arg(long, default_value_t = 3)]
+    /// Runs per figure; the median is reported, and the best beside it.
+    #[arg(long, default_value_t = 5)]
     repeats: usize,
     /// Also write the figures and the configuration as JSON.
     #[arg(long)]
@@ -339,7 +339,7 @@ struct RunArgs {
     #[arg(long, default_value_t = 0.05)]
     servo_damping: f64,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
-    /// impulse joints (about 3× faster; the joints drift apart by up to ~0.3 mm)
+    /// impulse joints (about 4× faster; the joints drift apart by up to ~0.4 mm)
     #[arg(long, value_enum, default_value_t = Articulation::Multibody)]
     articulation: Articulation,
     /// rapier substeps per step (each rebuilds the multibody's mass matrix).
@@ -774,8 +774,8 @@ fn bench(args: BenchArgs) -> Result<()> {
     }
     println!();
     println!(
-        "{:<30} {:<10} {:>7} {:>9} {:>8} {:>12}  notes",
-        "workload", "joints", "threads", "steps", "wall s", "steps/s"
+        "{:<30} {:<10} {:>7} {:>9} {:>8} {:>12} {:>9}  notes",
+        "workload", "joints", "threads", "steps", "wall s", "steps/s", "best"
     );
     let report = hexsim::bench::run_bench(&options, |f| {
         let mut notes = Vec::new();
@@ -786,13 +786,14 @@ fn bench(args: BenchArgs) -> Result<()> {
             notes.push(format!("joint drift ≤ {:.1} µm", d * 1e6));
         }
         println!(
-            "{:<30} {:<10} {:>7} {:>9} {:>8.2} {:>12.0}  {}",
+            "{:<30} {:<10} {:>7} {:>9} {:>8.2} {:>12.0} {:>9.0}  {}",
             f.workload,
             f.articulation.as_deref().unwrap_or("-"),
             f.threads,
             f.steps,
             f.wall_time,
             f.steps_per_second,
+            f.best_steps_per_second,
             notes.join(", ")
         );
     })?;

@@ -318,7 +318,12 @@ fn bench_measures_both_articulations_and_says_what_it_measured() {
     // walk, walk recorded, batch — per articulation — and the ball
     assert_eq!(figures.len(), 7, "{figures:?}");
     for f in figures {
-        assert!(f["steps_per_second"].as_f64().unwrap() > 0.0);
+        let median = f["steps_per_second"].as_f64().unwrap();
+        assert!(median > 0.0);
+        assert!(
+            f["best_steps_per_second"].as_f64().unwrap() >= median,
+            "{f}"
+        );
     }
     let batch = figures
         .iter()

@@ -535,7 +535,7 @@ in_both_articulations!(
 
 /// A target far from the pose asks for k·Δq = 20 N·m/rad · 0.5 rad = 10 N·m, over hex18's 3 N·m
 /// effort: the servos must apply exactly the effort (multibody: an explicit torque in place of the
-/// spring; impulse joints: the motor's bounded impulse), and never more.
+/// spring; impulse joints: the explicit torque, clamped), and never more.
 fn servo_torque_stops_at_the_effort_limit(articulation: Articulation) {
     let model = hex18();
     let mut hexapod = standing_on_flat_ground(&model, articulation);
@@ -563,8 +563,8 @@ fn servo_torque_stops_at_the_effort_limit(articulation: Articulation) {
 }
 
 /// The servos' reported torques are the torques applied: standing still, each leg's joints carry
-/// its foot's load, so both articulations (one reporting its implicit springs' law, the other
-/// rapier's motor impulses) must report the same static torques, and the torques must balance
+/// its foot's load, so both articulations (one reporting its implicit springs' law, the other the
+/// explicit torques it applied) must report the same static torques, and the torques must balance
 /// the foot forces' moments about each femur joint.
 fn servo_torques_hold_the_standing_robot(articulation: Articulation) {
     let model = hex18();

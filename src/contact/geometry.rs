@@ -23,17 +23,55 @@ const CLOSEST_POINT_ITERATIONS: usize = 3;
 /// plane there, drop the perpendicular from the centre onto it, and repeat at the foot of that
 /// perpendicular. The distance to the last tangent plane is the centre's height above the ground
 /// measured along the normal.
+///
+/// A steep feature beside the centre — a stair's riser — can touch the sphere's side while the
+/// ground beneath the centre is clear: when the search from below finds no contact but the
+/// terrain within the sphere's footprint rises above its lowest point
+/// ([`HeightGrid::ceiling_near`]), it is repeated from the footprint's four edges and the
+/// deepest answer kept.
 pub fn sphere_geometry(
     terrain: &HeightGrid,
     center: DVec3,
     radius: f64,
     orientation: Orientation,
 ) -> SphereGeometry {
-    let (mut x, mut y) = (center.x, center.y);
+    let below = closest_from(terrain, center, radius, orientation, (center.x, center.y));
+    if below.penetration > 0.0
+        || terrain.ceiling_near(center.x, center.y, radius) <= center.z - radius
+    {
+        return below;
+    }
+    [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
+        .map(|(u, v)| (center.x + u * radius, center.y + v * radius))
+        .into_iter()
+        .map(|start| closest_from(terrain, center, radius, orientation, start))
+        .fold(below, |deepest, g| {
+            if g.penetration > deepest.penetration {
+                g
+            } else {
+                deepest
+            }
+        })
+}
+
+/// The fixed-point search for the closest surface point, from the ground at `start`. The gap is
+/// measured to the surface point the search ends on (signed by the side of its tangent plane the
+/// centre lies on), not to that point's tangent plane: once converged the two agree, but on a
+/// sharp feature where three iterations do not converge the plane of an upper stair tread would
+/// extend over the lower one and report a foot above the lower tread as sunk into it (seen on
+/// `terrains/steps.toml`: 4.6 mm out of nothing). A surface point's distance never exceeds the
+/// true gap's, so an unconverged search can miss depth but never invent it.
+fn closest_from(
+    terrain: &HeightGrid,
+    center: DVec3,
+    radius: f64,
+    orientation: Orientation,
+    (mut x, mut y): (f64, f64),
+) -> SphereGeometry {
     let (height, mut frame) = terrain.height_and_frame(x, y, orientation);
     let mut surface = DVec3::new(x, y, height);
-    let mut distance = (center - surface).dot(frame.normal);
     for _ in 1..CLOSEST_POINT_ITERATIONS {
+        let distance = (center - surface).dot(frame.normal);
         let foot = center - distance * frame.normal;
         if (foot.x - x).abs() < 1e-12 && (foot.y - y).abs() < 1e-12 {
             break;
@@ -42,11 +80,12 @@ pub fn sphere_geometry(
         let height;
         (height, frame) = terrain.height_and_frame(x, y, orientation);
         surface = DVec3::new(x, y, height);
-        distance = (center - surface).dot(frame.normal);
     }
+    let offset = center - surface;
+    let distance = offset.length().copysign(offset.dot(frame.normal));
     SphereGeometry {
         penetration: radius - distance,
-        point: center - distance * frame.normal,
+        point: surface,
         frame,
     }
 }
@@ -68,6 +107,59 @@ mod tests {
         assert!((g.penetration - 0.001).abs() < 1e-12, "{}", g.penetration);
         assert!(g.point.abs_diff_eq(foot, 1e-12));
         assert!(g.frame.normal.abs_diff_eq(n, 1e-12));
+    }
+
+    /// The gap to stairs (uniform along y) by brute force: the least distance from the centre to
+    /// the surface curve y = const, sampled every 2.5 µm over the sphere's reach.
+    fn brute_force_penetration(terrain: &HeightGrid, center: DVec3, radius: f64) -> f64 {
+        let n = 8000;
+        let distance = (0..=n)
+            .map(|k| center.x - radius + 2.0 * radius * k as f64 / n as f64)
+            .map(|x| center.distance(DVec3::new(x, center.y, terrain.height(x, center.y))))
+            .fold(f64::INFINITY, f64::min);
+        radius - distance
+    }
+
+    fn stairs() -> HeightGrid {
+        crate::terrain::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/terrains/steps.toml"
+        )))
+        .unwrap()
+    }
+
+    #[test]
+    fn a_foot_over_the_lower_tread_is_not_sunk_into_the_upper_one() {
+        // a foot of hex18 on the stairs scenario, beside the riser at x = 1.5: the search does not
+        // converge there, and the upper tread's tangent plane used to put it 4.6 mm deep
+        let terrain = stairs();
+        let center = DVec3::new(
+            1.4901076801667015,
+            -0.17811939159147336,
+            0.10761671697964005,
+        );
+        let g = sphere_geometry(&terrain, center, 0.01, Orientation::Exact);
+        let truth = brute_force_penetration(&terrain, center, 0.01);
+        assert!(truth < 0.0, "the sphere is clear of the stairs: {truth}");
+        assert!(g.penetration <= truth + 1e-9, "{} > {truth}", g.penetration);
+    }
+
+    #[test]
+    fn a_sphere_against_a_riser_touches_its_side() {
+        // the ground beneath the centre is the lower tread, well clear; the riser is 5 mm into the
+        // sphere's side
+        let terrain = stairs();
+        let low = terrain.height(1.45, 0.0);
+        let center = DVec3::new(1.4865, 0.0, low + 0.0105);
+        let truth = brute_force_penetration(&terrain, center, 0.01);
+        assert!(truth > 1e-3, "{truth}");
+        let g = sphere_geometry(&terrain, center, 0.01, Orientation::Exact);
+        assert!(
+            (g.penetration - truth).abs() < 0.05e-3,
+            "{} mm against {} mm",
+            g.penetration * 1e3,
+            truth * 1e3
+        );
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //! contact whose stopping force leaves its friction cone slides, joins K, and the rest are solved
 //! again (at most once per contact). A lone contact gets exactly [`ContactModel::respond`]'s force.
 
-use super::{ContactForce, ContactModel, ContactState, PendingContact, SphereGeometry};
+use super::{ContactForce, ContactModel, ContactState, SphereGeometry};
 use glam::{DMat3, DVec2, DVec3};
 use rapier3d::na;
 
@@ -25,9 +25,18 @@ pub struct JointContact<'a> {
     pub velocity: DVec3,
 }
 
+/// The most contacts solved together: a hexapod's feet (the robot loader requires six legs). The
+/// solve works in fixed-size storage, so a step allocates nothing.
+pub const MAX_JOINT_CONTACTS: usize = 6;
+
+/// T_SS for up to [`MAX_JOINT_CONTACTS`] sticking contacts; unused rows and columns hold the
+/// identity, which leaves their unknowns at zero.
+type Block = na::SMatrix<f64, { 2 * MAX_JOINT_CONTACTS }, { 2 * MAX_JOINT_CONTACTS }>;
+type Column = na::SVector<f64, { 2 * MAX_JOINT_CONTACTS }>;
+
 /// The forces on `contacts` over a step, solved together. `mobility(i, j)` is W_ij in the
 /// contacts' ground-frame axes (t₁, t₂, n): W_ij[a][b] = a_i·M⁻¹·b_j. A contact that does not touch
-/// gives `None` (and its state is reset).
+/// gives `None` (and its state is reset). At most [`MAX_JOINT_CONTACTS`] contacts.
 pub fn respond_jointly(
     model: &ContactModel,
     contacts: &[JointContact],
@@ -37,35 +46,49 @@ pub fn respond_jointly(
     out: &mut [Option<ContactForce>],
 ) {
     let n = contacts.len();
-    let mut pending: Vec<Option<PendingContact>> = Vec::with_capacity(n);
-    for (c, state) in contacts.iter().zip(states.iter_mut()) {
-        let normal_mass = 1.0 / mobility(pending.len(), pending.len()).z_axis.z;
-        pending.push(model.begin(c.geometry, c.velocity, normal_mass, dt, state));
+    assert!(
+        n <= MAX_JOINT_CONTACTS,
+        "{n} contacts solved together, at most {MAX_JOINT_CONTACTS}"
+    );
+    let mut pending = [None; MAX_JOINT_CONTACTS];
+    for (i, (c, state)) in contacts.iter().zip(states.iter_mut()).enumerate() {
+        let normal_mass = 1.0 / mobility(i, i).z_axis.z;
+        pending[i] = model.begin(c.geometry, c.velocity, normal_mass, dt, state);
     }
-    let touching: Vec<usize> = (0..n).filter(|&i| pending[i].is_some()).collect();
+    let mut touching = [0; MAX_JOINT_CONTACTS];
+    let mut t = 0;
+    for i in (0..n).filter(|&i| pending[i].is_some()) {
+        touching[t] = i;
+        t += 1;
+    }
+    let touching = &touching[..t];
     let p = |i: usize| pending[i].as_ref().expect("touching");
     let in_plane = |w: DMat3| na::Matrix2::new(w.x_axis.x, w.y_axis.x, w.x_axis.y, w.y_axis.y);
     // force fixed by the friction law (K), or None while the contact is taken to stick (S)
-    let mut fixed: Vec<Option<DVec2>> = touching
-        .iter()
-        .map(|&i| (p(i).normal_force <= 0.0).then_some(DVec2::ZERO))
-        .collect();
-    let mut stops = vec![DVec2::ZERO; touching.len()];
-    for _ in 0..=touching.len() {
-        let sticking: Vec<usize> = (0..touching.len())
-            .filter(|&s| fixed[s].is_none())
-            .collect();
-        let m = sticking.len();
+    let mut fixed = [None; MAX_JOINT_CONTACTS];
+    for (s, &i) in touching.iter().enumerate() {
+        fixed[s] = (p(i).normal_force <= 0.0).then_some(DVec2::ZERO);
+    }
+    let fixed = &mut fixed[..t];
+    let mut stops = [DVec2::ZERO; MAX_JOINT_CONTACTS];
+    for _ in 0..=t {
+        let mut sticking = [0; MAX_JOINT_CONTACTS];
+        let mut m = 0;
+        for s in (0..t).filter(|&s| fixed[s].is_none()) {
+            sticking[m] = s;
+            m += 1;
+        }
         if m == 0 {
             break;
         }
-        let mut t_ss = na::DMatrix::<f64>::zeros(2 * m, 2 * m);
-        let mut rhs = na::DVector::<f64>::zeros(2 * m);
+        let sticking = &sticking[..m];
+        let mut t_ss = Block::identity();
+        let mut rhs = Column::zeros();
         for (a, &s) in sticking.iter().enumerate() {
             let i = touching[s];
             let mut r = na::Vector2::new(p(i).demand.x, p(i).demand.y);
             // the normal forces' change moves the contact too (last step's load had the old ones)
-            for &j in &touching {
+            for &j in touching {
                 let w = mobility(i, j);
                 r += na::Vector2::new(w.z_axis.x, w.z_axis.y) * p(j).normal_change;
             }
@@ -83,7 +106,7 @@ pub fn respond_jointly(
             rhs.fixed_rows_mut::<2>(2 * a).copy_from(&r);
         }
         // symmetrise: W is symmetric, its numerical copy only nearly
-        let t_ss = (&t_ss + t_ss.transpose()) * 0.5;
+        let t_ss = (t_ss + t_ss.transpose()) * 0.5;
         let Some(x) = t_ss.lu().solve(&rhs) else {
             break;
         };

@@ -29,16 +29,17 @@ pub enum Articulation {
     /// One reduced-coordinate multibody: joints exact by construction.
     #[default]
     Multibody,
-    /// Impulse joints between free bodies: about 3× faster; the joints drift apart by up to
-    /// ~0.3 mm.
+    /// Impulse joints between free bodies: about 4× faster; the joints drift apart by up to
+    /// ~0.4 mm.
     Impulse,
 }
 
 impl Articulation {
     /// Constraint-solver sweeps per substep unless set: the multibody has no constraints to
     /// solve (its servos are implicit springs), so one; impulse joints are held by the solver:
-    /// with fewer than 6 a foot slides over 3 mm per stance (V12 with 4: 3.00 mm; 3: 5.70 mm) (measured;
-    /// see the README's Performance section).
+    /// with 3 sweeps a foot slides at most 2.3 mm per stance on V12 (4: 1.7 mm; 6: 1.3 mm), with
+    /// 2 the legs shake loose and the feet slide metres (measured; see the README's Performance
+    /// section).
     pub fn default_pgs_iterations(self) -> usize {
         match self {
             Articulation::Multibody => 1,
@@ -50,7 +51,7 @@ impl Articulation {
     /// sweep removes the velocity its position correction added, so under a steady load (a robot
     /// standing on a slope) the unconverged joint error is corrected afresh each step and the
     /// robot creeps: 46 mm in 10 s on V14's 15° slope with 8 PGS sweeps and one stabilization
-    /// sweep, 0.2 mm with 6 PGS sweeps and none.
+    /// sweep (and motor servos), 1.0 mm with 3 sweeps and none.
     pub fn stabilization_iterations(self) -> usize {
         match self {
             Articulation::Multibody => 1,
@@ -89,7 +90,7 @@ impl Default for ServoGains {
 const DRIFT_EVERY: u64 = 10;
 
 /// Constraint-solver sweeps per substep for impulse joints by default.
-pub const IMPULSE_PGS_ITERATIONS: usize = 6;
+pub const IMPULSE_PGS_ITERATIONS: usize = 3;
 
 /// rapier substeps per step by default: one — V1–V15 hold with it (see the README's Performance
 /// section), and each substep rebuilds the multibody's mass matrix.
@@ -317,7 +318,6 @@ impl Hexapod {
                 &model,
                 &bodies,
                 root_com,
-                pose,
                 settings.gains,
             )),
         };
@@ -344,13 +344,19 @@ impl Hexapod {
 
     /// Reads every joint's angle and rate from rapier.
     fn read_joints(&mut self) {
-        for j in 0..self.model.joints.len() {
-            let (q, qd) = match &self.joints {
-                Joints::Multibody(r) => r.joint_state(&self.engine, j),
-                Joints::Impulse(r) => r.joint_state(&self.engine, &self.model, &self.bodies, j),
-            };
-            self.angles[j] = q;
-            self.rates[j] = qd;
+        match &mut self.joints {
+            Joints::Multibody(r) => {
+                for j in 0..self.model.joints.len() {
+                    (self.angles[j], self.rates[j]) = r.joint_state(&self.engine, j);
+                }
+            }
+            Joints::Impulse(r) => r.read_joints(
+                &self.engine,
+                &self.model,
+                &self.bodies,
+                &mut self.angles,
+                &mut self.rates,
+            ),
         }
     }
 
@@ -431,6 +437,7 @@ impl Hexapod {
             Joints::Impulse(r) => r.drive(
                 &mut self.engine,
                 &self.model,
+                &self.bodies,
                 &self.targets,
                 (&self.angles, &self.rates),
             ),
@@ -443,6 +450,12 @@ impl Hexapod {
         for (k, leg) in self.model.legs.iter().enumerate() {
             let frame = self.link_frame(leg.foot_link);
             let center = frame.transform_point3(leg.foot.center);
+            let r = leg.foot.radius;
+            // a swinging foot well clear of the ground needs no closest-point search
+            if center.z - r > self.terrain.ceiling_near(center.x, center.y, r) {
+                self.foot_states[k] = ContactState::default();
+                continue;
+            }
             let geometry = sphere_geometry(
                 &self.terrain,
                 center,
@@ -522,7 +535,7 @@ impl Hexapod {
         let joint_torques = (0..self.model.joints.len())
             .map(|j| match &self.joints {
                 Joints::Multibody(r) => r.applied_torque(j, self.targets[j], self.rates[j]),
-                Joints::Impulse(r) => r.applied_torque(&self.engine, j),
+                Joints::Impulse(r) => r.applied_torque(j),
             })
             .collect();
         let (v_com, omega) = match &self.joints {

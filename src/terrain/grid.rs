@@ -59,6 +59,8 @@ pub struct HeightGrid {
     /// Row-major: `heights[i * nx + j]` is the height at row i (y), column j (x).
     heights: Vec<f64>,
     interpolation: Interpolation,
+    /// Per cell (row-major, (ny − 1)·(nx − 1)), an upper bound of the interpolated surface over it.
+    ceilings: Vec<f64>,
 }
 
 /// Why a grid could not be built.
@@ -132,7 +134,7 @@ impl HeightGrid {
                 value: heights[k],
             });
         }
-        Ok(Self {
+        let mut grid = Self {
             nx: cols,
             ny: rows,
             x0: x_min,
@@ -141,7 +143,10 @@ impl HeightGrid {
             dy: (y_max - y_min) / (rows - 1) as f64,
             heights,
             interpolation: Interpolation::default(),
-        })
+            ceilings: Vec::new(),
+        };
+        grid.ceilings = grid.cell_ceilings();
+        Ok(grid)
     }
 
     /// A grid sampled from a function z = f(x, y).
@@ -166,7 +171,57 @@ impl HeightGrid {
 
     pub fn with_interpolation(mut self, interpolation: Interpolation) -> Self {
         self.interpolation = interpolation;
+        self.ceilings = self.cell_ceilings();
         self
+    }
+
+    /// An upper bound of the surface height over the square of half-width `r` around (x, y): a
+    /// sphere of radius r centred higher than this above (x, y) cannot touch the ground, which
+    /// spares a swinging foot the closest-point search.
+    pub fn ceiling_near(&self, x: f64, y: f64, r: f64) -> f64 {
+        let (j0, _, _) = locate(x - r, self.x0, self.dx, self.nx);
+        let (j1, _, _) = locate(x + r, self.x0, self.dx, self.nx);
+        let (i0, _, _) = locate(y - r, self.y0, self.dy, self.ny);
+        let (i1, _, _) = locate(y + r, self.y0, self.dy, self.ny);
+        let cells = self.nx - 1;
+        let mut ceiling = f64::NEG_INFINITY;
+        for i in i0..=i1 {
+            for &c in &self.ceilings[i * cells + j0..=i * cells + j1] {
+                ceiling = ceiling.max(c);
+            }
+        }
+        ceiling
+    }
+
+    /// Each cell's bound for [`Self::ceiling_near`]. Bilinear: the highest corner (the weights
+    /// are non-negative). Catmull–Rom: the 16 samples it blends have weights summing to 1 whose
+    /// absolute values sum to at most 1.25² (per axis 1 + t(1 − t) ≤ 1.25), so the surface stays
+    /// within 1.5625 half-ranges of the samples' mid-range.
+    fn cell_ceilings(&self) -> Vec<f64> {
+        let mut ceilings = Vec::with_capacity((self.ny - 1) * (self.nx - 1));
+        for i in 0..self.ny - 1 {
+            for j in 0..self.nx - 1 {
+                let (lo, hi) = match self.interpolation {
+                    Interpolation::Bilinear => (0..2)
+                        .flat_map(|a| (0..2).map(move |b| (a, b)))
+                        .map(|(a, b)| self.sample(i + a, j + b))
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), z| {
+                            (lo.min(z), hi.max(z))
+                        }),
+                    Interpolation::Bicubic => (-1..3)
+                        .flat_map(|a| (-1..3).map(move |b| (a, b)))
+                        .map(|(a, b)| self.ghost_sample(i as isize + a, j as isize + b))
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), z| {
+                            (lo.min(z), hi.max(z))
+                        }),
+                };
+                ceilings.push(match self.interpolation {
+                    Interpolation::Bilinear => hi,
+                    Interpolation::Bicubic => 0.5 * (hi + lo) + 1.5625 * 0.5 * (hi - lo),
+                });
+            }
+        }
+        ceilings
     }
 
     pub fn interpolation(&self) -> Interpolation {
@@ -334,6 +389,50 @@ mod tests {
         })
         .unwrap()
         .with_interpolation(interp)
+    }
+
+    proptest::proptest! {
+        /// The ceiling bounds the surface: random grids, random points and radii.
+        #[test]
+        fn the_ceiling_bounds_the_surface_near_a_point(
+            heights in proptest::collection::vec(-1.0f64..1.0, 30),
+            bicubic in proptest::bool::ANY,
+            x in -0.5f64..2.5,
+            y in -0.5f64..1.5,
+            r in 0.0f64..0.3,
+            (u, v) in (-1.0f64..1.0, -1.0f64..1.0),
+        ) {
+            let interpolation = if bicubic { Interpolation::Bicubic } else { Interpolation::Bilinear };
+            let grid = HeightGrid::new(5, 6, [0.0, 2.0], [0.0, 1.0], heights)
+                .unwrap()
+                .with_interpolation(interpolation);
+            let ceiling = grid.ceiling_near(x, y, r);
+            let h = grid.height(x + u * r, y + v * r);
+            proptest::prop_assert!(h <= ceiling + 1e-12, "height {h} above ceiling {ceiling}");
+        }
+    }
+
+    #[test]
+    fn the_ceiling_covers_catmull_rom_overshoot() {
+        // a ridge 0, 1, 1, 0 both ways: Catmull–Rom peaks at 1.125² between the ones, above every
+        // sample
+        let p = [0.0, 1.0, 1.0, 0.0];
+        let heights = (0..4).flat_map(|i| p.map(|q| q * p[i])).collect();
+        let grid = HeightGrid::new(4, 4, [0.0, 3.0], [0.0, 3.0], heights).unwrap();
+        let peak = grid.height(1.5, 1.5);
+        assert!((peak - 1.125f64.powi(2)).abs() < 1e-12, "{peak}");
+        assert!(grid.ceiling_near(1.5, 1.5, 0.0) >= peak);
+    }
+
+    #[test]
+    fn the_ceiling_is_tight_on_a_plane_cell_for_bilinear() {
+        // a plane's bilinear cell peaks at its highest corner, which is the bound
+        let grid = plane(Interpolation::Bilinear);
+        let (x, y) = (grid.x_at(4), grid.y_at(0));
+        assert_eq!(
+            grid.ceiling_near(x - 0.01, y + 0.01, 0.0),
+            grid.height(x, y)
+        );
     }
 
     #[test]
