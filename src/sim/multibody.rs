@@ -41,9 +41,11 @@ pub struct MultibodyRobot {
     start_angles: Vec<f64>,
     gains: ServoGains,
     dt: f64,
-    /// Scratch for the contact mobility: per contact and axis, A_i·e_a and M⁻¹·(A_i·e_a).
-    projected: Vec<na::DVector<f32>>,
-    solved: Vec<na::DVector<f32>>,
+    /// Scratch for the contact mobility, a column per contact and axis: A_i·e_a, M⁻¹·(A_i·e_a),
+    /// and their products.
+    projected: na::DMatrix<f32>,
+    solved: na::DMatrix<f32>,
+    products: na::DMatrix<f32>,
 }
 
 impl MultibodyRobot {
@@ -79,8 +81,9 @@ impl MultibodyRobot {
             start_angles: pose.to_vec(),
             gains,
             dt: engine.dt(),
-            projected: vec![na::DVector::zeros(6 + model.joints.len()); 3 * model.legs.len()],
-            solved: vec![na::DVector::zeros(6 + model.joints.len()); 3 * model.legs.len()],
+            projected: na::DMatrix::zeros(6 + model.joints.len(), 3 * model.legs.len()),
+            solved: na::DMatrix::zeros(6 + model.joints.len(), 3 * model.legs.len()),
+            products: na::DMatrix::zeros(3 * model.legs.len(), 3 * model.legs.len()),
         };
         for joint in &model.joints {
             let link = robot.multibody_link(engine, bodies[joint.child]);
@@ -182,18 +185,26 @@ impl MultibodyRobot {
             let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal];
             for (a, axis) in axes.iter().enumerate() {
                 let d = na::Vector3::new(axis.x as f32, axis.y as f32, axis.z as f32);
-                let row = &mut self.projected[3 * i + a];
-                jacobian.rows.tr_mul_to(&d, row);
-                let solved = &mut self.solved[3 * i + a];
-                solved.copy_from(row);
-                inverse_mass.solve_mut(solved);
+                jacobian
+                    .rows
+                    .tr_mul_to(&d, &mut self.projected.column_mut(3 * i + a));
             }
         }
+        // all contacts' axes in one solve, and W as one product: Aᵀ·(M⁻¹·A). (rapier factorises
+        // M in its first step; the robot starts 1 mm above the ground, so no contact comes sooner.)
+        if n == 0 {
+            return;
+        }
+        let columns = 3 * n;
+        let projected = self.projected.columns(0, columns);
+        let mut solved = self.solved.columns_mut(0, columns);
+        solved.copy_from(&projected);
+        inverse_mass.solve_mut(&mut solved);
+        let mut products = self.products.view_mut((0, 0), (columns, columns));
+        projected.tr_mul_to(&solved, &mut products);
         for i in 0..n {
             for j in 0..n {
-                let w = |a: usize, b: usize| {
-                    self.projected[3 * i + a].dot(&self.solved[3 * j + b]) as f64
-                };
+                let w = |a: usize, b: usize| products[(3 * i + a, 3 * j + b)] as f64;
                 mobility[i * n + j] =
                     DMat3::from_cols_array_2d(&[0, 1, 2].map(|b| [0, 1, 2].map(|a| w(a, b))));
             }
