@@ -346,7 +346,8 @@ struct RunArgs {
     #[arg(long, default_value_t = hexsim::sim::DEFAULT_SOLVER_ITERATIONS)]
     solver_iterations: usize,
     /// Constraint-solver sweeps per substep. Default: 1 for the multibody (it has no
-    /// constraints), 6 for impulse joints (with fewer the feet slide: the joints are held by the solver)
+    /// constraints), 3 for impulse joints (the joints are held by the solver: with 2 the legs
+    /// shake loose)
     #[arg(long)]
     pgs_iterations: Option<usize>,
     /// Recording file (.rrd) for the rerun viewer.
