@@ -345,11 +345,7 @@ impl Hexapod {
     /// Reads every joint's angle and rate from rapier.
     fn read_joints(&mut self) {
         match &mut self.joints {
-            Joints::Multibody(r) => {
-                for j in 0..self.model.joints.len() {
-                    (self.angles[j], self.rates[j]) = r.joint_state(&self.engine, j);
-                }
-            }
+            Joints::Multibody(r) => r.read_joints(&self.engine, &mut self.angles, &mut self.rates),
             Joints::Impulse(r) => r.read_joints(
                 &self.engine,
                 &self.model,

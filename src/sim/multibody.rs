@@ -145,13 +145,15 @@ impl MultibodyRobot {
         &mut mb.link_mut(link).expect("a joint's link exists").joint
     }
 
-    /// A joint's angle (rad) and rate (rad/s).
-    pub fn joint_state(&self, engine: &Engine, joint: usize) -> (f64, f64) {
+    /// Every joint's angle (rad) and rate (rad/s): its coordinate and generalized velocity.
+    pub fn read_joints(&self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
         let mb = self.multibody(engine);
-        let link = mb.link(self.links[joint]).expect("link exists");
-        let q = link.joint().coords()[ANG_X] as f64;
-        let qd = mb.generalized_velocity()[self.dofs[joint]] as f64;
-        (q, qd)
+        let q_dot = mb.generalized_velocity();
+        for (j, (&link, &dof)) in self.links.iter().zip(&self.dofs).enumerate() {
+            let link = mb.link(link).expect("link exists");
+            angles[j] = link.joint().coords()[ANG_X] as f64;
+            rates[j] = q_dot[dof] as f64;
+        }
     }
 
     /// The root's centre-of-mass velocity and angular velocity (world).
