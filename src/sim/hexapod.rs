@@ -77,6 +77,16 @@ pub struct ServoGains {
     pub damping: f64,
 }
 
+impl ServoGains {
+    /// The servo's torque over a step of `dt` towards `target` from angle `q` and rate `qd`:
+    /// τ = k·(q* − q) − (k·dt + d)·q̇. It is the implicit PD law (backward Euler on the spring adds
+    /// k·dt of damping on the step's end velocity) with the rate at the step's start: what the
+    /// multibody's springs apply up to that rate, and what impulse joints apply outright.
+    pub fn torque(&self, target: f64, q: f64, qd: f64, dt: f64) -> f64 {
+        self.stiffness * (target - q) - (self.stiffness * dt + self.damping) * qd
+    }
+}
+
 impl Default for ServoGains {
     fn default() -> Self {
         ServoGains {
@@ -223,6 +233,20 @@ pub(super) fn pose_of(a: &DAffine3) -> Pose {
 
 pub(super) fn affine_of(p: &Pose) -> DAffine3 {
     DAffine3::from_rotation_translation(p.rotation.as_dquat(), p.translation.as_dvec3())
+}
+
+/// Applies `torque` (N·m) about the world `axis` to a joint's child link, and its reaction to the
+/// parent.
+pub(super) fn apply_joint_torque(
+    engine: &mut Engine,
+    bodies: &[RigidBodyHandle],
+    joint: &Joint,
+    axis: DVec3,
+    torque: f64,
+) {
+    let t = (axis * torque).as_vec3();
+    engine.bodies[bodies[joint.child]].add_torque(t, false);
+    engine.bodies[bodies[joint.parent]].add_torque(-t, false);
 }
 
 /// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.

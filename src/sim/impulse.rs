@@ -17,7 +17,9 @@
 //! (ω·dt ≈ 0.3 for the lightest joint: the tibia, k = 20 N·m/rad about the knee).
 
 use super::engine::Engine;
-use super::hexapod::{ContactPoint, ServoGains, joint_frames, limit_can_bind, pose_of};
+use super::hexapod::{
+    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, pose_of,
+};
 use crate::robot::RobotModel;
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::prelude::{
@@ -185,19 +187,13 @@ impl ImpulseRobot {
         targets: &[f64],
         (angles, rates): (&[f64], &[f64]),
     ) {
-        let ServoGains {
-            stiffness: k,
-            damping: d,
-        } = self.gains;
         let dt = engine.dt();
         for (j, joint) in model.joints.iter().enumerate() {
             let (q, qd) = (angles[j], rates[j]);
-            let torque = k * (targets[j] - q) - (k * dt + d) * qd;
+            let torque = self.gains.torque(targets[j], q, qd, dt);
             let torque = torque.clamp(-joint.effort, joint.effort);
             self.torques[j] = torque;
-            let t = (self.axes[j] * torque).as_vec3();
-            engine.bodies[bodies[joint.child]].add_torque(t, false);
-            engine.bodies[bodies[joint.parent]].add_torque(-t, false);
+            apply_joint_torque(engine, bodies, joint, self.axes[j], torque);
             let near_limit = limit_can_bind(joint, q, qd, dt);
             if near_limit == self.limited[j] {
                 continue;

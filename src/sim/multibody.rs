@@ -23,7 +23,9 @@ use rapier3d::prelude::{
     MultibodyJointSet, RigidBodyHandle,
 };
 
-use super::hexapod::{ContactPoint, ServoGains, joint_frames, limit_can_bind, pose_of};
+use super::hexapod::{
+    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, pose_of,
+};
 
 /// rapier's index of the revolute coordinate (AngX) in a joint's spatial layout.
 const ANG_X: usize = 3;
@@ -232,7 +234,7 @@ impl MultibodyRobot {
             let (q, qd) = (angles[j], rates[j]);
             self.start_angles[j] = q;
             // the implicit law's torque, with this step's end velocity estimated by the current one
-            let predicted = k * (targets[j] - q) - (k * dt + d) * qd;
+            let predicted = self.gains.torque(targets[j], q, qd, dt);
             let saturated =
                 (predicted.abs() > joint.effort).then(|| joint.effort.copysign(predicted));
             self.saturated[j] = saturated;
@@ -254,9 +256,7 @@ impl MultibodyRobot {
                 .damping_mut()[dof] = if saturated.is_some() { 0.0 } else { d as f32 };
             if let Some(torque) = saturated {
                 let axis = self.joint_axis(engine, j);
-                let t = (axis * torque).as_vec3();
-                engine.bodies[bodies[joint.child]].add_torque(t, true);
-                engine.bodies[bodies[joint.parent]].add_torque(-t, true);
+                apply_joint_torque(engine, bodies, joint, axis, torque);
             }
         }
     }
@@ -275,11 +275,9 @@ impl MultibodyRobot {
         if let Some(torque) = self.saturated[joint] {
             return torque;
         }
-        let ServoGains {
-            stiffness: k,
-            damping: d,
-        } = self.gains;
-        k * (target - self.start_angles[joint]) - (k * self.dt + d) * qd
+        // the implicit law with the step's end velocity, which rapier's spring saw
+        self.gains
+            .torque(target, self.start_angles[joint], qd, self.dt)
     }
 }
 
