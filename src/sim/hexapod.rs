@@ -18,7 +18,10 @@ use crate::robot::{Joint, RobotModel};
 use crate::terrain::{GroundFrame, HeightGrid};
 use glam::{DAffine3, DQuat, DVec3};
 use rapier3d::math::Pose;
-use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
+use rapier3d::prelude::{
+    GenericJoint, GenericJointBuilder, JointAxesMask, MassProperties, RigidBodyBuilder,
+    RigidBodyHandle,
+};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -224,7 +227,7 @@ enum Joints {
     Impulse(ImpulseRobot),
 }
 
-pub(super) fn pose_of(a: &DAffine3) -> Pose {
+fn pose_of(a: &DAffine3) -> Pose {
     Pose::from_parts(
         a.translation.as_vec3(),
         DQuat::from_mat3(&a.matrix3).normalize().as_quat(),
@@ -271,6 +274,16 @@ pub(super) fn joint_frames(joint: &Joint, root_com: DVec3) -> (DAffine3, DAffine
     };
     let to_axis = DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::X, joint.axis));
     (parent_shift * joint.origin * to_axis, to_axis)
+}
+
+/// A model joint as rapier joint data for either articulation: a revolute about x between its
+/// [`joint_frames`], no contacts between its links.
+pub(super) fn revolute_joint((frame1, frame2): &(DAffine3, DAffine3)) -> GenericJoint {
+    GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+        .local_frame1(pose_of(frame1))
+        .local_frame2(pose_of(frame2))
+        .contacts_enabled(false)
+        .build()
 }
 
 impl Hexapod {

@@ -18,13 +18,11 @@
 
 use super::engine::Engine;
 use super::hexapod::{
-    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, pose_of,
+    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, revolute_joint,
 };
 use crate::robot::RobotModel;
 use glam::{DAffine3, DMat3, DQuat, DVec3};
-use rapier3d::prelude::{
-    GenericJointBuilder, ImpulseJointHandle, JointAxesMask, JointAxis, RigidBodyHandle,
-};
+use rapier3d::prelude::{ImpulseJointHandle, JointAxesMask, JointAxis, RigidBodyHandle};
 
 pub struct ImpulseRobot {
     joints: Vec<ImpulseJointHandle>,
@@ -64,19 +62,14 @@ impl ImpulseRobot {
         let mut joints = Vec::with_capacity(model.joints.len());
         let mut frames = Vec::with_capacity(model.joints.len());
         for joint in &model.joints {
-            let (frame1, frame2) = joint_frames(joint, root_com);
-            let data = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-                .local_frame1(pose_of(&frame1))
-                .local_frame2(pose_of(&frame2))
-                .contacts_enabled(false)
-                .build();
+            let joint_frames = joint_frames(joint, root_com);
             joints.push(engine.impulse_joints.insert(
                 bodies[joint.parent],
                 bodies[joint.child],
-                data,
+                revolute_joint(&joint_frames),
                 true,
             ));
-            frames.push((frame1, frame2));
+            frames.push(joint_frames);
         }
         let n = joints.len();
         let rotation = |f: &DAffine3| DQuat::from_mat3(&f.matrix3).normalize();

@@ -19,12 +19,11 @@ use crate::robot::RobotModel;
 use glam::{DMat3, DVec3};
 use rapier3d::na;
 use rapier3d::prelude::{
-    GenericJointBuilder, JointAxesMask, JointAxis, Multibody, MultibodyJointHandle,
-    MultibodyJointSet, RigidBodyHandle,
+    JointAxesMask, JointAxis, Multibody, MultibodyJointHandle, MultibodyJointSet, RigidBodyHandle,
 };
 
 use super::hexapod::{
-    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, pose_of,
+    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, revolute_joint,
 };
 
 /// rapier's index of the revolute coordinate (AngX) in a joint's spatial layout.
@@ -62,12 +61,7 @@ impl MultibodyRobot {
     ) -> Self {
         let mut joints = Vec::with_capacity(model.joints.len());
         for joint in &model.joints {
-            let (frame1, frame2) = joint_frames(joint, root_com);
-            let data = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-                .local_frame1(pose_of(&frame1))
-                .local_frame2(pose_of(&frame2))
-                .contacts_enabled(false)
-                .build();
+            let data = revolute_joint(&joint_frames(joint, root_com));
             let handle = engine
                 .multibody_joints
                 .insert(bodies[joint.parent], bodies[joint.child], data, true)
