@@ -3,6 +3,7 @@
 pub mod ball;
 mod engine;
 mod impulse;
+mod mobility;
 mod multibody;
 
 pub use ball::{BallConfig, BallSample, BallSim};

@@ -15,9 +15,9 @@
 //!   (plus a margin) of a limit, and is inert — costless — otherwise.
 
 use super::engine::Engine;
+use super::mobility::{DOFS, Mobility};
 use crate::robot::RobotModel;
 use glam::{DMat3, DVec3};
-use rapier3d::na;
 use rapier3d::prelude::{
     JointAxesMask, JointAxis, Multibody, MultibodyJointHandle, MultibodyJointSet, RigidBodyHandle,
 };
@@ -42,11 +42,8 @@ pub struct MultibodyRobot {
     start_angles: Vec<f64>,
     gains: ServoGains,
     dt: f64,
-    /// Scratch for the contact mobility, a column per contact and axis: A_i·e_a, M⁻¹·(A_i·e_a),
-    /// and their products.
-    projected: na::DMatrix<f32>,
-    solved: na::DMatrix<f32>,
-    products: na::DMatrix<f32>,
+    /// Scratch for the contact mobility.
+    scratch: Box<Mobility>,
 }
 
 impl MultibodyRobot {
@@ -77,9 +74,7 @@ impl MultibodyRobot {
             start_angles: pose.to_vec(),
             gains,
             dt: engine.dt(),
-            projected: na::DMatrix::zeros(6 + model.joints.len(), 3 * model.legs.len()),
-            solved: na::DMatrix::zeros(6 + model.joints.len(), 3 * model.legs.len()),
-            products: na::DMatrix::zeros(3 * model.legs.len(), 3 * model.legs.len()),
+            scratch: Box::default(),
         };
         for joint in &model.joints {
             let link = robot.multibody_link(engine, bodies[joint.child]);
@@ -101,7 +96,11 @@ impl MultibodyRobot {
                 .apply_displacement(&[angle as f32]);
         }
         let mb = robot.multibody_mut(&mut engine.multibody_joints);
-        debug_assert_eq!(mb.ndofs(), 6 + model.joints.len());
+        assert_eq!(
+            mb.ndofs(),
+            DOFS,
+            "the robot loader gives six legs of three joints"
+        );
         mb.forward_kinematics(&engine.bodies, true);
         mb.update_rigid_bodies(&mut engine.bodies, true);
         robot
@@ -175,34 +174,34 @@ impl MultibodyRobot {
         let mb = self.multibody(engine);
         let n = contacts.len();
         let q_dot = mb.generalized_velocity();
-        let inverse_mass = mb.inv_augmented_mass();
         for (i, c) in contacts.iter().enumerate() {
             let link = self.multibody_link(engine, c.body);
-            let jacobian = PointJacobian::new(mb.body_jacobian(link), c.point - c.com);
-            velocities[i] = jacobian.velocity(&q_dot);
-            let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal];
-            for (a, axis) in axes.iter().enumerate() {
-                let d = na::Vector3::new(axis.x as f32, axis.y as f32, axis.z as f32);
-                jacobian
-                    .rows
-                    .tr_mul_to(&d, &mut self.projected.column_mut(3 * i + a));
+            // a material point's velocity column per degree of freedom: J_v − [r]×·J_ω, with the
+            // arm r from the link's centre of mass (J the link's centre-of-mass Jacobian)
+            let jacobian = mb.body_jacobian(link);
+            let arm = c.point - c.com;
+            let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
+            let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
+            let mut velocity = glam::Vec3::ZERO;
+            for (dof, column) in jacobian.column_iter().enumerate() {
+                let linear = glam::Vec3::new(column[0], column[1], column[2]);
+                let angular = glam::Vec3::new(column[3], column[4], column[5]);
+                let point = linear - r.cross(angular);
+                velocity += point * q_dot[dof];
+                for (a, axis) in axes.iter().enumerate() {
+                    self.scratch.set(dof, 3 * i + a, axis.dot(point));
+                }
             }
+            velocities[i] = velocity.as_dvec3();
         }
-        // all contacts' axes in one solve, and W as one product: Aᵀ·(M⁻¹·A). (rapier factorises
-        // M in its first step; the robot starts 1 mm above the ground, so no contact comes sooner.)
-        if n == 0 {
+        // rapier factorises M in its first step; the robot starts 1 mm above the ground, so no
+        // contact comes sooner
+        if n == 0 || !self.scratch.compute(mb.inv_augmented_mass(), 3 * n) {
             return;
         }
-        let columns = 3 * n;
-        let projected = self.projected.columns(0, columns);
-        let mut solved = self.solved.columns_mut(0, columns);
-        solved.copy_from(&projected);
-        inverse_mass.solve_mut(&mut solved);
-        let mut products = self.products.view_mut((0, 0), (columns, columns));
-        projected.tr_mul_to(&solved, &mut products);
         for i in 0..n {
             for j in 0..n {
-                let w = |a: usize, b: usize| products[(3 * i + a, 3 * j + b)] as f64;
+                let w = |a: usize, b: usize| self.scratch.w(3 * i + a, 3 * j + b) as f64;
                 mobility[i * n + j] =
                     DMat3::from_cols_array_2d(&[0, 1, 2].map(|b| [0, 1, 2].map(|a| w(a, b))));
             }
@@ -272,26 +271,5 @@ impl MultibodyRobot {
         // the implicit law with the step's end velocity, which rapier's spring saw
         self.gains
             .torque(target, self.start_angles[joint], qd, self.dt)
-    }
-}
-
-/// The Jacobian of a material point on a multibody link: its velocity is J·q̇, with
-/// J = J_v − [r]×·J_ω from the link's centre-of-mass Jacobian and the arm r from that centre.
-struct PointJacobian {
-    rows: na::Matrix3xX<f32>,
-}
-
-impl PointJacobian {
-    fn new(body_jacobian: &na::Matrix6xX<f32>, arm: DVec3) -> Self {
-        let linear = body_jacobian.fixed_rows::<3>(0);
-        let angular = body_jacobian.fixed_rows::<3>(3);
-        let r = na::Vector3::new(arm.x as f32, arm.y as f32, arm.z as f32);
-        let rows = linear - r.cross_matrix() * angular;
-        PointJacobian { rows }
-    }
-
-    fn velocity(&self, q_dot: &na::DVectorView<f32>) -> DVec3 {
-        let v = &self.rows * q_dot;
-        DVec3::new(v.x as f64, v.y as f64, v.z as f64)
     }
 }
