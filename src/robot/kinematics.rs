@@ -3,13 +3,16 @@
 //! three revolute joints, not only yaw-pitch-pitch legs.
 
 use super::model::{Leg, RobotModel};
-use glam::{DAffine3, DMat3, DVec3};
+use glam::{DAffine3, DMat3, DQuat, DVec3};
 
 /// One leg's chain, in the body (root link) frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LegChain {
+    /// Joint k's origin in joint k−1's frame, both frames turned so their joint axis is z
+    /// (Aₖ₋₁ᵀ·Oₖ·Aₖ, Aₖ taking z onto the URDF axis): a joint's rotation is then a turn about z,
+    /// which forward kinematics applies to two columns instead of composing a Rodrigues matrix.
     origins: [DAffine3; 3],
-    axes: [DVec3; 3],
+    /// The foot centre in the last joint's turned frame.
     foot: DVec3,
     lower: [f64; 3],
     upper: [f64; 3],
@@ -30,10 +33,17 @@ impl LegChain {
     pub fn new(model: &RobotModel, leg: &Leg) -> Self {
         let j = leg.joints.map(|k| &model.joints[k]);
         // The first joint may hang from the body through fixed offsets only (merged into its origin).
+        let align = j.map(|j| DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Z, j.axis)));
         LegChain {
-            origins: j.map(|j| j.origin),
-            axes: j.map(|j| j.axis),
-            foot: leg.foot.center,
+            origins: [0, 1, 2].map(|k| {
+                let previous = if k == 0 {
+                    DAffine3::IDENTITY
+                } else {
+                    align[k - 1].inverse()
+                };
+                previous * j[k].origin * align[k]
+            }),
+            foot: align[2].inverse().transform_point3(leg.foot.center),
             lower: j.map(|j| j.lower),
             upper: j.map(|j| j.upper),
         }
@@ -55,8 +65,11 @@ impl LegChain {
         let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
         for k in 0..3 {
             frame *= self.origins[k];
-            joints[k] = (frame.translation, frame.matrix3 * self.axes[k]);
-            frame *= DAffine3::from_axis_angle(self.axes[k], q[k]);
+            let m = &mut frame.matrix3;
+            joints[k] = (frame.translation, m.z_axis);
+            // turn about the (turned) joint axis z by q
+            let (s, c) = q[k].sin_cos();
+            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
         }
         (joints, frame.transform_point3(self.foot))
     }
