@@ -13,7 +13,9 @@ use super::engine::{Engine, STANDARD_GRAVITY};
 use super::impulse::{ImpulseRobot, JointDrift};
 use super::multibody::MultibodyRobot;
 use crate::contact::joint::JointContact;
-use crate::contact::{ContactForce, ContactModel, ContactState, respond_jointly, sphere_geometry};
+use crate::contact::{
+    ContactForce, ContactModel, ContactState, SphereGeometry, respond_jointly, sphere_geometry,
+};
 use crate::robot::{Joint, RobotModel};
 use crate::terrain::{GroundFrame, HeightGrid};
 use glam::{DAffine3, DQuat, DVec3};
@@ -524,12 +526,16 @@ impl Hexapod {
                 &mut mobility,
             ),
         }
-        let inputs: Vec<JointContact> = (0..n)
-            .map(|i| JointContact {
-                geometry: geometries[i].as_ref().expect("touching"),
-                velocity: velocities[i],
-            })
-            .collect();
+        // (the entries past n are placeholders: only inputs[..n] is read)
+        let placeholder = SphereGeometry {
+            penetration: 0.0,
+            point: DVec3::ZERO,
+            frame: GroundFrame::from_normal(DVec3::Z),
+        };
+        let inputs: [JointContact; 6] = std::array::from_fn(|i| JointContact {
+            geometry: geometries[i].as_ref().unwrap_or(&placeholder),
+            velocity: velocities[i],
+        });
         let mut states = [ContactState::default(); 6];
         for i in 0..n {
             states[i] = self.foot_states[legs[i]];
@@ -537,7 +543,7 @@ impl Hexapod {
         let mut forces = [None; 6];
         respond_jointly(
             &self.contact,
-            &inputs,
+            &inputs[..n],
             |i, j| mobility[i * n + j],
             dt,
             &mut states[..n],

@@ -183,11 +183,12 @@ impl MultibodyRobot {
             let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
             let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
             let mut velocity = glam::Vec3::ZERO;
-            for (dof, column) in jacobian.column_iter().enumerate() {
-                let linear = glam::Vec3::new(column[0], column[1], column[2]);
-                let angular = glam::Vec3::new(column[3], column[4], column[5]);
+            let columns = jacobian.as_slice().chunks_exact(6);
+            for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
+                let linear = glam::Vec3::from_slice(&column[..3]);
+                let angular = glam::Vec3::from_slice(&column[3..]);
                 let point = linear - r.cross(angular);
-                velocity += point * q_dot[dof];
+                velocity += point * rate;
                 for (a, axis) in axes.iter().enumerate() {
                     self.scratch.set(dof, 3 * i + a, axis.dot(point));
                 }
