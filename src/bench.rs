@@ -8,7 +8,8 @@
 //! - **ball**: the paper's ball on the natural terrain.
 //!
 //! Each walk also checks V13's criteria on its own result, so a figure from a configuration whose
-//! physics broke is flagged as such.
+//! physics broke is flagged as such, and reports the share of its time spent inside rapier's step
+//! (what the figure could be if hexsim's own work cost nothing).
 
 use crate::scenario::{Metrics, Outputs, Report, Scenario, ScenarioSpec};
 use crate::sim::Articulation;
@@ -48,6 +49,18 @@ pub struct Figure {
     pub v13: Option<bool>,
     /// Impulse joints: the largest joint anchor separation over the run (m).
     pub max_joint_drift: Option<f64>,
+    /// Single-thread walks: the share of the run's wall time spent inside rapier's step; the
+    /// rest is hexsim's (contacts, servos, gait, outputs).
+    pub rapier_share: Option<f64>,
+}
+
+impl Figure {
+    /// Steps per second rapier's step alone would allow at this run's speed: the ceiling a
+    /// simulator driving rapier could reach if its own work cost nothing.
+    pub fn rapier_ceiling(&self) -> Option<f64> {
+        self.rapier_share
+            .map(|share| self.steps_per_second / share.max(1e-9))
+    }
 }
 
 /// The whole benchmark.
@@ -120,6 +133,7 @@ fn figure(
         best_steps_per_second: steps as f64 / wall_time.max(1e-9),
         v13: None,
         max_joint_drift: None,
+        rapier_share: None,
     }
 }
 
@@ -155,6 +169,7 @@ pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Res
                 r.steps as f64 / r.steps_per_second,
             );
             f.v13 = v13(&scenario, &r);
+            f.rapier_share = r.physics_seconds.map(|s| s / f.wall_time.max(1e-9));
             if let (Metrics::Walk(m), Articulation::Impulse) = (&r.metrics, articulation) {
                 f.max_joint_drift = Some(m.max_joint_drift);
             }

@@ -786,6 +786,12 @@ fn bench(args: BenchArgs) -> Result<()> {
         if let Some(d) = f.max_joint_drift {
             notes.push(format!("joint drift ≤ {:.1} µm", d * 1e6));
         }
+        if let (Some(share), Some(ceiling)) = (f.rapier_share, f.rapier_ceiling()) {
+            notes.push(format!(
+                "rapier's step {:.0} % (alone {ceiling:.0} steps/s)",
+                share * 100.0
+            ));
+        }
         println!(
             "{:<30} {:<10} {:>7} {:>9} {:>8.2} {:>12.0} {:>9.0}  {}",
             f.workload,

@@ -325,6 +325,12 @@ fn bench_measures_both_articulations_and_says_what_it_measured() {
             "{f}"
         );
     }
+    // each single-thread walk says how much of its time was rapier's step
+    for f in figures.iter().filter(|f| f["workload"] == "walk") {
+        let share = f["rapier_share"].as_f64().unwrap();
+        assert!(share > 0.0 && share < 1.0, "{f}");
+    }
+    assert!(stdout.contains("rapier's step"), "{stdout}");
     let batch = figures
         .iter()
         .find(|f| f["workload"].as_str().unwrap().starts_with("batch"))

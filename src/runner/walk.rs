@@ -45,6 +45,8 @@ pub struct WalkOutcome {
     pub metrics: HexapodMetrics,
     pub written: Vec<PathBuf>,
     pub steps_per_second: f64,
+    /// Of the stepping's wall time, the seconds inside rapier's step.
+    pub physics_seconds: f64,
     pub failure: Option<String>,
 }
 
@@ -193,6 +195,7 @@ impl WalkRun {
         super::conclude(&mut written, self.metrics.as_deref(), &metrics)?;
         Ok(WalkOutcome {
             steps_per_second: metrics.steps as f64 / elapsed.max(1e-9),
+            physics_seconds: walker.hexapod().physics_seconds(),
             metrics,
             written,
             failure,

@@ -92,6 +92,8 @@ pub struct Report {
     pub steps: u64,
     pub wall_time: f64,
     pub steps_per_second: f64,
+    /// Walks: of the stepping's wall time, the seconds inside rapier's step.
+    pub physics_seconds: Option<f64>,
     /// Why the run stopped early, if it diverged.
     pub failure: Option<String>,
     pub checks: Vec<Check>,
@@ -477,7 +479,7 @@ impl Scenario {
         let grid = Arc::new(self.build_terrain()?);
         let spec = &self.spec;
         let started = std::time::Instant::now();
-        let (metrics, steps_per_second, failure, written) = match &self.setup {
+        let (metrics, steps_per_second, physics_seconds, failure, written) = match &self.setup {
             Setup::Walk(w) => {
                 let [x_min, _] = grid.x_range();
                 let [y_min, y_max] = grid.y_range();
@@ -521,6 +523,7 @@ impl Scenario {
                 (
                     Metrics::Walk(Box::new(o.metrics)),
                     o.steps_per_second,
+                    Some(o.physics_seconds),
                     o.failure,
                     o.written,
                 )
@@ -547,6 +550,7 @@ impl Scenario {
                 (
                     Metrics::Ball(o.metrics),
                     o.steps_per_second,
+                    None,
                     o.failure,
                     o.written,
                 )
@@ -562,6 +566,7 @@ impl Scenario {
             steps,
             wall_time: started.elapsed().as_secs_f64(),
             steps_per_second,
+            physics_seconds,
             failure,
             checks,
             written,

@@ -198,6 +198,8 @@ pub struct Hexapod {
     foot_states: [ContactState; 6],
     last_contacts: [Option<ContactForce>; 6],
     step: u64,
+    /// Wall-clock seconds spent inside rapier's step (see [`Hexapod::physics_seconds`]).
+    physics_seconds: f64,
 }
 
 /// A foot touching the ground: its link, the contact point, the link's centre of mass and the
@@ -376,6 +378,7 @@ impl Hexapod {
             foot_states: Default::default(),
             last_contacts: [None; 6],
             step: 0,
+            physics_seconds: 0.0,
         };
         hexapod.read_joints();
         hexapod
@@ -433,6 +436,13 @@ impl Hexapod {
         (0..self.model.links.len())
             .map(|k| self.link_frame(k))
             .collect()
+    }
+
+    /// Wall-clock seconds spent inside rapier's step so far. The rest of a step is hexsim's
+    /// (contacts, servos, gait): the benchmark reports the split, so a figure can be read against
+    /// what rapier alone would allow.
+    pub fn physics_seconds(&self) -> f64 {
+        self.physics_seconds
     }
 
     /// How far apart the joints have come (always zero for the multibody).
@@ -559,7 +569,9 @@ impl Hexapod {
             }
             contacts[legs[i]] = forces[i];
         }
+        let started = std::time::Instant::now();
         self.engine.step();
+        self.physics_seconds += started.elapsed().as_secs_f64();
         self.step += 1;
         self.read_joints();
         if self.step.is_multiple_of(DRIFT_EVERY) {
