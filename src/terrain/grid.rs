@@ -298,13 +298,26 @@ impl HeightGrid {
                 }
             }
             Interpolation::Bicubic => {
+                // the 4×4 samples around the cell; ghosts only at the grid's edge (the contact
+                // search evaluates this a dozen times a step, nearly always inside)
+                let inside = i >= 1 && i + 2 < self.ny && j >= 1 && j + 2 < self.nx;
+                let mut z = [[0.0; 4]; 4];
+                for (a, row) in z.iter_mut().enumerate() {
+                    if inside {
+                        let start = (i + a - 1) * self.nx + j - 1;
+                        row.copy_from_slice(&self.heights[start..start + 4]);
+                    } else {
+                        let r = i as isize + a as isize - 1;
+                        for (b, v) in row.iter_mut().enumerate() {
+                            *v = self.ghost_sample(r, j as isize + b as isize - 1);
+                        }
+                    }
+                }
                 for a in 0..4 {
-                    let row = i as isize + a as isize - 1;
                     for b in 0..4 {
-                        let z = self.ghost_sample(row, j as isize + b as isize - 1);
-                        h += wy[a] * wx[b] * z;
-                        hx += wy[a] * dwx[b] * z;
-                        hy += dwy[a] * wx[b] * z;
+                        h += wy[a] * wx[b] * z[a][b];
+                        hx += wy[a] * dwx[b] * z[a][b];
+                        hy += dwy[a] * wx[b] * z[a][b];
                     }
                 }
             }
