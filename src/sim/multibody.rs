@@ -224,6 +224,9 @@ impl MultibodyRobot {
             damping: d,
         } = self.gains;
         let dt = self.dt;
+        let mut saturated_torques = [(0, DVec3::ZERO, 0.0); DOFS];
+        let mut n_saturated = 0;
+        let mb = self.multibody_mut(&mut engine.multibody_joints);
         for (j, joint) in model.joints.iter().enumerate() {
             let (q, qd) = (angles[j], rates[j]);
             self.start_angles[j] = q;
@@ -233,7 +236,8 @@ impl MultibodyRobot {
                 (predicted.abs() > joint.effort).then(|| joint.effort.copysign(predicted));
             self.saturated[j] = saturated;
             let near_limit = limit_can_bind(joint, q, qd, dt);
-            let rapier_joint = self.joint_mut(engine, j);
+            let link = mb.link_mut(self.links[j]).expect("a joint's link exists");
+            let rapier_joint = &mut link.joint;
             match saturated {
                 None => rapier_joint.set_spring(ANG_X, k as f32, targets[j] as f32),
                 Some(_) => rapier_joint.set_spring(ANG_X, 0.0, 0.0),
@@ -245,22 +249,18 @@ impl MultibodyRobot {
             } else {
                 rapier_joint.data.limit_axes.remove(JointAxesMask::ANG_X);
             }
-            let dof = self.dofs[j];
-            self.multibody_mut(&mut engine.multibody_joints)
-                .damping_mut()[dof] = if saturated.is_some() { 0.0 } else { d as f32 };
             if let Some(torque) = saturated {
-                let axis = self.joint_axis(engine, j);
-                apply_joint_torque(engine, bodies, joint, axis, torque);
+                // the joint's axis in the world, on the child link's side
+                let frame =
+                    link.local_to_world().rotation * link.joint().data.local_frame2.rotation;
+                saturated_torques[n_saturated] = (j, (frame * glam::Vec3::X).as_dvec3(), torque);
+                n_saturated += 1;
             }
+            mb.damping_mut()[self.dofs[j]] = if saturated.is_some() { 0.0 } else { d as f32 };
         }
-    }
-
-    /// A joint's axis in the world (the child link's side).
-    fn joint_axis(&self, engine: &Engine, joint: usize) -> DVec3 {
-        let mb = self.multibody(engine);
-        let link = mb.link(self.links[joint]).expect("link exists");
-        let frame = link.local_to_world().rotation * link.joint().data.local_frame2.rotation;
-        (frame * glam::Vec3::X).as_dvec3()
+        for &(j, axis, torque) in &saturated_torques[..n_saturated] {
+            apply_joint_torque(engine, bodies, &model.joints[j], axis, torque);
+        }
     }
 
     /// The torque the servo applied over the last step (N·m): the implicit spring-damper's
