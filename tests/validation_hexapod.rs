@@ -291,6 +291,30 @@ fn v14_stands_on_a_15_degree_slope(articulation: Articulation) {
     assert!(moved < 0.005, "V14: the body moved {:.3} mm", moved * 1e3);
 }
 
+/// On a 35° slope the robot, placed with its feet 1 mm above the ground below them, touches along
+/// the slope's normal in its very first step: the contact forces then must already be finite and
+/// bounded (the multibody's contact mobility needs the mass matrix before rapier's first step).
+fn touches_down_in_the_first_step_on_a_steep_slope(articulation: Articulation) {
+    let model = hex18();
+    let ground = terrain::slope([4.0, 4.0], [0.0, 0.0], 35f64.to_radians(), 0.0).unwrap();
+    let place = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let (mut hexapod, _) = standing(&model, ground, place, articulation);
+    let first = hexapod.step();
+    let touching: Vec<_> = first.foot_contacts.iter().flatten().collect();
+    assert!(!touching.is_empty(), "no foot touches in the first step");
+    let weight = model.total_mass() * G;
+    for c in touching {
+        assert!(c.force.is_finite(), "{c:?}");
+        assert!(c.force.length() < 10.0 * weight, "{c:?}");
+    }
+    let samples = run(&mut hexapod, 0.5);
+    assert!(samples.iter().all(|s| s.body.translation.is_finite()));
+}
+
 fn v15_same_scenario_same_result_bit_for_bit(articulation: Articulation) {
     let ground = || terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
     let a = walk(
@@ -531,6 +555,7 @@ in_both_articulations!(
     v15_same_scenario_same_result_bit_for_bit,
     servo_torques_hold_the_standing_robot,
     servo_torque_stops_at_the_effort_limit,
+    touches_down_in_the_first_step_on_a_steep_slope,
 );
 
 /// A target far from the pose asks for k·Δq = 20 N·m/rad · 0.5 rad = 10 N·m, over hex18's 3 N·m

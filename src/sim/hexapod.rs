@@ -56,7 +56,7 @@ impl Articulation {
     /// sweep removes the velocity its position correction added, so under a steady load (a robot
     /// standing on a slope) the unconverged joint error is corrected afresh each step and the
     /// robot creeps: 46 mm in 10 s on V14's 15° slope with 8 PGS sweeps and one stabilization
-    /// sweep (and motor servos), 1.0 mm with 3 sweeps and none.
+    /// sweep (and motor servos), 1.2 mm with 3 sweeps and none.
     pub fn stabilization_iterations(self) -> usize {
         match self {
             Articulation::Multibody => 1,

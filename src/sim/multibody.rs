@@ -103,6 +103,9 @@ impl MultibodyRobot {
         );
         mb.forward_kinematics(&engine.bodies, true);
         mb.update_rigid_bodies(&mut engine.bodies, true);
+        // factorise the mass matrix now: rapier does it in its step, and on a steep slope a foot
+        // touches before the first one (the contact mobility needs the factors)
+        mb.dof_inverse_inertia(&engine.bodies);
         robot
     }
 
@@ -195,11 +198,13 @@ impl MultibodyRobot {
             }
             velocities[i] = velocity.as_dvec3();
         }
-        // rapier factorises M in its first step; the robot starts 1 mm above the ground, so no
-        // contact comes sooner
-        if n == 0 || !self.scratch.compute(mb.inv_augmented_mass(), 3 * n) {
+        if n == 0 {
             return;
         }
+        assert!(
+            self.scratch.compute(mb.inv_augmented_mass(), 3 * n),
+            "the mass matrix is factorised from the start, {DOFS} degrees of freedom"
+        );
         for i in 0..n {
             for j in 0..n {
                 let w = |a: usize, b: usize| self.scratch.w(3 * i + a, 3 * j + b) as f64;
