@@ -107,29 +107,7 @@ pub fn respond_jointly(
         }
         // symmetrise: W is symmetric, its numerical copy only nearly
         let t_ss = (t_ss + t_ss.transpose()) * 0.5;
-        // the leading 2m×2m block (the rest is identity padding), by LU in storage of that size
-        macro_rules! leading {
-            ($n:literal) => {{
-                let block = t_ss.fixed_view::<$n, $n>(0, 0).into_owned();
-                block
-                    .lu()
-                    .solve(&rhs.fixed_rows::<$n>(0).into_owned())
-                    .map(|x| {
-                        let mut out = Column::zeros();
-                        out.fixed_rows_mut::<$n>(0).copy_from(&x);
-                        out
-                    })
-            }};
-        }
-        let x = match m {
-            1 => leading!(2),
-            2 => leading!(4),
-            3 => leading!(6),
-            4 => leading!(8),
-            5 => leading!(10),
-            _ => leading!(12),
-        };
-        let Some(x) = x else {
+        let Some(x) = t_ss.lu().solve(&rhs) else {
             break;
         };
         let mut changed = false;
