@@ -536,6 +536,16 @@ fn conclude(report: &Report) -> ExitCode {
     for path in &report.written {
         println!("  wrote {}", path.display());
     }
+    if let Some(rrd) = report
+        .written
+        .iter()
+        .find(|p| p.extension().is_some_and(|e| e == "rrd"))
+    {
+        println!(
+            "  view it: `rerun {}` (the viewer: `pip install rerun-sdk==0.36.3`), or run with --spawn",
+            rrd.display()
+        );
+    }
     if let Some(failure) = &report.failure {
         eprintln!(
             "error: {:#}",

@@ -224,7 +224,7 @@ fn sigint_leaves_a_readable_recording_and_incomplete_metrics() {
     assert!(steps > 200 && steps < 600_000, "{steps} steps");
     let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
     assert!(rows > 10, "{rows} trajectory rows");
-    let messages = hexsim::record::rerun::count_messages(&rrd).unwrap();
+    let messages = hexsim::record::rerun::read_back(&rrd).unwrap().messages;
     assert!(messages > 10, "{messages} messages in the recording");
     for leftover in ["i.rrd.partial", "i.csv.partial", "i.json.partial"] {
         assert!(!dir.join(leftover).exists(), "{leftover} left behind");

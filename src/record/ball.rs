@@ -1,35 +1,86 @@
 //! Observers for the ball experiment: rerun recording, trajectory CSV, summary metrics.
 
 use super::Observer;
+use super::blueprint::{History, Layout, View};
+use super::camera::{self, FollowCamera};
 use super::rerun::Recording;
 use super::table::CsvTable;
-use crate::sim::BallSample;
+use crate::sim::{BallConfig, BallSample};
+use crate::terrain::HeightGrid;
 use anyhow::Result;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// Records the ball, its contact force and time series to rerun, every `every` steps.
+/// Records the ball, its contact force, its path and time series to rerun, every `every` steps,
+/// with a camera that follows the ball.
 pub struct BallRecorder {
     recording: Recording,
     every: u64,
-    trail: Vec<[f32; 3]>,
+    /// Metres of drawn arrow per newton: the ball's weight gets an arrow four radii long.
+    force_scale: f64,
+    camera: FollowCamera,
+    /// The last point of the path.
+    path_end: Option<[f32; 3]>,
+}
+
+/// The viewer's default layout for the ball: the ball in 3D beside its plots.
+fn layout() -> Layout {
+    let plots = |name: &str, origins: &[&str]| {
+        Layout::vertical(
+            origins
+                .iter()
+                .map(|o| View::time_series(o.rsplit('/').next().unwrap_or(o), o).into())
+                .collect(),
+            Vec::new(),
+        )
+        .named(name)
+    };
+    Layout::horizontal(
+        vec![
+            View::spatial_3d("ball", "world")
+                .through_camera("world/camera")
+                .with_history("world/path", History::Whole)
+                .into(),
+            Layout::tabs(vec![
+                plots("energy", &["plots/energy", "plots/height"]),
+                plots("contact", &["plots/force", "plots/penetration_mm"]),
+                plots("motion", &["plots/speed", "plots/height"]),
+            ]),
+        ],
+        vec![0.6, 0.4],
+    )
 }
 
 impl BallRecorder {
-    pub fn new(recording: Recording, radius: f64, every: u64) -> Result<Self> {
+    /// Creates the recording at `path` with its layout, the terrain and the ball.
+    pub fn create(
+        path: &Path,
+        name: String,
+        dt: f64,
+        terrain: &HeightGrid,
+        ball: &BallConfig,
+        every: u64,
+    ) -> Result<Self> {
+        let recording = Recording::create(path, name, dt, &layout())?;
+        recording.log_terrain("world/terrain", terrain)?;
         let rec = recording.stream();
         rec.log_static(
             "world/ball",
-            &rerun::Ellipsoids3D::from_radii([radius as f32])
+            &rerun::Ellipsoids3D::from_radii([ball.radius as f32])
                 .with_colors([[220, 60, 40]])
                 .with_fill_mode(rerun::FillMode::Solid),
         )?;
+        rec.log_static("world/camera", &camera::pinhole(0.02f32))?;
         recording.name_series("plots/energy", &["kinetic", "potential", "spring", "total"])?;
         recording.name_series("plots/force", &["normal", "tangential"])?;
+        let weight = ball.mass * ball.gravity.abs();
         Ok(BallRecorder {
             recording,
             every,
-            trail: Vec::new(),
+            force_scale: 4.0 * ball.radius / weight.max(1e-9),
+            // as for a body twenty radii across: the ball, and the ground it rolls on around it
+            camera: FollowCamera::new(10.0 * ball.radius, false),
+            path_end: None,
         })
     }
 
@@ -43,25 +94,30 @@ impl Observer<BallSample> for BallRecorder {
         if !s.step.is_multiple_of(self.every) {
             return Ok(());
         }
+        self.recording.set_step(s.step);
         let r = &self.recording;
-        r.set_step(s.step);
         let rec = r.stream();
         let position = s.position.as_vec3().to_array();
         rec.log(
             "world/ball",
             &rerun::Transform3D::from_translation(position),
         )?;
-        self.trail.push(position);
-        if self.trail.len() % 10 == 1 {
+        let view = self
+            .camera
+            .follow(s.position, 0.0, r.dt() * self.every as f64);
+        camera::log_pose(rec, "world/camera", &view)?;
+        // one segment a sample; the view draws them all (History::Whole): linear in the run
+        if let Some(end) = self.path_end {
             rec.log(
                 "world/path",
-                &rerun::LineStrips3D::new([self.trail.clone()]).with_colors([[240, 200, 60]]),
+                &rerun::LineStrips3D::new([[end, position]]).with_colors([[240, 200, 60]]),
             )?;
         }
+        self.path_end = Some(position);
         match &s.contact {
             Some(c) => rec.log(
                 "world/contact_force",
-                &rerun::Arrows3D::from_vectors([(c.force * 0.01).as_vec3().to_array()])
+                &rerun::Arrows3D::from_vectors([(c.force * self.force_scale).as_vec3().to_array()])
                     .with_origins([c.point.as_vec3().to_array()])
                     .with_colors([[40, 120, 255]]),
             )?,
@@ -83,9 +139,6 @@ impl Observer<BallSample> for BallRecorder {
                 s.total_energy(),
             ],
         )?;
-        if s.step.is_multiple_of(1000) {
-            r.flush();
-        }
         Ok(())
     }
 }

@@ -1,11 +1,13 @@
 //! Observers for a hexapod run: rerun recording, trajectory CSV, summary metrics.
 
 use super::Observer;
+use super::blueprint::{History, Layout, View};
+use super::camera::{self, FollowCamera};
 use super::rerun::Recording;
 use super::table::CsvTable;
-use crate::gait::LegPhase;
-use crate::robot::{LEG_NAMES, RobotModel, Shape};
+use crate::robot::{LEG_NAMES, RobotModel, Shape, Visual};
 use crate::sim::WalkSample;
+use crate::terrain::HeightGrid;
 use anyhow::Result;
 use glam::{DAffine3, DQuat};
 use serde::Serialize;
@@ -24,87 +26,141 @@ fn rgba(c: [f32; 4]) -> [u8; 4] {
     c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
 }
 
-/// Records the robot (links with their URDF shapes), foot forces, the body's path and time series.
+/// Records the robot (links with their URDF shapes), its foot forces, the feet's stance trails,
+/// the body's path, the footfall diagram and time series, with a camera that follows the body.
 pub struct HexapodRecorder {
     recording: Recording,
     every: u64,
+    /// Per link, its entity: links nest as the kinematic tree does, each under a static entity
+    /// holding its joint's origin, so a sample logs the root's pose and each joint's rotation.
     link_paths: Vec<String>,
-    path: Vec<[f32; 3]>,
+    /// Whether links can drift from their joints (impulse joints): then each link's full pose
+    /// relative to its joint frame is logged, not only the rotation.
+    joints_drift: bool,
+    /// Metres of drawn arrow per newton: a foot carrying its share of the weight gets an arrow
+    /// as long as its leg in the starting stance (measured at the first sample).
+    force_scale: Option<f64>,
+    camera: FollowCamera,
+    /// Samples between frames of the 3D scene (links, camera, forces, trails): the scene is drawn
+    /// at up to [`SCENE_RATE`], the plots and the footfall diagram at every sample.
+    scene_every: u64,
+    /// The body position last added to the path, and samples since.
+    path_end: Option<[f32; 3]>,
+    path_samples: u64,
+    /// The footfall lanes' last logged states (actual contact, scheduled stance).
+    footfall: [Option<[bool; 2]>; 6],
 }
 
-/// Newtons per metre of drawn force arrow.
-const FORCE_SCALE: f64 = 0.01;
+/// Samples between points of the body's path (at the default 50 Hz: 10 points a second).
+const PATH_EVERY: u64 = 5;
+
+/// Frames a second of the 3D scene at most: a film's rate, smooth in playback. Its 19 link poses
+/// are most of a sample's bytes; at the 50 Hz default this halves them, and keeps a walk under
+/// 6 MB a minute (5.1 MB with the scene at 50 Hz, plus 1 MB of terrain, robot and layout).
+const SCENE_RATE: f64 = 25.0;
+
+/// Seconds of history shown for the feet's stance trails.
+const TRAIL_SECONDS: f64 = 3.0;
+
+/// The footfall diagram's states: per leg two lanes, whether the foot touches the ground (the
+/// contact model's answer) and whether the gait schedules it in stance; a swing is a gap.
+const FOOTFALL_STATES: [&str; 3] = ["contact", "scheduled", "swing"];
+
+/// The viewer's default layout for a walk: the robot in 3D above its footfall diagram, beside tabs
+/// of time series (body; feet; each leg's joints).
+fn layout(model: &RobotModel) -> Layout {
+    let mut scene = View::spatial_3d("robot", "world")
+        .through_camera("world/camera")
+        .with_history("world/body_path", History::Whole);
+    for leg in &model.legs {
+        scene = scene.with_history(
+            &format!("world/feet/{}/trail", leg.name),
+            History::Last(TRAIL_SECONDS),
+        );
+    }
+    let plots = |name: &str, origins: &[&str]| {
+        Layout::vertical(
+            origins
+                .iter()
+                .map(|o| View::time_series(o.rsplit('/').next().unwrap_or(o), o).into())
+                .collect(),
+            Vec::new(),
+        )
+        .named(name)
+    };
+    let mut tabs = vec![
+        plots(
+            "body",
+            &[
+                "plots/body/height_above_ground",
+                "plots/body/attitude_deg",
+                "plots/body/forward_speed",
+            ],
+        ),
+        plots(
+            "feet",
+            &["plots/feet/normal_force", "plots/feet/slip_speed"],
+        ),
+    ];
+    for leg in &model.legs {
+        let angle = format!("plots/joints/{}/angle", leg.name);
+        let torque = format!("plots/joints/{}/torque", leg.name);
+        tabs.push(plots(leg.name, &[&angle, &torque]));
+    }
+    Layout::horizontal(
+        vec![
+            scene.into(),
+            Layout::vertical(
+                vec![
+                    View::state_timeline(
+                        "footfall: per leg, contact (white) above schedule (blue)",
+                        "footfall",
+                    )
+                    .into(),
+                    Layout::tabs(tabs),
+                ],
+                vec![0.5, 0.5],
+            ),
+        ],
+        vec![0.55, 0.45],
+    )
+}
 
 impl HexapodRecorder {
-    pub fn new(recording: Recording, model: &RobotModel, every: u64) -> Result<Self> {
+    /// Creates the recording at `path` with its layout, the terrain, the robot's shapes and the
+    /// plots' series names; `every` is the steps between samples; `joints_drift` for an
+    /// articulation whose links are not held to their joints exactly (impulse joints).
+    pub fn create(
+        path: &Path,
+        name: String,
+        dt: f64,
+        terrain: &HeightGrid,
+        model: &RobotModel,
+        every: u64,
+        joints_drift: bool,
+    ) -> Result<Self> {
+        let recording = Recording::create(path, name, dt, &layout(model))?;
+        recording.log_terrain("world/terrain", terrain)?;
         let rec = recording.stream();
-        let mut link_paths = Vec::new();
+        let mut link_paths: Vec<String> = Vec::new();
         for link in &model.links {
-            let entity = format!("world/robot/{}", link.name);
-            for (k, visual) in link.visuals.iter().enumerate() {
-                let shape_entity = format!("{entity}/visual_{k}");
-                let mut origin = visual.origin;
-                let color = rgba(visual.color);
-                match &visual.shape {
-                    Shape::Box { half_extents } => rec.log_static(
-                        shape_entity.as_str(),
-                        &rerun::Boxes3D::from_half_sizes([half_extents.as_vec3().to_array()])
-                            .with_colors([color])
-                            .with_fill_mode(rerun::FillMode::Solid),
-                    )?,
-                    Shape::Cylinder { radius, length } => rec.log_static(
-                        shape_entity.as_str(),
-                        &rerun::Cylinders3D::from_lengths_and_radii(
-                            [*length as f32],
-                            [*radius as f32],
-                        )
-                        .with_colors([color])
-                        .with_fill_mode(rerun::FillMode::Solid),
-                    )?,
-                    Shape::Capsule { radius, length } => {
-                        // rerun's capsule runs from its origin along +z; the URDF's is centred
-                        origin *=
-                            DAffine3::from_translation(glam::DVec3::new(0.0, 0.0, -length / 2.0));
-                        rec.log_static(
-                            shape_entity.as_str(),
-                            &rerun::Capsules3D::from_lengths_and_radii(
-                                [*length as f32],
-                                [*radius as f32],
-                            )
-                            .with_colors([color])
-                            .with_fill_mode(rerun::FillMode::Solid),
-                        )?
-                    }
-                    Shape::Sphere { radius } => rec.log_static(
-                        shape_entity.as_str(),
-                        &rerun::Ellipsoids3D::from_radii([*radius as f32])
-                            .with_colors([color])
-                            .with_fill_mode(rerun::FillMode::Solid),
-                    )?,
-                    Shape::Mesh { path, .. } => match rerun::Asset3D::from_file_path(path) {
-                        Ok(asset) => {
-                            rec.log_static(shape_entity.as_str(), &asset.with_albedo_factor(color))?
-                        }
-                        Err(_) => rec.log_static(
-                            shape_entity.as_str(),
-                            &rerun::Ellipsoids3D::from_radii([0.01f32]).with_colors([color]),
-                        )?,
-                    },
+            let entity = match link.parent_joint {
+                None => format!("world/robot/{}", link.name),
+                Some(j) => {
+                    let joint = &model.joints[j];
+                    let frame = format!("{}/{}", link_paths[joint.parent], joint.name);
+                    log_pose(rec, &frame, &joint.origin, true)?;
+                    format!("{frame}/{}", link.name)
                 }
-                rec.log_static(
-                    shape_entity.as_str(),
-                    &rerun::Transform3D::from_translation_rotation(
-                        origin.translation.as_vec3().to_array(),
-                        quaternion(&origin),
-                    ),
-                )?;
+            };
+            for (k, visual) in link.visuals.iter().enumerate() {
+                log_visual(rec, &format!("{entity}/visual_{k}"), visual)?;
             }
             link_paths.push(entity);
         }
         recording.name_series("plots/body/attitude_deg", &["roll", "pitch", "yaw"])?;
         recording.name_series("plots/feet/normal_force", &LEG_NAMES)?;
-        recording.name_series("plots/feet/in_contact", &LEG_NAMES)?;
-        recording.name_series("plots/gait/stance", &LEG_NAMES)?;
+        recording.name_series("plots/feet/slip_speed", &LEG_NAMES)?;
         for leg in &model.legs {
             let names: Vec<String> = leg
                 .joints
@@ -117,23 +173,156 @@ impl HexapodRecorder {
             recording.name_series(&format!("plots/joints/{}/angle", leg.name), &refs)?;
             let refs: Vec<&str> = names.iter().map(String::as_str).collect();
             recording.name_series(&format!("plots/joints/{}/torque", leg.name), &refs)?;
+            // a classic footfall (Hildebrand) diagram: a bar while the foot is down, a gap while
+            // it swings
+            rec.log_static(
+                format!("footfall/{}", leg.name),
+                &rerun::StateConfiguration::new()
+                    .with_values(FOOTFALL_STATES)
+                    .with_labels(["", "", ""])
+                    .with_colors([[235, 235, 235], [60, 130, 200], [0, 0, 0]])
+                    .with_visible([true, true, false]),
+            )?;
+        }
+        rec.log_static("world/camera", &camera::pinhole(0.05f32))?;
+        // colours and sizes once, static, rather than in every sample's row
+        rec.log_static(
+            "world/foot_forces",
+            &rerun::Arrows3D::update_fields().with_colors([[40, 120, 255]]),
+        )?;
+        rec.log_static(
+            "world/body_path",
+            &rerun::LineStrips3D::update_fields().with_colors([[240, 200, 60]]),
+        )?;
+        for leg in &model.legs {
+            rec.log_static(
+                format!("world/feet/{}/trail", leg.name),
+                &rerun::Points3D::update_fields()
+                    .with_colors([[230, 60, 60]])
+                    .with_radii([0.002f32]),
+            )?;
         }
         Ok(HexapodRecorder {
             recording,
             every,
             link_paths,
-            path: Vec::new(),
+            joints_drift,
+            scene_every: ((1.0 / (SCENE_RATE * dt * every as f64)).round() as u64).max(1),
+            force_scale: None,
+            camera: FollowCamera::new(robot_radius(model), true),
+            path_end: None,
+            path_samples: 0,
+            footfall: [None; 6],
         })
     }
 
     pub fn finish(self) -> Result<PathBuf> {
         self.recording.finish()
     }
+}
 
-    /// Pushes what was logged so far to the file.
-    pub fn flush(&self) {
-        self.recording.flush();
+/// The robot's horizontal radius: its farthest foot from the body's origin with the legs
+/// stretched (zero joint angles), which sets the follow camera's distance.
+fn robot_radius(model: &RobotModel) -> f64 {
+    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
+    let radius = model
+        .legs
+        .iter()
+        .map(|leg| {
+            poses[leg.foot_link]
+                .transform_point3(leg.foot.center)
+                .truncate()
+                .length()
+        })
+        .fold(0.0, f64::max);
+    radius.max(0.05)
+}
+
+/// Metres of arrow per newton so that a foot carrying a sixth of the weight gets an arrow as long
+/// as the mean hip-to-foot distance in the pose `link_frames`.
+fn force_scale(model: &RobotModel, link_frames: &[DAffine3]) -> f64 {
+    let reach: f64 = model
+        .legs
+        .iter()
+        .map(|leg| {
+            let hip = &model.joints[leg.joints[0]];
+            let hip = (link_frames[hip.parent] * hip.origin).translation;
+            let foot = link_frames[leg.foot_link].transform_point3(leg.foot.center);
+            (foot - hip).length()
+        })
+        .sum::<f64>()
+        / model.legs.len().max(1) as f64;
+    let weight_share = model.total_mass() * crate::sim::STANDARD_GRAVITY / 6.0;
+    reach.max(0.01) / weight_share.max(1e-9)
+}
+
+/// Logs `pose` (translation and rotation) at `entity`, static or at the current time.
+fn log_pose(
+    rec: &rerun::RecordingStream,
+    entity: &str,
+    pose: &DAffine3,
+    is_static: bool,
+) -> Result<()> {
+    let transform = rerun::Transform3D::from_translation_rotation(
+        pose.translation.as_vec3().to_array(),
+        quaternion(pose),
+    );
+    if is_static {
+        rec.log_static(entity, &transform)?;
+    } else {
+        rec.log(entity, &transform)?;
     }
+    Ok(())
+}
+
+fn log_visual(rec: &rerun::RecordingStream, entity: &str, visual: &Visual) -> Result<()> {
+    let mut origin = visual.origin;
+    let color = rgba(visual.color);
+    match &visual.shape {
+        Shape::Box { half_extents } => rec.log_static(
+            entity,
+            &rerun::Boxes3D::from_half_sizes([half_extents.as_vec3().to_array()])
+                .with_colors([color])
+                .with_fill_mode(rerun::FillMode::Solid),
+        )?,
+        Shape::Cylinder { radius, length } => rec.log_static(
+            entity,
+            &rerun::Cylinders3D::from_lengths_and_radii([*length as f32], [*radius as f32])
+                .with_colors([color])
+                .with_fill_mode(rerun::FillMode::Solid),
+        )?,
+        Shape::Capsule { radius, length } => {
+            // rerun's capsule runs from its origin along +z; the URDF's is centred
+            origin *= DAffine3::from_translation(glam::DVec3::new(0.0, 0.0, -length / 2.0));
+            rec.log_static(
+                entity,
+                &rerun::Capsules3D::from_lengths_and_radii([*length as f32], [*radius as f32])
+                    .with_colors([color])
+                    .with_fill_mode(rerun::FillMode::Solid),
+            )?
+        }
+        Shape::Sphere { radius } => rec.log_static(
+            entity,
+            &rerun::Ellipsoids3D::from_radii([*radius as f32])
+                .with_colors([color])
+                .with_fill_mode(rerun::FillMode::Solid),
+        )?,
+        Shape::Mesh { path, .. } => match rerun::Asset3D::from_file_path(path) {
+            Ok(asset) => rec.log_static(entity, &asset.with_albedo_factor(color))?,
+            Err(_) => rec.log_static(
+                entity,
+                &rerun::Ellipsoids3D::from_radii([0.01f32]).with_colors([color]),
+            )?,
+        },
+    }
+    rec.log_static(
+        entity,
+        &rerun::Transform3D::from_translation_rotation(
+            origin.translation.as_vec3().to_array(),
+            quaternion(&origin),
+        ),
+    )?;
+    Ok(())
 }
 
 impl HexapodRecorder {
@@ -147,45 +336,41 @@ impl HexapodRecorder {
         if !s.robot.step.is_multiple_of(self.every) {
             return Ok(());
         }
+        self.recording.set_step(s.robot.step);
+        if self.path_samples.is_multiple_of(self.scene_every) {
+            self.log_scene(s, model, link_frames)?;
+        }
         let r = &self.recording;
         let rec = r.stream();
-        r.set_step(s.robot.step);
-        for (entity, frame) in self.link_paths.iter().zip(link_frames) {
-            rec.log(
-                entity.as_str(),
-                &rerun::Transform3D::from_translation_rotation(
-                    frame.translation.as_vec3().to_array(),
-                    quaternion(frame),
-                ),
-            )?;
-        }
-        let (origins, vectors): (Vec<[f32; 3]>, Vec<[f32; 3]>) = s
-            .robot
-            .foot_contacts
-            .iter()
-            .flatten()
-            .map(|c| {
-                (
-                    c.point.as_vec3().to_array(),
-                    (c.force * FORCE_SCALE).as_vec3().to_array(),
-                )
-            })
-            .unzip();
-        rec.log(
-            "world/foot_forces",
-            &rerun::Arrows3D::from_vectors(vectors)
-                .with_origins(origins)
-                .with_colors([[40, 120, 255]]),
-        )?;
-        let body = s.robot.body.translation;
-        self.path.push(body.as_vec3().to_array());
-        if self.path.len() % 10 == 1 {
-            rec.log(
-                "world/body_path",
-                &rerun::LineStrips3D::new([self.path.clone()]).with_colors([[240, 200, 60]]),
-            )?;
-        }
         let (roll, pitch, yaw) = s.robot.roll_pitch_yaw();
+        let body = s.robot.body.translation;
+        // the path grows by one segment at a time; the view draws them all (History::Whole), so
+        // the file grows linearly with the run
+        let point = body.as_vec3().to_array();
+        if self.path_samples.is_multiple_of(PATH_EVERY) {
+            if let Some(end) = self.path_end {
+                rec.log("world/body_path", &rerun::LineStrips3D::new([[end, point]]))?;
+            }
+            self.path_end = Some(point);
+        }
+        self.path_samples += 1;
+        for (k, leg) in model.legs.iter().enumerate() {
+            let contact = s.robot.foot_contacts[k];
+            // while settling every foot is scheduled down
+            let scheduled = s.gait.as_ref().is_none_or(|g| g.phases[k].is_stance());
+            let lanes = [contact.is_some(), scheduled];
+            if self.footfall[k] != Some(lanes) {
+                self.footfall[k] = Some(lanes);
+                let states = lanes
+                    .iter()
+                    .zip(FOOTFALL_STATES)
+                    .map(|(&down, state)| if down { state } else { FOOTFALL_STATES[2] });
+                rec.log(
+                    format!("footfall/{}", leg.name),
+                    &rerun::StateChange::new().with_state(states),
+                )?;
+            }
+        }
         r.scalars("plots/body/height_above_ground", &[s.robot.body_height])?;
         r.scalars(
             "plots/body/attitude_deg",
@@ -200,29 +385,13 @@ impl HexapodRecorder {
             .map(|c| c.map_or(0.0, |c| c.normal_force))
             .collect();
         r.scalars("plots/feet/normal_force", &normal)?;
-        let touching: Vec<f64> = s
+        let slip: Vec<f64> = s
             .robot
             .foot_contacts
             .iter()
-            .map(|c| if c.is_some() { 1.0 } else { 0.0 })
+            .map(|c| c.map_or(0.0, |c| c.slip.length()))
             .collect();
-        r.scalars("plots/feet/in_contact", &touching)?;
-        if let Some(gait) = &s.gait {
-            let stance: Vec<f64> = gait
-                .phases
-                .iter()
-                .map(|p| if p.is_stance() { 1.0 } else { 0.0 })
-                .collect();
-            r.scalars("plots/gait/stance", &stance)?;
-            let phase: Vec<f64> = gait
-                .phases
-                .iter()
-                .map(|p| match p {
-                    LegPhase::Stance(x) | LegPhase::Swing(x) => *x,
-                })
-                .collect();
-            r.scalars("plots/gait/progress", &phase)?;
-        }
+        r.scalars("plots/feet/slip_speed", &slip)?;
         for leg in &model.legs {
             let mut values: Vec<f64> = leg
                 .joints
@@ -238,8 +407,67 @@ impl HexapodRecorder {
                 .collect();
             r.scalars(&format!("plots/joints/{}/torque", leg.name), &torques)?;
         }
-        if s.robot.step.is_multiple_of(self.every * 50) {
-            r.flush();
+        Ok(())
+    }
+
+    /// Logs a frame of the 3D scene: the links, the camera, the foot forces and the stance trails.
+    fn log_scene(
+        &mut self,
+        s: &WalkSample,
+        model: &RobotModel,
+        link_frames: &[DAffine3],
+    ) -> Result<()> {
+        let rec = self.recording.stream();
+        for ((entity, link), frame) in self.link_paths.iter().zip(&model.links).zip(link_frames) {
+            match link.parent_joint {
+                None => log_pose(rec, entity, frame, false)?,
+                Some(j) => {
+                    let joint = &model.joints[j];
+                    let joint_frame = link_frames[joint.parent] * joint.origin;
+                    let relative = joint_frame.inverse() * *frame;
+                    if self.joints_drift {
+                        log_pose(rec, entity, &relative, false)?;
+                    } else {
+                        // a rigid joint only turns: its link sits at the joint frame's origin
+                        rec.log(
+                            entity.as_str(),
+                            &rerun::Transform3D::from_rotation(quaternion(&relative)),
+                        )?;
+                    }
+                }
+            }
+        }
+        let (_, _, yaw) = s.robot.roll_pitch_yaw();
+        let frame_dt = self.recording.dt() * (self.every * self.scene_every) as f64;
+        let view = self.camera.follow(s.robot.body.translation, yaw, frame_dt);
+        camera::log_pose(rec, "world/camera", &view)?;
+        let force_scale = *self
+            .force_scale
+            .get_or_insert_with(|| force_scale(model, link_frames));
+        let (origins, vectors): (Vec<[f32; 3]>, Vec<[f32; 3]>) = s
+            .robot
+            .foot_contacts
+            .iter()
+            .flatten()
+            .map(|c| {
+                (
+                    c.point.as_vec3().to_array(),
+                    (c.force * force_scale).as_vec3().to_array(),
+                )
+            })
+            .unzip();
+        rec.log(
+            "world/foot_forces",
+            &rerun::Arrows3D::from_vectors(vectors).with_origins(origins),
+        )?;
+        // a dot per frame while a foot is down: a footprint, or a streak where it slips
+        for (leg, contact) in model.legs.iter().zip(&s.robot.foot_contacts) {
+            if let Some(c) = contact {
+                rec.log(
+                    format!("world/feet/{}/trail", leg.name),
+                    &rerun::Points3D::new([c.point.as_vec3().to_array()]),
+                )?;
+            }
         }
         Ok(())
     }

@@ -3,6 +3,8 @@
 
 pub mod background;
 pub mod ball;
+pub mod blueprint;
+pub mod camera;
 pub mod hexapod;
 pub mod output;
 pub mod rerun;

@@ -1,71 +1,77 @@
 //! The rerun recording: a `.rrd` file with a `sim_time` timeline computed from the step index.
 
+use super::blueprint::{self, Layout};
 use super::output::{commit, partial_path};
 use crate::terrain::{HeightGrid, io::mesh};
 use anyhow::{Context, Result};
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// An open `.rrd` recording, written to a temporary name until [`Recording::finish`].
 pub struct Recording {
     stream: rerun::RecordingStream,
     path: PathBuf,
+    dt: f64,
     dt_nanos: i64,
+    samples: u64,
 }
 
+/// Samples between pushes of the recording to its file (a minute of a walk at 50 Hz). Each push
+/// closes a chunk per entity, and a chunk carries its own schema (about 1.6 kB, some 130 kB for a
+/// walk's 80 entities), so frequent pushes bloat the file: pushing every second of a walk made it
+/// 11 MB a minute, every 20 s 5.2 MB. A run that stops (finishes, diverges or is interrupted)
+/// pushes everything; this only bounds what a killed process loses.
+const PUSH_EVERY: u64 = 3000;
+
+/// The timeline the viewer opens on: simulated time, computed from the step index.
+pub const TIMELINE: &str = "sim_time";
+
 impl Recording {
-    /// Creates the file; `dt` is the simulation step, for the `sim_time` timeline. `layout` is the
-    /// viewer's default arrangement: a 3D view of `world` beside tabs of time-series views.
-    pub fn create(path: &Path, name: String, dt: f64, layout: &[(&str, &[&str])]) -> Result<Self> {
-        use rerun::blueprint::{
-            Blueprint, ContainerLike, Horizontal, Spatial3DView, Tabs, TimePanel, TimeSeriesView,
-            Vertical,
+    /// Creates the file; `dt` is the simulation step, for the `sim_time` timeline; `layout` is
+    /// the viewer's default arrangement of views.
+    pub fn create(path: &Path, name: String, dt: f64, layout: &Layout) -> Result<Self> {
+        // chunks as large as the pushes allow, rather than one every 200 ms of wall time
+        let batching = rerun::log::ChunkBatcherConfig {
+            flush_tick: std::time::Duration::from_secs(3600),
+            flush_num_bytes: 64 << 20,
+            ..rerun::log::ChunkBatcherConfig::DEFAULT
         };
-        let tabs: Vec<ContainerLike> = layout
-            .iter()
-            .map(|(tab, origins)| {
-                let views: Vec<ContainerLike> = origins
-                    .iter()
-                    .map(|origin| {
-                        TimeSeriesView::new(origin.rsplit('/').next().unwrap_or(origin))
-                            .with_origin(*origin)
-                            .into()
-                    })
-                    .collect();
-                Vertical::new(views).with_name(*tab).into()
-            })
-            .collect();
-        let blueprint = Blueprint::new(
-            Horizontal::new([
-                Spatial3DView::new("world").with_origin("world").into(),
-                Tabs::new(tabs).into(),
-            ])
-            .with_column_shares([0.6, 0.4]),
-        )
-        .with_time_panel(TimePanel::new().with_timeline("sim_time"));
         let stream = rerun::RecordingStreamBuilder::new("hexsim")
             .recording_name(name)
             .enabled(true)
-            .with_default_blueprint(blueprint)
+            .batcher_config(batching)
             .save(partial_path(path))
             .with_context(|| format!("cannot create the recording {}", path.display()))?;
+        blueprint::send(&stream, layout, TIMELINE)?;
         stream.set_log_time_enabled(false);
         stream.log_static("/", &rerun::ViewCoordinates::RIGHT_HAND_Z_UP())?;
         Ok(Recording {
             stream,
             path: path.to_path_buf(),
+            dt,
             dt_nanos: (dt * 1e9).round() as i64,
+            samples: 0,
         })
+    }
+
+    /// The simulation step (s).
+    pub fn dt(&self) -> f64 {
+        self.dt
     }
 
     pub fn stream(&self) -> &rerun::RecordingStream {
         &self.stream
     }
 
-    /// Sets the `step` and `sim_time` timelines (sim_time = step · dt, exact in nanoseconds).
-    pub fn set_step(&self, step: u64) {
-        self.stream.set_time_sequence("step", step as i64);
+    /// Starts a sample: sets the `sim_time` timeline to step · dt (exact in nanoseconds), and
+    /// now and then pushes what has been logged to the file.
+    pub fn set_step(&mut self, step: u64) {
+        self.samples += 1;
+        if self.samples.is_multiple_of(PUSH_EVERY) {
+            self.flush();
+        }
         self.stream.set_time(
-            "sim_time",
+            TIMELINE,
             rerun::TimeCell::from_duration_nanos(step as i64 * self.dt_nanos),
         );
     }
@@ -155,19 +161,106 @@ pub fn spawn_viewer(file: &Path) -> Result<()> {
     }
 }
 
-/// Reads a recording back and counts its messages: a recording that decodes to its end is one the
-/// viewer can open (used to check that interrupted runs leave readable files).
-pub fn count_messages(path: &std::path::Path) -> anyhow::Result<usize> {
+/// What a recording file holds, read back the way the viewer reads it: per store (the data, the
+/// blueprint) and entity, the rows, components and text values logged there, and how the
+/// blueprint asks to be activated. A file that reads to its end is one the viewer can open.
+#[derive(Debug, Default)]
+pub struct Contents {
+    pub messages: usize,
+    /// (in the blueprint store, entity path) → what was logged there.
+    pub entities: BTreeMap<(bool, String), Logged>,
+    /// Per blueprint activation command: (make_active, make_default).
+    pub activations: Vec<(bool, bool)>,
+    /// Whether an activation command came before the last blueprint data (a half-sent layout).
+    pub activated_early: bool,
+}
+
+#[derive(Debug, Default)]
+pub struct Logged {
+    pub rows: usize,
+    pub static_rows: usize,
+    /// Component identifiers, e.g. `EyeControls3D:tracking_entity`.
+    pub components: BTreeSet<String>,
+    /// Every text value logged (entity paths, names, states, timelines).
+    pub texts: BTreeSet<String>,
+}
+
+impl Contents {
+    /// What was logged at `entity` in the data store (`blueprint` false) or the blueprint.
+    pub fn at(&self, blueprint: bool, entity: &str) -> Option<&Logged> {
+        self.entities.get(&(blueprint, entity.to_string()))
+    }
+
+    /// The entities of a store whose path starts with `prefix`.
+    pub fn under<'a>(
+        &'a self,
+        blueprint: bool,
+        prefix: &'a str,
+    ) -> impl Iterator<Item = (&'a str, &'a Logged)> + 'a {
+        self.entities
+            .iter()
+            .filter(move |((b, path), _)| *b == blueprint && path.starts_with(prefix))
+            .map(|((_, path), logged)| (path.as_str(), logged))
+    }
+}
+
+/// Reads the recording at `path` to its end (see [`Contents`]).
+pub fn read_back(path: &Path) -> Result<Contents> {
+    use rerun::external::arrow::array::{Array, StringArray};
     use rerun::external::re_log_encoding::DecoderApp;
-    let file = std::fs::File::open(path)
-        .map_err(|e| anyhow::anyhow!("{}: cannot open: {e}", path.display()))?;
-    let mut count = 0;
+    use rerun::external::re_log_types::{LogMsg, StoreKind};
+    let file =
+        std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
+    let mut contents = Contents::default();
     for message in DecoderApp::decode_eager(std::io::BufReader::new(file))
         .map_err(|e| anyhow::anyhow!("{}: not a recording: {e}", path.display()))?
     {
-        let _message =
-            message.map_err(|e| anyhow::anyhow!("{}: message {count}: {e}", path.display()))?;
-        count += 1;
+        let message = message.map_err(|e| {
+            anyhow::anyhow!("{}: message {}: {e}", path.display(), contents.messages)
+        })?;
+        contents.messages += 1;
+        match message {
+            LogMsg::ArrowMsg(store, arrow) => {
+                let chunk = rerun::log::Chunk::from_arrow_msg(&arrow)?;
+                let blueprint = store.kind() == StoreKind::Blueprint;
+                if blueprint && !contents.activations.is_empty() {
+                    contents.activated_early = true;
+                }
+                let logged = contents
+                    .entities
+                    .entry((
+                        blueprint,
+                        chunk
+                            .entity_path()
+                            .to_string()
+                            .trim_start_matches('/')
+                            .to_string(),
+                    ))
+                    .or_default();
+                if chunk.is_static() {
+                    logged.static_rows += chunk.num_rows();
+                } else {
+                    logged.rows += chunk.num_rows();
+                }
+                for (component, column) in chunk.components().iter() {
+                    logged.components.insert(component.to_string());
+                    if let Some(texts) = column
+                        .list_array
+                        .values()
+                        .as_any()
+                        .downcast_ref::<StringArray>()
+                    {
+                        logged
+                            .texts
+                            .extend(texts.iter().flatten().map(str::to_string));
+                    }
+                }
+            }
+            LogMsg::BlueprintActivationCommand(command) => contents
+                .activations
+                .push((command.make_active, command.make_default)),
+            LogMsg::SetStoreInfo(_) => {}
+        }
     }
-    Ok(count)
+    Ok(contents)
 }

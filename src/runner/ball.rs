@@ -3,7 +3,6 @@
 use crate::contact::ContactModel;
 use crate::record::ball::{BallMetrics, BallRecorder, BallTrajectory};
 use crate::record::output::check_writable;
-use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::sim::{BallConfig, BallSim};
 use crate::terrain::HeightGrid;
@@ -49,21 +48,14 @@ impl BallRun {
         let initial = sim.sample();
         let mut metrics = BallMetrics::new(&initial, self.ball.radius);
         let mut recorder = match &self.record {
-            Some(path) => {
-                let layout: &[(&str, &[&str])] = &[
-                    ("motion", &["plots/height", "plots/speed"]),
-                    ("contact", &["plots/force", "plots/penetration_mm"]),
-                    ("energy", &["plots/energy"]),
-                ];
-                let recording = Recording::create(
-                    path,
-                    format!("ball on {}", self.terrain_name),
-                    self.dt,
-                    layout,
-                )?;
-                recording.log_terrain("world/terrain", &self.terrain)?;
-                Some(BallRecorder::new(recording, self.ball.radius, every)?)
-            }
+            Some(path) => Some(BallRecorder::create(
+                path,
+                format!("ball on {}", self.terrain_name),
+                self.dt,
+                &self.terrain,
+                &self.ball,
+                every,
+            )?),
             None => None,
         };
         let mut trajectory = match &self.trajectory {

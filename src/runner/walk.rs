@@ -5,7 +5,6 @@ use crate::gait::{CommandSchedule, GaitController, GaitSpec};
 use crate::record::background::Background;
 use crate::record::hexapod::{HexapodMetrics, HexapodRecorder, HexapodTrajectory};
 use crate::record::output::check_writable;
-use crate::record::rerun::Recording;
 use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
 use crate::sim::{Articulation, Hexapod, HexapodSettings, Placement, WalkSample, Walker};
@@ -83,46 +82,24 @@ impl WalkRun {
         let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass());
         let recorder = match &self.record {
             Some(path) => {
-                let layout: &[(&str, &[&str])] = &[
-                    (
-                        "body",
-                        &[
-                            "plots/body/height_above_ground",
-                            "plots/body/attitude_deg",
-                            "plots/body/forward_speed",
-                        ],
+                let name = match self.settings.articulation {
+                    Articulation::Multibody => {
+                        format!("{} on {}", self.gait.name, self.terrain_name)
+                    }
+                    Articulation::Impulse => format!(
+                        "{} on {} (impulse joints)",
+                        self.gait.name, self.terrain_name
                     ),
-                    (
-                        "feet",
-                        &[
-                            "plots/feet/normal_force",
-                            "plots/feet/in_contact",
-                            "plots/gait/stance",
-                        ],
-                    ),
-                    ("lf", &["plots/joints/lf/angle", "plots/joints/lf/torque"]),
-                    ("lm", &["plots/joints/lm/angle", "plots/joints/lm/torque"]),
-                    ("lr", &["plots/joints/lr/angle", "plots/joints/lr/torque"]),
-                    ("rf", &["plots/joints/rf/angle", "plots/joints/rf/torque"]),
-                    ("rm", &["plots/joints/rm/angle", "plots/joints/rm/torque"]),
-                    ("rr", &["plots/joints/rr/angle", "plots/joints/rr/torque"]),
-                ];
-                let recording = Recording::create(
+                };
+                let recorder = HexapodRecorder::create(
                     path,
-                    match self.settings.articulation {
-                        Articulation::Multibody => {
-                            format!("{} on {}", self.gait.name, self.terrain_name)
-                        }
-                        Articulation::Impulse => format!(
-                            "{} on {} (impulse joints)",
-                            self.gait.name, self.terrain_name
-                        ),
-                    },
+                    name,
                     dt,
-                    layout,
+                    &self.terrain,
+                    &self.robot,
+                    every,
+                    self.settings.articulation == Articulation::Impulse,
                 )?;
-                recording.log_terrain("world/terrain", &self.terrain)?;
-                let recorder = HexapodRecorder::new(recording, &self.robot, every)?;
                 let robot = self.robot.clone();
                 Some(Background::spawn(
                     recorder,

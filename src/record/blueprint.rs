@@ -1,0 +1,312 @@
+//! The viewer's default layout for a recording: a rerun *blueprint*, written as the blueprint
+//! archetypes themselves (as rerun's Python SDK writes them). rerun's Rust builder
+//! (`rerun::blueprint`) cannot set what a robot recording needs: a 3D camera that follows the
+//! robot (`EyeControls3D`) and per-entity history for trails (`VisibleTimeRanges`).
+//!
+//! The blueprint is sent as the application's active and default layout: the viewer shows it
+//! when it opens the file, and "reset blueprint" returns to it after the user has rearranged the
+//! views.
+
+use anyhow::Result;
+use rerun::RecordingStream;
+use rerun::datatypes::{TimeInt, TimeRange, TimeRangeBoundary, VisibleTimeRange};
+use rerun::external::re_log_types::{BlueprintActivationCommand, LogMsg};
+use rerun::external::re_sdk_types::blueprint::archetypes::{
+    ContainerBlueprint, EyeControls3D, PanelBlueprint, TimeAxis, TimePanelBlueprint, ViewBlueprint,
+    ViewContents, ViewportBlueprint, VisibleTimeRanges,
+};
+use rerun::external::re_sdk_types::blueprint::components::{
+    AutoLayout, AutoViews, ColumnShare, ContainerKind, IncludedContent, LinkAxis, PanelState,
+    QueryExpression, RootContainer, RowShare, TimelineName, ViewClass,
+};
+
+/// A view or a container of views.
+pub enum Layout {
+    Container(Container),
+    View(View),
+}
+
+/// Views side by side, one above the other, or in tabs.
+pub struct Container {
+    kind: ContainerKind,
+    name: Option<String>,
+    children: Vec<Layout>,
+    /// Width (horizontal) or height (vertical) shares of the children; empty for equal shares.
+    shares: Vec<f32>,
+}
+
+impl Layout {
+    fn container(kind: ContainerKind, children: Vec<Layout>, shares: Vec<f32>) -> Self {
+        Layout::Container(Container {
+            kind,
+            name: None,
+            children,
+            shares,
+        })
+    }
+
+    /// Side by side, with the given width shares (empty: equal).
+    pub fn horizontal(children: Vec<Layout>, shares: Vec<f32>) -> Self {
+        Layout::container(ContainerKind::Horizontal, children, shares)
+    }
+
+    /// One above the other, with the given height shares (empty: equal).
+    pub fn vertical(children: Vec<Layout>, shares: Vec<f32>) -> Self {
+        Layout::container(ContainerKind::Vertical, children, shares)
+    }
+
+    /// Tabs, the first one shown.
+    pub fn tabs(children: Vec<Layout>) -> Self {
+        Layout::container(ContainerKind::Tabs, children, Vec::new())
+    }
+
+    /// Names a container (a tab's title); a view keeps its own name.
+    pub fn named(mut self, name: &str) -> Self {
+        if let Layout::Container(c) = &mut self {
+            c.name = Some(name.to_string());
+        }
+        self
+    }
+}
+
+/// What a view shows and how.
+pub struct View {
+    class: &'static str,
+    name: String,
+    origin: String,
+    contents: Vec<String>,
+    /// The 3D camera follows this entity (a `Pinhole` camera: the view looks through it).
+    camera: Option<String>,
+    /// Entities drawn with their history (trails) instead of their latest value only.
+    history: Vec<(String, History)>,
+}
+
+/// How much of an entity's past a 3D view draws.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum History {
+    /// Everything logged up to the time cursor (a path).
+    Whole,
+    /// The last so many seconds before the time cursor (a trail that fades out of view).
+    Last(f64),
+}
+
+impl View {
+    fn new(class: &'static str, name: &str, origin: &str) -> Self {
+        View {
+            class,
+            name: name.to_string(),
+            origin: origin.to_string(),
+            contents: vec!["$origin/**".into()],
+            camera: None,
+            history: Vec::new(),
+        }
+    }
+
+    /// A 3D view of everything under `origin`.
+    pub fn spatial_3d(name: &str, origin: &str) -> Self {
+        View::new("3D", name, origin)
+    }
+
+    /// Time series of the scalars under `origin`.
+    pub fn time_series(name: &str, origin: &str) -> Self {
+        View::new("TimeSeries", name, origin)
+    }
+
+    /// Lanes of discrete states (`StateChange`) over time, one per entity under `origin`.
+    pub fn state_timeline(name: &str, origin: &str) -> Self {
+        View::new("StateTimeline", name, origin)
+    }
+
+    /// The 3D view looks through the `Pinhole` camera logged at `entity` (until the user moves
+    /// the view, which leaves the camera where it is).
+    pub fn through_camera(mut self, entity: &str) -> Self {
+        self.camera = Some(entity.to_string());
+        self
+    }
+
+    /// Draws `entity` with its history on the time panel's timeline.
+    pub fn with_history(mut self, entity: &str, history: History) -> Self {
+        self.history.push((entity.to_string(), history));
+        self
+    }
+}
+
+impl From<View> for Layout {
+    fn from(view: View) -> Self {
+        Layout::View(view)
+    }
+}
+
+/// Ids of views and containers: UUID-shaped, counted, so the same layout gives the same blueprint.
+struct Ids(u64);
+
+impl Ids {
+    fn next(&mut self) -> String {
+        self.0 += 1;
+        format!("00000000-0000-4000-8000-{:012x}", self.0)
+    }
+}
+
+/// Sends `root` as the default blueprint of `stream`'s application, with the time panel on
+/// `timeline` (a duration timeline, whose history ranges are in seconds).
+pub fn send(stream: &RecordingStream, root: &Layout, timeline: &str) -> Result<()> {
+    let application = stream
+        .store_info()
+        .map(|info| info.application_id().clone())
+        .ok_or_else(|| anyhow::anyhow!("the recording has no application id"))?;
+    let (blueprint, storage) = rerun::RecordingStreamBuilder::new(application)
+        .blueprint()
+        .memory()?;
+    // the viewer identifies blueprint data by this timeline
+    blueprint.set_time_sequence("blueprint", 0);
+    let mut ids = Ids(0);
+    let root_path = log_layout(&blueprint, root, timeline, &mut ids)?;
+    let root_id = root_path.rsplit('/').next().unwrap_or_default();
+    let root_uuid: [u8; 16] = parse_uuid(root_id);
+    blueprint.log(
+        "viewport",
+        &ViewportBlueprint::new()
+            .with_root_container(RootContainer(root_uuid.into()))
+            .with_auto_layout(AutoLayout(false.into()))
+            .with_auto_views(AutoViews(false.into())),
+    )?;
+    // the views get the whole window; the side panels and the time panel's stream tree are a
+    // click away
+    blueprint.log(
+        "time_panel",
+        &TimePanelBlueprint::new()
+            .with_timeline(TimelineName(timeline.into()))
+            .with_state(PanelState::Collapsed),
+    )?;
+    for panel in ["blueprint_panel", "selection_panel"] {
+        blueprint.log(
+            panel,
+            &PanelBlueprint::new().with_state(PanelState::Collapsed),
+        )?;
+    }
+    let messages: Vec<LogMsg> = storage.take();
+    let blueprint_id = messages
+        .iter()
+        .find_map(|m| match m {
+            LogMsg::SetStoreInfo(info) => Some(info.info.store_id.clone()),
+            _ => None,
+        })
+        .ok_or_else(|| anyhow::anyhow!("the blueprint stream wrote no store info"))?;
+    // Active as well as default. A default alone is only a fallback: the native viewer restores
+    // the layout it saved for "hexsim" last time, and any viewer that draws a frame between the
+    // recording's first messages and this command builds an automatic layout, which the default
+    // then never replaces (seen as nine small views on the `step` timeline).
+    stream.send_blueprint(
+        messages,
+        BlueprintActivationCommand {
+            blueprint_id,
+            make_active: true,
+            make_default: true,
+        },
+    );
+    Ok(())
+}
+
+/// Logs a view or container and everything in it; returns its blueprint path.
+fn log_layout(
+    stream: &RecordingStream,
+    layout: &Layout,
+    timeline: &str,
+    ids: &mut Ids,
+) -> Result<String> {
+    let c = match layout {
+        Layout::View(view) => return log_view(stream, view, timeline, ids),
+        Layout::Container(c) => c,
+    };
+    let path = format!("container/{}", ids.next());
+    let mut contents = Vec::new();
+    for child in &c.children {
+        contents.push(IncludedContent(
+            log_layout(stream, child, timeline, ids)?.into(),
+        ));
+    }
+    let mut container = ContainerBlueprint::new(c.kind).with_contents(contents);
+    if let Some(name) = &c.name {
+        container = container.with_display_name(name.as_str());
+    }
+    if !c.shares.is_empty() {
+        match c.kind {
+            ContainerKind::Horizontal => {
+                container =
+                    container.with_col_shares(c.shares.iter().map(|&x| ColumnShare(x.into())));
+            }
+            ContainerKind::Vertical => {
+                container = container.with_row_shares(c.shares.iter().map(|&x| RowShare(x.into())));
+            }
+            _ => {}
+        }
+    }
+    stream.log(path.as_str(), &container)?;
+    Ok(path)
+}
+
+fn log_view(
+    stream: &RecordingStream,
+    view: &View,
+    timeline: &str,
+    ids: &mut Ids,
+) -> Result<String> {
+    let id = ids.next();
+    let path = format!("view/{id}");
+    stream.log(
+        format!("{path}/ViewContents"),
+        &ViewContents::new(
+            view.contents
+                .iter()
+                .map(|q| QueryExpression(q.clone().into())),
+        ),
+    )?;
+    stream.log(
+        path.as_str(),
+        &ViewBlueprint::new(ViewClass(view.class.into()))
+            .with_display_name(view.name.as_str())
+            .with_space_origin(view.origin.as_str()),
+    )?;
+    if matches!(view.class, "TimeSeries" | "StateTimeline") {
+        // plots share their time axis: zooming one zooms all, the footfall diagram included
+        stream.log(
+            format!("{path}/TimeAxis"),
+            &TimeAxis::new().with_link(LinkAxis::LinkToGlobal),
+        )?;
+    }
+    if let Some(camera) = &view.camera {
+        stream.log(
+            format!("{path}/EyeControls3D"),
+            &EyeControls3D::new().with_tracking_entity(camera.as_str()),
+        )?;
+    }
+    for (entity, history) in &view.history {
+        let start = match history {
+            History::Whole => TimeRangeBoundary::Infinite,
+            History::Last(seconds) => {
+                TimeRangeBoundary::CursorRelative(TimeInt(-(seconds * 1e9).round() as i64))
+            }
+        };
+        let range = VisibleTimeRange {
+            timeline: timeline.into(),
+            range: TimeRange {
+                start,
+                end: TimeRangeBoundary::AT_CURSOR,
+            },
+        };
+        // where the Python SDK puts an entity's overrides: ViewContents/overrides/ENTITY/visualizers
+        let entity = entity.trim_start_matches('/');
+        stream.log(
+            format!("{path}/ViewContents/overrides/{entity}/visualizers"),
+            &VisibleTimeRanges::new([range]),
+        )?;
+    }
+    Ok(path)
+}
+
+/// The bytes of a UUID written by [`Ids::next`].
+fn parse_uuid(text: &str) -> [u8; 16] {
+    let hex: String = text.chars().filter(char::is_ascii_hexdigit).collect();
+    let value = u128::from_str_radix(&hex, 16).unwrap_or_default();
+    value.to_be_bytes()
+}

@@ -1,0 +1,173 @@
+//! The recordings as the viewer will read them: the layout (blueprint) that opens, the follow
+//! camera, the footfall diagram, and a file that grows linearly with the run. What the viewer
+//! draws from them is checked by looking (README, "Recordings"); here, what it is given.
+
+use hexsim::record::rerun::{Contents, read_back};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const LEGS: [&str; 6] = ["lf", "lm", "lr", "rf", "rm", "rr"];
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hexsim-rec-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `hexsim ARGS --record FILE` and returns what it printed.
+fn record(args: &[&str], file: &Path) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_hexsim"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .arg("--record")
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// The blueprint entity whose component `component` holds the text `value`.
+fn blueprint_with(contents: &Contents, component: &str, value: &str) -> Option<String> {
+    contents
+        .under(true, "")
+        .find(|(_, l)| l.components.contains(component) && l.texts.contains(value))
+        .map(|(path, _)| path.to_string())
+}
+
+/// The layout every recording must open with: activated (not only a default, which the viewer's
+/// saved layout or an early frame overrides), complete before activation, time on `sim_time`, and
+/// a 3D view looking through the follow camera.
+fn check_layout(contents: &Contents) {
+    assert_eq!(contents.activations, [(true, true)], "activate and default");
+    assert!(
+        !contents.activated_early,
+        "activated before it was complete"
+    );
+    let panel = contents.at(true, "time_panel").expect("a time panel");
+    assert!(panel.texts.contains("sim_time"), "{:?}", panel.texts);
+    assert!(
+        blueprint_with(contents, "ViewBlueprint:class_identifier", "3D").is_some(),
+        "no 3D view"
+    );
+    let eye = blueprint_with(contents, "EyeControls3D:tracking_entity", "world/camera");
+    assert!(
+        eye.is_some(),
+        "the 3D view does not look through the camera"
+    );
+    let camera = contents.at(false, "world/camera").expect("a camera");
+    assert!(camera.components.contains("Pinhole:image_from_camera"));
+    assert!(camera.static_rows >= 1 && camera.rows > 10, "{camera:?}");
+}
+
+#[test]
+fn a_walk_opens_with_its_layout_camera_footfall_diagram_and_trails() {
+    let dir = scratch("walk");
+    let file = dir.join("walk.rrd");
+    let printed = record(&["run", "--duration", "3", "--settle", "0.5"], &file);
+    assert!(
+        printed.contains(&format!("rerun {}", file.display())),
+        "says how to open it: {printed}"
+    );
+    let contents = read_back(&file).unwrap();
+    check_layout(&contents);
+    let samples = 175; // 3.5 s at 50 Hz
+    let frames = 88; // the 3D scene at 25 Hz
+    assert_eq!(contents.at(false, "world/camera").unwrap().rows, frames);
+    assert_eq!(
+        contents.at(false, "plots/feet/normal_force").unwrap().rows,
+        samples
+    );
+    assert!(
+        blueprint_with(&contents, "ViewBlueprint:class_identifier", "StateTimeline").is_some(),
+        "no footfall diagram"
+    );
+    // footfall: one lane group per leg, contact and schedule, swing as gaps; logged on change
+    for leg in LEGS {
+        let lanes = contents
+            .at(false, &format!("footfall/{leg}"))
+            .unwrap_or_else(|| panic!("no footfall lanes for {leg}"));
+        for state in ["contact", "scheduled", "swing"] {
+            assert!(lanes.texts.contains(state), "{leg}: {:?}", lanes.texts);
+        }
+        assert!(
+            lanes.rows > 4 && lanes.rows < samples / 4,
+            "{leg}: {lanes:?}"
+        );
+        // the foot's trail is drawn with 3 s of history, from a point per frame in stance
+        let trail = format!("world/feet/{leg}/trail");
+        let history = contents.under(true, "view/").find(|(path, l)| {
+            path.contains(&format!("overrides/{trail}"))
+                && l.components.contains("VisibleTimeRanges:ranges")
+        });
+        assert!(history.is_some(), "{trail} has no history in the 3D view");
+        let points = contents.at(false, &trail).unwrap().rows;
+        assert!(points > frames / 3 && points < frames, "{trail}: {points}");
+    }
+    // the body's path: a segment at a time (10 a second), drawn with its whole history
+    let path = contents.at(false, "world/body_path").unwrap();
+    assert!((path.rows as i64 - 35).abs() <= 1, "{path:?}");
+    assert!(
+        contents
+            .under(true, "view/")
+            .any(|(p, _)| p.contains("overrides/world/body_path")),
+        "the path is drawn with its history"
+    );
+    // the links nest as the kinematic tree: a tibia under its femur under its coxa
+    let tibia = contents
+        .under(false, "world/robot/")
+        .find(|(p, l)| p.ends_with("/lf_tibia") && l.rows == frames);
+    let tibia = tibia.expect("lf_tibia moves every frame").0;
+    assert!(
+        tibia.contains("/lf_coxa/") && tibia.contains("/lf_femur/"),
+        "{tibia}"
+    );
+}
+
+#[test]
+fn a_ball_opens_with_its_layout_camera_and_path() {
+    let dir = scratch("ball");
+    let file = dir.join("ball.rrd");
+    record(
+        &["ball", "--terrain", "terrains/bell.toml", "--duration", "2"],
+        &file,
+    );
+    let contents = read_back(&file).unwrap();
+    check_layout(&contents);
+    assert_eq!(contents.at(false, "world/ball").unwrap().rows, 201);
+    assert!(contents.at(false, "world/contact_force").is_some());
+    assert!(contents.at(false, "plots/energy").unwrap().rows == 201);
+    assert!(
+        contents
+            .under(true, "view/")
+            .any(|(p, _)| p.contains("overrides/world/path")),
+        "the path is drawn with its history"
+    );
+}
+
+/// Nothing in a recording is re-logged as the run grows (the body's path once was, whole, every
+/// tenth sample: 624 MB for 10 minutes): each further stretch of walking adds the same bytes,
+/// and at the default 50 Hz under 6 MB a minute.
+#[test]
+fn a_walk_recording_grows_linearly_with_the_run() {
+    let dir = scratch("size");
+    let size = |seconds: u32| {
+        let file = dir.join(format!("w{seconds}.rrd"));
+        let duration = seconds.to_string();
+        record(&["run", "--duration", &duration, "--settle", "0.5"], &file);
+        std::fs::metadata(&file).unwrap().len() as f64
+    };
+    let (a, b, c) = (size(15), size(30), size(45));
+    assert!(b <= 2.2 * a, "2× the run, {:.2}× the file", b / a);
+    let (first, second) = (b - a, c - b);
+    assert!(
+        second <= 1.15 * first && second >= first / 1.15,
+        "15 s more walking added {first:.0} B, then {second:.0} B"
+    );
+    let per_minute = (c - a) / 30.0 * 60.0;
+    assert!(per_minute < 6e6, "{per_minute:.0} B a minute");
+}
