@@ -1,19 +1,8 @@
 //! The `hexsim` binary end to end: outputs written, errors reported with exit code 2.
 
-use std::path::PathBuf;
+mod common;
+use common::{hexsim, scratch};
 use std::process::Command;
-
-fn hexsim() -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hexsim"));
-    cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
-    cmd
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hexsim-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 #[test]
 fn ball_writes_recording_trajectory_and_metrics() {

@@ -2,22 +2,16 @@
 //! camera, the footfall diagram, and a file that grows linearly with the run. What the viewer
 //! draws from them is checked by looking (README, "Recordings"); here, what it is given.
 
+mod common;
+use common::{hexsim, scratch};
 use hexsim::record::rerun::{Contents, read_back};
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 const LEGS: [&str; 6] = ["lf", "lm", "lr", "rf", "rm", "rr"];
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hexsim-rec-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 /// Runs `hexsim ARGS --record FILE` and returns what it printed.
 fn record(args: &[&str], file: &Path) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_hexsim"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let out = hexsim()
         .args(args)
         .arg("--record")
         .arg(file)

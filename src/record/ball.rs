@@ -25,16 +25,6 @@ pub struct BallRecorder {
 
 /// The viewer's default layout for the ball: the ball in 3D beside its plots.
 fn layout() -> Layout {
-    let plots = |name: &str, origins: &[&str]| {
-        Layout::vertical(
-            origins
-                .iter()
-                .map(|o| View::time_series(o.rsplit('/').next().unwrap_or(o), o).into())
-                .collect(),
-            Vec::new(),
-        )
-        .named(name)
-    };
     Layout::horizontal(
         vec![
             View::spatial_3d("ball", "world")
@@ -42,9 +32,9 @@ fn layout() -> Layout {
                 .with_history("world/path", History::Whole)
                 .into(),
             Layout::tabs(vec![
-                plots("energy", &["plots/energy", "plots/height"]),
-                plots("contact", &["plots/force", "plots/penetration_mm"]),
-                plots("motion", &["plots/speed", "plots/height"]),
+                Layout::plots("energy", &["plots/energy", "plots/height"]),
+                Layout::plots("contact", &["plots/force", "plots/penetration_mm"]),
+                Layout::plots("motion", &["plots/speed", "plots/height"]),
             ]),
         ],
         vec![0.6, 0.4],

@@ -60,6 +60,19 @@ impl Layout {
         Layout::container(ContainerKind::Tabs, children, Vec::new())
     }
 
+    /// A tab named `name` of time-series views stacked one above the other, one per entity in
+    /// `origins`, each titled by the entity's last name.
+    pub fn plots(name: &str, origins: &[&str]) -> Self {
+        Layout::vertical(
+            origins
+                .iter()
+                .map(|o| View::time_series(o.rsplit('/').next().unwrap_or(o), o).into())
+                .collect(),
+            Vec::new(),
+        )
+        .named(name)
+    }
+
     /// Names a container (a tab's title); a view keeps its own name.
     pub fn named(mut self, name: &str) -> Self {
         if let Layout::Container(c) = &mut self {
@@ -137,14 +150,24 @@ impl From<View> for Layout {
     }
 }
 
-/// Ids of views and containers: UUID-shaped, counted, so the same layout gives the same blueprint.
+/// Ids of views and containers: counted, so the same layout gives the same blueprint.
 struct Ids(u64);
 
 impl Ids {
-    fn next(&mut self) -> String {
+    fn next(&mut self) -> u64 {
         self.0 += 1;
-        format!("00000000-0000-4000-8000-{:012x}", self.0)
+        self.0
     }
+}
+
+/// The UUID the viewer knows an id by: a version-4-shaped UUID whose last field is the id.
+fn uuid(id: u64) -> String {
+    format!("00000000-0000-4000-8000-{id:012x}")
+}
+
+/// The same UUID's bytes.
+fn uuid_bytes(id: u64) -> [u8; 16] {
+    (0x4000_8000_0000_0000_0000_u128 | u128::from(id)).to_be_bytes()
 }
 
 /// Sends `root` as the default blueprint of `stream`'s application, with the time panel on
@@ -160,13 +183,11 @@ pub fn send(stream: &RecordingStream, root: &Layout, timeline: &str) -> Result<(
     // the viewer identifies blueprint data by this timeline
     blueprint.set_time_sequence("blueprint", 0);
     let mut ids = Ids(0);
-    let root_path = log_layout(&blueprint, root, timeline, &mut ids)?;
-    let root_id = root_path.rsplit('/').next().unwrap_or_default();
-    let root_uuid: [u8; 16] = parse_uuid(root_id);
+    let (_, root_id) = log_layout(&blueprint, root, timeline, &mut ids)?;
     blueprint.log(
         "viewport",
         &ViewportBlueprint::new()
-            .with_root_container(RootContainer(root_uuid.into()))
+            .with_root_container(RootContainer(uuid_bytes(root_id).into()))
             .with_auto_layout(AutoLayout(false.into()))
             .with_auto_views(AutoViews(false.into())),
     )?;
@@ -207,23 +228,23 @@ pub fn send(stream: &RecordingStream, root: &Layout, timeline: &str) -> Result<(
     Ok(())
 }
 
-/// Logs a view or container and everything in it; returns its blueprint path.
+/// Logs a view or container and everything in it; returns its blueprint path and id.
 fn log_layout(
     stream: &RecordingStream,
     layout: &Layout,
     timeline: &str,
     ids: &mut Ids,
-) -> Result<String> {
+) -> Result<(String, u64)> {
     let c = match layout {
         Layout::View(view) => return log_view(stream, view, timeline, ids),
         Layout::Container(c) => c,
     };
-    let path = format!("container/{}", ids.next());
+    let id = ids.next();
+    let path = format!("container/{}", uuid(id));
     let mut contents = Vec::new();
     for child in &c.children {
-        contents.push(IncludedContent(
-            log_layout(stream, child, timeline, ids)?.into(),
-        ));
+        let (child_path, _) = log_layout(stream, child, timeline, ids)?;
+        contents.push(IncludedContent(child_path.into()));
     }
     let mut container = ContainerBlueprint::new(c.kind).with_contents(contents);
     if let Some(name) = &c.name {
@@ -242,7 +263,7 @@ fn log_layout(
         }
     }
     stream.log(path.as_str(), &container)?;
-    Ok(path)
+    Ok((path, id))
 }
 
 fn log_view(
@@ -250,9 +271,9 @@ fn log_view(
     view: &View,
     timeline: &str,
     ids: &mut Ids,
-) -> Result<String> {
+) -> Result<(String, u64)> {
     let id = ids.next();
-    let path = format!("view/{id}");
+    let path = format!("view/{}", uuid(id));
     stream.log(
         format!("{path}/ViewContents"),
         &ViewContents::new(
@@ -301,12 +322,5 @@ fn log_view(
             &VisibleTimeRanges::new([range]),
         )?;
     }
-    Ok(path)
-}
-
-/// The bytes of a UUID written by [`Ids::next`].
-fn parse_uuid(text: &str) -> [u8; 16] {
-    let hex: String = text.chars().filter(char::is_ascii_hexdigit).collect();
-    let value = u128::from_str_radix(&hex, 16).unwrap_or_default();
-    value.to_be_bytes()
+    Ok((path, id))
 }

@@ -44,9 +44,8 @@ pub struct HexapodRecorder {
     /// Samples between frames of the 3D scene (links, camera, forces, trails): the scene is drawn
     /// at up to [`SCENE_RATE`], the plots and the footfall diagram at every sample.
     scene_every: u64,
-    /// The body position last added to the path, and samples since.
+    /// The body position last added to the path.
     path_end: Option<[f32; 3]>,
-    path_samples: u64,
     /// The footfall lanes' last logged states (actual contact, scheduled stance).
     footfall: [Option<[bool; 2]>; 6],
 }
@@ -78,18 +77,8 @@ fn layout(model: &RobotModel) -> Layout {
             History::Last(TRAIL_SECONDS),
         );
     }
-    let plots = |name: &str, origins: &[&str]| {
-        Layout::vertical(
-            origins
-                .iter()
-                .map(|o| View::time_series(o.rsplit('/').next().unwrap_or(o), o).into())
-                .collect(),
-            Vec::new(),
-        )
-        .named(name)
-    };
     let mut tabs = vec![
-        plots(
+        Layout::plots(
             "body",
             &[
                 "plots/body/height_above_ground",
@@ -97,7 +86,7 @@ fn layout(model: &RobotModel) -> Layout {
                 "plots/body/forward_speed",
             ],
         ),
-        plots(
+        Layout::plots(
             "feet",
             &["plots/feet/normal_force", "plots/feet/slip_speed"],
         ),
@@ -105,7 +94,7 @@ fn layout(model: &RobotModel) -> Layout {
     for leg in &model.legs {
         let angle = format!("plots/joints/{}/angle", leg.name);
         let torque = format!("plots/joints/{}/torque", leg.name);
-        tabs.push(plots(leg.name, &[&angle, &torque]));
+        tabs.push(Layout::plots(leg.name, &[&angle, &torque]));
     }
     Layout::horizontal(
         vec![
@@ -211,7 +200,6 @@ impl HexapodRecorder {
             force_scale: None,
             camera: FollowCamera::new(robot_radius(model), true),
             path_end: None,
-            path_samples: 0,
             footfall: [None; 6],
         })
     }
@@ -315,14 +303,7 @@ fn log_visual(rec: &rerun::RecordingStream, entity: &str, visual: &Visual) -> Re
             )?,
         },
     }
-    rec.log_static(
-        entity,
-        &rerun::Transform3D::from_translation_rotation(
-            origin.translation.as_vec3().to_array(),
-            quaternion(&origin),
-        ),
-    )?;
-    Ok(())
+    log_pose(rec, entity, &origin, true)
 }
 
 impl HexapodRecorder {
@@ -336,8 +317,8 @@ impl HexapodRecorder {
         if !s.robot.step.is_multiple_of(self.every) {
             return Ok(());
         }
-        self.recording.set_step(s.robot.step);
-        if self.path_samples.is_multiple_of(self.scene_every) {
+        let sample = self.recording.set_step(s.robot.step);
+        if sample.is_multiple_of(self.scene_every) {
             self.log_scene(s, model, link_frames)?;
         }
         let r = &self.recording;
@@ -347,13 +328,12 @@ impl HexapodRecorder {
         // the path grows by one segment at a time; the view draws them all (History::Whole), so
         // the file grows linearly with the run
         let point = body.as_vec3().to_array();
-        if self.path_samples.is_multiple_of(PATH_EVERY) {
+        if sample.is_multiple_of(PATH_EVERY) {
             if let Some(end) = self.path_end {
                 rec.log("world/body_path", &rerun::LineStrips3D::new([[end, point]]))?;
             }
             self.path_end = Some(point);
         }
-        self.path_samples += 1;
         for (k, leg) in model.legs.iter().enumerate() {
             let contact = s.robot.foot_contacts[k];
             // while settling every foot is scheduled down

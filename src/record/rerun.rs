@@ -64,8 +64,10 @@ impl Recording {
     }
 
     /// Starts a sample: sets the `sim_time` timeline to step · dt (exact in nanoseconds), and
-    /// now and then pushes what has been logged to the file.
-    pub fn set_step(&mut self, step: u64) {
+    /// now and then pushes what has been logged to the file. Returns the sample's index (0 for
+    /// the first), by which recorders decimate what they draw less often.
+    pub fn set_step(&mut self, step: u64) -> u64 {
+        let sample = self.samples;
         self.samples += 1;
         if self.samples.is_multiple_of(PUSH_EVERY) {
             self.flush();
@@ -74,6 +76,7 @@ impl Recording {
             TIMELINE,
             rerun::TimeCell::from_duration_nanos(step as i64 * self.dt_nanos),
         );
+        sample
     }
 
     /// Logs the terrain as a static mesh coloured by height.

@@ -1,4 +1,4 @@
-//! Helpers shared by the validation tests.
+//! Helpers shared by the tests: the validation cases' set-ups, and running the `hexsim` binary.
 #![allow(dead_code)]
 
 use hexsim::contact::{ContactModel, FrictionLaw, NormalLaw};
@@ -9,6 +9,20 @@ use std::sync::Arc;
 
 pub const G: f64 = 9.81;
 pub const DT: f64 = 1e-3;
+
+/// The `hexsim` binary, run from the project's folder.
+pub fn hexsim() -> std::process::Command {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_hexsim"));
+    cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+    cmd
+}
+
+/// A fresh folder for one test's files.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hexsim-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
 
 pub fn project_file(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
