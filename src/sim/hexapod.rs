@@ -9,103 +9,18 @@
 //!   URDF's `effort`; the sample carries the torque actually applied.
 //! - Nothing sleeps.
 
+use super::articulation::{Articulation, JointDrift, Joints, ServoGains, affine_of, pose_of};
 use super::engine::{Engine, STANDARD_GRAVITY};
-use super::impulse::{ImpulseRobot, JointDrift};
-use super::multibody::MultibodyRobot;
-use crate::contact::joint::JointContact;
-use crate::contact::{
-    ContactForce, ContactModel, ContactState, SphereGeometry, respond_jointly, sphere_geometry,
-};
-use crate::robot::{Joint, RobotModel};
-use crate::terrain::{GroundFrame, HeightGrid};
+use super::foot_contact::FootContacts;
+use crate::contact::{ContactForce, ContactModel};
+use crate::robot::RobotModel;
+use crate::terrain::HeightGrid;
 use glam::{DAffine3, DQuat, DVec3};
-use rapier3d::math::Pose;
-use rapier3d::prelude::{
-    GenericJoint, GenericJointBuilder, JointAxesMask, MassProperties, RigidBodyBuilder,
-    RigidBodyHandle,
-};
-use serde::{Deserialize, Serialize};
+use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
 use std::sync::Arc;
-
-/// How the links are joined in rapier.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "snake_case")]
-pub enum Articulation {
-    /// One reduced-coordinate multibody: joints exact by construction.
-    #[default]
-    Multibody,
-    /// Impulse joints between free bodies: about 4× faster; the joints drift apart by up to
-    /// ~0.4 mm.
-    Impulse,
-}
-
-impl Articulation {
-    /// Constraint-solver sweeps per substep unless set: the multibody has no constraints to
-    /// solve (its servos are implicit springs), so one; impulse joints are held by the solver:
-    /// with 3 sweeps a foot slides at most 2.3 mm per stance on V12 (4: 1.7 mm; 6: 1.3 mm), with
-    /// 2 the legs shake loose and the feet slide metres (measured; see the README's Performance
-    /// section).
-    pub fn default_pgs_iterations(self) -> usize {
-        match self {
-            Articulation::Multibody => 1,
-            Articulation::Impulse => IMPULSE_PGS_ITERATIONS,
-        }
-    }
-
-    /// rapier's bias-free sweeps after the constraint solve. Impulse joints: none. rapier's one
-    /// sweep removes the velocity its position correction added, so under a steady load (a robot
-    /// standing on a slope) the unconverged joint error is corrected afresh each step and the
-    /// robot creeps: 46 mm in 10 s on V14's 15° slope with 8 PGS sweeps and one stabilization
-    /// sweep (and motor servos), 1.2 mm with 3 sweeps and none.
-    pub fn stabilization_iterations(self) -> usize {
-        match self {
-            Articulation::Multibody => 1,
-            Articulation::Impulse => 0,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Articulation::Multibody => "multibody",
-            Articulation::Impulse => "impulse",
-        }
-    }
-}
-
-/// Servo gains (the reference's: 20 N·m/rad, 0.05 N·m·s/rad).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ServoGains {
-    /// N·m/rad
-    pub stiffness: f64,
-    /// N·m·s/rad
-    pub damping: f64,
-}
-
-impl ServoGains {
-    /// The servo's torque over a step of `dt` towards `target` from angle `q` and rate `qd`:
-    /// τ = k·(q* − q) − (k·dt + d)·q̇. It is the implicit PD law (backward Euler on the spring adds
-    /// k·dt of damping on the step's end velocity) with the rate at the step's start: what the
-    /// multibody's springs apply up to that rate, and what impulse joints apply outright.
-    pub fn torque(&self, target: f64, q: f64, qd: f64, dt: f64) -> f64 {
-        self.stiffness * (target - q) - (self.stiffness * dt + self.damping) * qd
-    }
-}
-
-impl Default for ServoGains {
-    fn default() -> Self {
-        ServoGains {
-            stiffness: 20.0,
-            damping: 0.05,
-        }
-    }
-}
 
 /// Steps between two measurements of the impulse joints' drift (it changes slowly).
 const DRIFT_EVERY: u64 = 10;
-
-/// Constraint-solver sweeps per substep for impulse joints by default.
-pub const IMPULSE_PGS_ITERATIONS: usize = 3;
 
 /// rapier substeps per step by default: one — V1–V15 hold with it (see the README's Performance
 /// section), and each substep rebuilds the multibody's mass matrix.
@@ -186,7 +101,7 @@ pub struct Hexapod {
     contact: ContactModel,
     /// rapier body per model link
     bodies: Vec<RigidBodyHandle>,
-    joints: Joints,
+    joints: Box<dyn Joints>,
     /// the root's rapier frame is the base link frame shifted to its centre of mass
     root_com: DVec3,
     targets: Vec<f64>,
@@ -195,99 +110,11 @@ pub struct Hexapod {
     rates: Vec<f64>,
     /// The joints' drift, measured every [`DRIFT_EVERY`] steps (impulse joints).
     drift: JointDrift,
-    foot_states: [ContactState; 6],
+    feet: FootContacts,
     last_contacts: [Option<ContactForce>; 6],
     step: u64,
     /// Wall-clock seconds spent inside rapier's step (see [`Hexapod::physics_seconds`]).
     physics_seconds: f64,
-}
-
-/// A foot touching the ground: its link, the contact point, the link's centre of mass and the
-/// ground frame there (world).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct ContactPoint {
-    pub link: usize,
-    pub body: RigidBodyHandle,
-    pub point: DVec3,
-    pub com: DVec3,
-    pub frame: GroundFrame,
-}
-
-impl Default for ContactPoint {
-    fn default() -> Self {
-        ContactPoint {
-            link: 0,
-            body: RigidBodyHandle::invalid(),
-            point: DVec3::ZERO,
-            com: DVec3::ZERO,
-            frame: GroundFrame::from_normal(DVec3::Z),
-        }
-    }
-}
-
-/// The links' joining, by articulation.
-enum Joints {
-    Multibody(MultibodyRobot),
-    Impulse(ImpulseRobot),
-}
-
-fn pose_of(a: &DAffine3) -> Pose {
-    Pose::from_parts(
-        a.translation.as_vec3(),
-        DQuat::from_mat3(&a.matrix3).normalize().as_quat(),
-    )
-}
-
-pub(super) fn affine_of(p: &Pose) -> DAffine3 {
-    DAffine3::from_rotation_translation(p.rotation.as_dquat(), p.translation.as_dvec3())
-}
-
-/// Applies `torque` (N·m) about the world `axis` to a joint's child link, and its reaction to the
-/// parent.
-pub(super) fn apply_joint_torque(
-    engine: &mut Engine,
-    bodies: &[RigidBodyHandle],
-    joint: &Joint,
-    axis: DVec3,
-    torque: f64,
-) {
-    let t = (axis * torque).as_vec3();
-    engine.bodies[bodies[joint.child]].add_torque(t, false);
-    engine.bodies[bodies[joint.parent]].add_torque(-t, false);
-}
-
-/// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.
-const LIMIT_MARGIN: f64 = 1e-3;
-
-/// Whether a joint at angle `q` moving at `qd` can reach a limit within the step. rapier's limit
-/// constraint pushes only once the joint is past the limit, yet costs a constraint set-up (on the
-/// multibody, a 24-wide solve) every step it exists: it is enabled only where it can bind.
-pub(super) fn limit_can_bind(joint: &Joint, q: f64, qd: f64, dt: f64) -> bool {
-    let reach = qd.abs() * dt + LIMIT_MARGIN;
-    q - joint.lower < reach || joint.upper - q < reach
-}
-
-/// A joint's frames in its parent's and its child's rapier body frames. rapier's revolute turns
-/// about the frames' x axis, so x is rotated onto the URDF axis; the root's body frame sits at
-/// its centre of mass.
-pub(super) fn joint_frames(joint: &Joint, root_com: DVec3) -> (DAffine3, DAffine3) {
-    let parent_shift = if joint.parent == 0 {
-        DAffine3::from_translation(-root_com)
-    } else {
-        DAffine3::IDENTITY
-    };
-    let to_axis = DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::X, joint.axis));
-    (parent_shift * joint.origin * to_axis, to_axis)
-}
-
-/// A model joint as rapier joint data for either articulation: a revolute about x between its
-/// [`joint_frames`], no contacts between its links.
-pub(super) fn revolute_joint((frame1, frame2): &(DAffine3, DAffine3)) -> GenericJoint {
-    GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
-        .local_frame1(pose_of(frame1))
-        .local_frame2(pose_of(frame2))
-        .contacts_enabled(false)
-        .build()
 }
 
 impl Hexapod {
@@ -345,23 +172,14 @@ impl Hexapod {
                 .build();
             bodies.push(engine.bodies.insert(rb));
         }
-        let joints = match settings.articulation {
-            Articulation::Multibody => Joints::Multibody(MultibodyRobot::build(
-                &mut engine,
-                &model,
-                &bodies,
-                root_com,
-                pose,
-                settings.gains,
-            )),
-            Articulation::Impulse => Joints::Impulse(ImpulseRobot::build(
-                &mut engine,
-                &model,
-                &bodies,
-                root_com,
-                settings.gains,
-            )),
-        };
+        let joints = settings.articulation.build(
+            &mut engine,
+            &model,
+            &bodies,
+            root_com,
+            pose,
+            settings.gains,
+        );
         let n = model.joints.len();
         let mut hexapod = Hexapod {
             engine,
@@ -375,7 +193,7 @@ impl Hexapod {
             angles: vec![0.0; n],
             rates: vec![0.0; n],
             drift: JointDrift::default(),
-            foot_states: Default::default(),
+            feet: FootContacts::default(),
             last_contacts: [None; 6],
             step: 0,
             physics_seconds: 0.0,
@@ -386,16 +204,8 @@ impl Hexapod {
 
     /// Reads every joint's angle and rate from rapier.
     fn read_joints(&mut self) {
-        match &mut self.joints {
-            Joints::Multibody(r) => r.read_joints(&self.engine, &mut self.angles, &mut self.rates),
-            Joints::Impulse(r) => r.read_joints(
-                &self.engine,
-                &self.model,
-                &self.bodies,
-                &mut self.angles,
-                &mut self.rates,
-            ),
-        }
+        self.joints
+            .read_joints(&self.engine, &mut self.angles, &mut self.rates);
     }
 
     pub fn model(&self) -> &RobotModel {
@@ -415,10 +225,7 @@ impl Hexapod {
     }
 
     pub fn articulation(&self) -> Articulation {
-        match self.joints {
-            Joints::Multibody(_) => Articulation::Multibody,
-            Joints::Impulse(_) => Articulation::Impulse,
-        }
+        self.joints.articulation()
     }
 
     /// Sets the servos' position targets (per model joint), used from the next step on.
@@ -447,10 +254,7 @@ impl Hexapod {
 
     /// How far apart the joints have come (always zero for the multibody).
     pub fn joint_drift(&self) -> JointDrift {
-        match &self.joints {
-            Joints::Multibody(_) => JointDrift::default(),
-            Joints::Impulse(r) => r.joint_drift(&self.engine, &self.model, &self.bodies),
-        }
+        self.joints.joint_drift(&self.engine)
     }
 
     /// World pose of a model link's frame.
@@ -465,110 +269,24 @@ impl Hexapod {
 
     /// Computes each foot's ground force, applies it with the servos', and advances one step.
     pub fn step(&mut self) -> HexapodSample {
-        let dt = self.dt();
         for &h in &self.bodies {
             let body = &mut self.engine.bodies[h];
             body.reset_forces(false);
             body.reset_torques(false);
         }
-        match &mut self.joints {
-            Joints::Multibody(r) => r.drive(
-                &mut self.engine,
-                &self.model,
-                &self.bodies,
-                &self.targets,
-                (&self.angles, &self.rates),
-            ),
-            Joints::Impulse(r) => r.drive(
-                &mut self.engine,
-                &self.model,
-                &self.bodies,
-                &self.targets,
-                (&self.angles, &self.rates),
-            ),
-        }
-        // the feet touching the ground, then their forces together (they push each other)
-        let mut geometries = [None; 6];
-        let mut points = [ContactPoint::default(); 6];
-        let mut legs = [0; 6];
-        let mut n = 0;
-        for (k, leg) in self.model.legs.iter().enumerate() {
-            let frame = self.link_frame(leg.foot_link);
-            let center = frame.transform_point3(leg.foot.center);
-            let r = leg.foot.radius;
-            // a swinging foot well clear of the ground needs no closest-point search
-            if center.z - r > self.terrain.ceiling_near(center.x, center.y, r) {
-                self.foot_states[k] = ContactState::default();
-                continue;
-            }
-            let geometry = sphere_geometry(
-                &self.terrain,
-                center,
-                leg.foot.radius,
-                self.contact.orientation,
-            );
-            if geometry.penetration <= 0.0 {
-                self.foot_states[k] = ContactState::default();
-                continue;
-            }
-            points[n] = ContactPoint {
-                link: leg.foot_link,
-                body: self.bodies[leg.foot_link],
-                point: geometry.point,
-                com: frame.transform_point3(self.model.links[leg.foot_link].com),
-                frame: geometry.frame,
-            };
-            geometries[n] = Some(geometry);
-            legs[n] = k;
-            n += 1;
-        }
-        let mut velocities = [DVec3::ZERO; 6];
-        let mut mobility = [glam::DMat3::ZERO; 36];
-        match &mut self.joints {
-            Joints::Multibody(r) => {
-                r.contact_mobility(&self.engine, &points[..n], &mut velocities, &mut mobility)
-            }
-            Joints::Impulse(r) => r.contact_mobility(
-                &self.engine,
-                &self.model,
-                &points[..n],
-                &mut velocities,
-                &mut mobility,
-            ),
-        }
-        // (the entries past n are placeholders: only inputs[..n] is read)
-        let placeholder = SphereGeometry {
-            penetration: 0.0,
-            point: DVec3::ZERO,
-            frame: GroundFrame::from_normal(DVec3::Z),
-        };
-        let inputs: [JointContact; 6] = std::array::from_fn(|i| JointContact {
-            geometry: geometries[i].as_ref().unwrap_or(&placeholder),
-            velocity: velocities[i],
-        });
-        let mut states = [ContactState::default(); 6];
-        for i in 0..n {
-            states[i] = self.foot_states[legs[i]];
-        }
-        let mut forces = [None; 6];
-        respond_jointly(
+        self.joints
+            .drive(&mut self.engine, &self.targets, &self.angles, &self.rates);
+        let foot_frames: [DAffine3; 6] =
+            std::array::from_fn(|k| self.link_frame(self.model.legs[k].foot_link));
+        let contacts = self.feet.apply(
+            &mut self.engine,
+            self.joints.as_mut(),
+            &self.model,
+            &self.bodies,
+            &self.terrain,
             &self.contact,
-            &inputs[..n],
-            |i, j| mobility[i * n + j],
-            dt,
-            &mut states[..n],
-            &mut forces[..n],
+            &foot_frames,
         );
-        let mut contacts = [None; 6];
-        for i in 0..n {
-            self.foot_states[legs[i]] = states[i];
-            if let Some(c) = forces[i] {
-                let body = &mut self.engine.bodies[points[i].body];
-                body.add_force(c.force.as_vec3(), true);
-                body.add_torque((c.point - points[i].com).cross(c.force).as_vec3(), true);
-            }
-            contacts[legs[i]] = forces[i];
-        }
         let started = std::time::Instant::now();
         self.engine.step();
         self.physics_seconds += started.elapsed().as_secs_f64();
@@ -584,15 +302,12 @@ impl Hexapod {
     /// The current state.
     pub fn sample(&self) -> HexapodSample {
         let joint_torques = (0..self.model.joints.len())
-            .map(|j| match &self.joints {
-                Joints::Multibody(r) => r.applied_torque(j, self.targets[j], self.rates[j]),
-                Joints::Impulse(r) => r.applied_torque(j),
+            .map(|j| {
+                self.joints
+                    .applied_torque(j, self.targets[j], self.rates[j])
             })
             .collect();
-        let (v_com, omega) = match &self.joints {
-            Joints::Multibody(r) => r.base_velocity(&self.engine),
-            Joints::Impulse(r) => r.base_velocity(&self.engine, self.bodies[0]),
-        };
+        let (v_com, omega) = self.joints.base_velocity(&self.engine);
         let body = self.link_frame(0);
         let com_offset = body.matrix3 * self.root_com;
         let mut foot_positions = [DVec3::ZERO; 6];

@@ -16,15 +16,20 @@
 //! explicit servos: 2.3 mm). At 1 ms the explicit law is far inside its stability bound
 //! (ω·dt ≈ 0.3 for the lightest joint: the tibia, k = 20 N·m/rad about the knee).
 
-use super::engine::Engine;
-use super::hexapod::{
-    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, revolute_joint,
+use super::{
+    Articulation, ContactPoint, Joints, ServoGains, affine_of, apply_joint_torque, joint_frames,
+    limit_can_bind, revolute_joint,
 };
 use crate::robot::RobotModel;
+use crate::sim::engine::Engine;
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::prelude::{ImpulseJointHandle, JointAxesMask, JointAxis, RigidBodyHandle};
+use std::sync::Arc;
 
 pub struct ImpulseRobot {
+    model: Arc<RobotModel>,
+    /// rapier body per model link
+    bodies: Vec<RigidBodyHandle>,
     joints: Vec<ImpulseJointHandle>,
     /// Per model joint, its frames in the parent's and the child's rapier body frames.
     frames: Vec<(DAffine3, DAffine3)>,
@@ -54,7 +59,7 @@ impl ImpulseRobot {
     /// Joins the links (already placed) with impulse joints.
     pub fn build(
         engine: &mut Engine,
-        model: &RobotModel,
+        model: &Arc<RobotModel>,
         bodies: &[RigidBodyHandle],
         root_com: DVec3,
         gains: ServoGains,
@@ -74,6 +79,8 @@ impl ImpulseRobot {
         let n = joints.len();
         let rotation = |f: &DAffine3| DQuat::from_mat3(&f.matrix3).normalize();
         ImpulseRobot {
+            model: model.clone(),
+            bodies: bodies.to_vec(),
             joints,
             rotations: frames
                 .iter()
@@ -89,31 +96,25 @@ impl ImpulseRobot {
     }
 
     /// A joint's two frames in the world: the parent's and the child's.
-    fn world_frames(
-        &self,
-        engine: &Engine,
-        model: &RobotModel,
-        bodies: &[RigidBodyHandle],
-        joint: usize,
-    ) -> (DAffine3, DAffine3) {
-        let j = &model.joints[joint];
+    fn world_frames(&self, engine: &Engine, joint: usize) -> (DAffine3, DAffine3) {
+        let j = &self.model.joints[joint];
         let (f1, f2) = &self.frames[joint];
-        let pose = |h: RigidBodyHandle| super::hexapod::affine_of(engine.bodies[h].position());
-        (pose(bodies[j.parent]) * *f1, pose(bodies[j.child]) * *f2)
+        let pose = |link: usize| affine_of(engine.bodies[self.bodies[link]].position());
+        (pose(j.parent) * *f1, pose(j.child) * *f2)
+    }
+}
+
+impl Joints for ImpulseRobot {
+    fn articulation(&self) -> Articulation {
+        Articulation::Impulse
     }
 
     /// Every joint's angle (rad) and rate (rad/s): the child frame's turn about the joint's x axis
     /// relative to the parent frame. Also keeps each joint's axis for [`Self::drive`].
-    pub fn read_joints(
-        &mut self,
-        engine: &Engine,
-        model: &RobotModel,
-        bodies: &[RigidBodyHandle],
-        angles: &mut [f64],
-        rates: &mut [f64],
-    ) {
+    fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
         use std::f64::consts::{PI, TAU};
-        for (j, joint) in model.joints.iter().enumerate() {
+        let bodies = &self.bodies;
+        for (j, joint) in self.model.joints.iter().enumerate() {
             let (parent, child) = (
                 &engine.bodies[bodies[joint.parent]],
                 &engine.bodies[bodies[joint.child]],
@@ -132,8 +133,8 @@ impl ImpulseRobot {
     }
 
     /// The root's centre-of-mass velocity and angular velocity (world).
-    pub fn base_velocity(&self, engine: &Engine, root: RigidBodyHandle) -> (DVec3, DVec3) {
-        let rb = &engine.bodies[root];
+    fn base_velocity(&self, engine: &Engine) -> (DVec3, DVec3) {
+        let rb = &engine.bodies[self.bodies[0]];
         (rb.linvel().as_dvec3(), rb.angvel().as_dvec3())
     }
 
@@ -141,10 +142,9 @@ impl ImpulseRobot {
     /// link alone (W_ij = 0 between feet): within one PGS sweep a force on the foot moves the foot
     /// link first and the joints pass only part of it on, so the articulated robot's mobility would
     /// let the stick force overshoot.
-    pub fn contact_mobility(
-        &self,
+    fn contact_mobility(
+        &mut self,
         engine: &Engine,
-        model: &RobotModel,
         contacts: &[ContactPoint],
         velocities: &mut [DVec3],
         mobility: &mut [DMat3],
@@ -163,7 +163,7 @@ impl ImpulseRobot {
                 DVec3::new(-r.z, 0.0, r.x),
                 DVec3::new(r.y, -r.x, 0.0),
             );
-            let world = DMat3::from_diagonal(DVec3::splat(1.0 / model.links[c.link].mass))
+            let world = DMat3::from_diagonal(DVec3::splat(1.0 / self.model.links[c.link].mass))
                 + cross.transpose() * inverse_inertia * cross;
             let axes = DMat3::from_cols(c.frame.tangent_x, c.frame.tangent_y, c.frame.normal);
             mobility[i * n + i] = axes.transpose() * world * axes;
@@ -172,21 +172,14 @@ impl ImpulseRobot {
 
     /// Applies each servo's torque for the coming step, and switches each limit constraint on
     /// where it can bind.
-    pub fn drive(
-        &mut self,
-        engine: &mut Engine,
-        model: &RobotModel,
-        bodies: &[RigidBodyHandle],
-        targets: &[f64],
-        (angles, rates): (&[f64], &[f64]),
-    ) {
+    fn drive(&mut self, engine: &mut Engine, targets: &[f64], angles: &[f64], rates: &[f64]) {
         let dt = engine.dt();
-        for (j, joint) in model.joints.iter().enumerate() {
+        for (j, joint) in self.model.joints.iter().enumerate() {
             let (q, qd) = (angles[j], rates[j]);
             let torque = self.gains.torque(targets[j], q, qd, dt);
             let torque = torque.clamp(-joint.effort, joint.effort);
             self.torques[j] = torque;
-            apply_joint_torque(engine, bodies, joint, self.axes[j], torque);
+            apply_joint_torque(engine, &self.bodies, joint, self.axes[j], torque);
             let near_limit = limit_can_bind(joint, q, qd, dt);
             if near_limit == self.limited[j] {
                 continue;
@@ -206,20 +199,15 @@ impl ImpulseRobot {
     }
 
     /// The servo torque applied over the last step (N·m, on the child about the axis).
-    pub fn applied_torque(&self, joint: usize) -> f64 {
+    fn applied_torque(&self, joint: usize, _target: f64, _rate: f64) -> f64 {
         self.torques[joint]
     }
 
     /// The joints' worst separation now.
-    pub fn joint_drift(
-        &self,
-        engine: &Engine,
-        model: &RobotModel,
-        bodies: &[RigidBodyHandle],
-    ) -> JointDrift {
+    fn joint_drift(&self, engine: &Engine) -> JointDrift {
         let mut drift = JointDrift::default();
         for j in 0..self.joints.len() {
-            let (parent, child) = self.world_frames(engine, model, bodies, j);
+            let (parent, child) = self.world_frames(engine, j);
             let anchor = parent.translation.distance(child.translation);
             // the swing: the angle between the two frames' x axes
             let angle = parent.matrix3.x_axis.angle_between(child.matrix3.x_axis);

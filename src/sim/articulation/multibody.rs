@@ -14,22 +14,26 @@
 //!   joint is past its limit, so a constraint is enabled when the joint is within one step's travel
 //!   (plus a margin) of a limit, and is inert — costless — otherwise.
 
-use super::engine::Engine;
 use super::mobility::{DOFS, Mobility};
+use super::{
+    Articulation, ContactPoint, Joints, ServoGains, apply_joint_torque, joint_frames,
+    limit_can_bind, revolute_joint,
+};
 use crate::robot::RobotModel;
+use crate::sim::engine::Engine;
 use glam::{DMat3, DVec3};
 use rapier3d::prelude::{
     JointAxesMask, JointAxis, Multibody, MultibodyJointHandle, MultibodyJointSet, RigidBodyHandle,
 };
-
-use super::hexapod::{
-    ContactPoint, ServoGains, apply_joint_torque, joint_frames, limit_can_bind, revolute_joint,
-};
+use std::sync::Arc;
 
 /// rapier's index of the revolute coordinate (AngX) in a joint's spatial layout.
 const ANG_X: usize = 3;
 
 pub struct MultibodyRobot {
+    model: Arc<RobotModel>,
+    /// rapier body per model link
+    bodies: Vec<RigidBodyHandle>,
     /// rapier joint per model joint
     joints: Vec<MultibodyJointHandle>,
     /// per model joint: its multibody link and degree of freedom
@@ -50,7 +54,7 @@ impl MultibodyRobot {
     /// Joins the links with multibody joints and sets the joint coordinates to `pose`.
     pub fn build(
         engine: &mut Engine,
-        model: &RobotModel,
+        model: &Arc<RobotModel>,
         bodies: &[RigidBodyHandle],
         root_com: DVec3,
         pose: &[f64],
@@ -66,6 +70,8 @@ impl MultibodyRobot {
             joints.push(handle);
         }
         let mut robot = MultibodyRobot {
+            model: model.clone(),
+            bodies: bodies.to_vec(),
             links: Vec::new(),
             dofs: Vec::new(),
             joints,
@@ -142,9 +148,15 @@ impl MultibodyRobot {
             .expect("every model joint is in the multibody");
         &mut mb.link_mut(link).expect("a joint's link exists").joint
     }
+}
+
+impl Joints for MultibodyRobot {
+    fn articulation(&self) -> Articulation {
+        Articulation::Multibody
+    }
 
     /// Every joint's angle (rad) and rate (rad/s): its coordinate and generalized velocity.
-    pub fn read_joints(&self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
+    fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
         let mb = self.multibody(engine);
         let q_dot = mb.generalized_velocity();
         for (j, (&link, &dof)) in self.links.iter().zip(&self.dofs).enumerate() {
@@ -155,7 +167,7 @@ impl MultibodyRobot {
     }
 
     /// The root's centre-of-mass velocity and angular velocity (world).
-    pub fn base_velocity(&self, engine: &Engine) -> (DVec3, DVec3) {
+    fn base_velocity(&self, engine: &Engine) -> (DVec3, DVec3) {
         // generalized velocities 0..3: the root's centre-of-mass velocity; 3..6: its angular velocity
         let v = self.multibody(engine).generalized_velocity();
         (
@@ -167,7 +179,7 @@ impl MultibodyRobot {
     /// For each contact, its material point's velocity, and the contact mobility of the
     /// articulated robot, W_ij = A_i·M⁻¹·A_jᵀ (A the point Jacobians projected on each contact's
     /// ground-frame axes), row-major n×n blocks in `mobility`.
-    pub fn contact_mobility(
+    fn contact_mobility(
         &mut self,
         engine: &Engine,
         contacts: &[ContactPoint],
@@ -216,14 +228,8 @@ impl MultibodyRobot {
 
     /// Sets each servo for the coming step (see the module docs): an implicit spring towards its
     /// target, or the effort limit as an explicit torque; and each limit constraint that can bind.
-    pub fn drive(
-        &mut self,
-        engine: &mut Engine,
-        model: &RobotModel,
-        bodies: &[RigidBodyHandle],
-        targets: &[f64],
-        (angles, rates): (&[f64], &[f64]),
-    ) {
+    fn drive(&mut self, engine: &mut Engine, targets: &[f64], angles: &[f64], rates: &[f64]) {
+        let model = &self.model;
         let ServoGains {
             stiffness: k,
             damping: d,
@@ -264,13 +270,13 @@ impl MultibodyRobot {
             mb.damping_mut()[self.dofs[j]] = if saturated.is_some() { 0.0 } else { d as f32 };
         }
         for &(j, axis, torque) in &saturated_torques[..n_saturated] {
-            apply_joint_torque(engine, bodies, &model.joints[j], axis, torque);
+            apply_joint_torque(engine, &self.bodies, &model.joints[j], axis, torque);
         }
     }
 
     /// The torque the servo applied over the last step (N·m): the implicit spring-damper's
     /// k·(q* − qₙ) − (k·dt + d)·q̇ₙ₊₁, or the saturated effort.
-    pub fn applied_torque(&self, joint: usize, target: f64, qd: f64) -> f64 {
+    fn applied_torque(&self, joint: usize, target: f64, qd: f64) -> f64 {
         if let Some(torque) = self.saturated[joint] {
             return torque;
         }
