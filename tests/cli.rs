@@ -267,6 +267,64 @@ fn a_diverging_run_is_caught_with_when_where_and_why() {
     assert!(stderr.contains("dt < 3.16e-4 s"), "{stderr}");
 }
 
+/// The ball goes through the same step loop as the walk: when it diverges, every file asked for
+/// is still written, the trajectory ends with the step that diverged, and the metrics say the run
+/// is incomplete.
+#[test]
+fn a_diverging_ball_leaves_every_file_ending_at_the_diverged_step() {
+    let dir = scratch("diverge_ball");
+    let (rrd, csv, json) = (dir.join("b.rrd"), dir.join("b.csv"), dir.join("b.json"));
+    let out = hexsim()
+        .args([
+            "ball",
+            "--terrain",
+            "terrains/flat.toml",
+            "--stiffness",
+            "1e9",
+            "--dt",
+            "0.005",
+            "--log-rate",
+            "200",
+            "--allow-unstable-dt",
+            "--duration",
+            "3",
+        ])
+        .arg("--record")
+        .arg(&rrd)
+        .arg("--trajectory")
+        .arg(&csv)
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let at = stderr
+        .split("diverged at t = ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .unwrap_or_else(|| panic!("no time of divergence in {stderr}"));
+    let at: f64 = at.parse().unwrap();
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let last: f64 = table
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (last - at).abs() < 1e-9,
+        "the trajectory ends at {last} s, the run diverged at {at} s"
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["complete"], false);
+    assert!(hexsim::record::rerun::read_back(&rrd).unwrap().messages > 3);
+}
+
 #[test]
 fn bench_measures_both_articulations_and_says_what_it_measured() {
     let dir = scratch("bench");

@@ -1,6 +1,7 @@
 //! Observers for the ball experiment: rerun recording, trajectory CSV, summary metrics.
 
 use super::Observer;
+use super::background::Background;
 use super::blueprint::{History, Layout, View};
 use super::camera::{self, FollowCamera};
 use super::rerun::Recording;
@@ -77,13 +78,21 @@ impl BallRecorder {
     pub fn finish(self) -> Result<PathBuf> {
         self.recording.finish()
     }
-}
 
-impl Observer<BallSample> for BallRecorder {
-    fn observe(&mut self, s: &BallSample) -> Result<()> {
-        if !s.step.is_multiple_of(self.every) {
-            return Ok(());
-        }
+    /// The recorder as an observer of a ball run, writing on its own thread (see
+    /// [`super::background`]).
+    pub fn in_background<W: ?Sized>(self) -> Background<BallSample, W, BallSample> {
+        Background::spawn(
+            self.every,
+            |sample: &BallSample, _: &W| *sample,
+            self,
+            |r: &mut BallRecorder, sample: BallSample| r.record(&sample),
+            BallRecorder::finish,
+        )
+    }
+
+    /// Logs a sample.
+    fn record(&mut self, s: &BallSample) -> Result<()> {
         self.recording.set_step(s.step);
         let r = &self.recording;
         let rec = r.stream();
@@ -167,14 +176,14 @@ impl BallTrajectory {
             every,
         })
     }
-
-    pub fn finish(self) -> Result<PathBuf> {
-        self.table.finish()
-    }
 }
 
-impl Observer<BallSample> for BallTrajectory {
-    fn observe(&mut self, s: &BallSample) -> Result<()> {
+impl<W: ?Sized> Observer<BallSample, W> for BallTrajectory {
+    fn finish(&mut self, _complete: bool) -> Result<Option<PathBuf>> {
+        self.table.finish()
+    }
+
+    fn observe(&mut self, s: &BallSample, _: &W) -> Result<()> {
         if !s.step.is_multiple_of(self.every) {
             return Ok(());
         }
@@ -235,11 +244,16 @@ pub struct BallMetrics {
     after_first_bounce: bool,
     #[serde(skip)]
     radius: f64,
+    /// Where the metrics are written as JSON when the run ends, if anywhere.
+    #[serde(skip)]
+    output: Option<PathBuf>,
 }
 
 impl BallMetrics {
-    pub fn new(initial: &BallSample, radius: f64) -> Self {
+    /// Metrics of a ball of `radius` starting at `initial`; written to `output` at the end.
+    pub fn new(initial: &BallSample, radius: f64, output: Option<PathBuf>) -> Self {
         BallMetrics {
+            output,
             initial_energy: initial.total_energy(),
             lowest_energy: initial.total_energy(),
             final_energy: initial.total_energy(),
@@ -250,8 +264,13 @@ impl BallMetrics {
     }
 }
 
-impl Observer<BallSample> for BallMetrics {
-    fn observe(&mut self, s: &BallSample) -> Result<()> {
+impl<W: ?Sized> Observer<BallSample, W> for BallMetrics {
+    fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
+        self.complete = complete;
+        super::output::write_json(self.output.as_deref(), self)
+    }
+
+    fn observe(&mut self, s: &BallSample, _: &W) -> Result<()> {
         self.steps = s.step;
         self.sim_time = s.time;
         let in_contact = s.contact.is_some();

@@ -1,17 +1,19 @@
 //! Observers for a hexapod run: rerun recording, trajectory CSV, summary metrics.
 
 use super::Observer;
+use super::background::Background;
 use super::blueprint::{History, Layout, View};
 use super::camera::{self, FollowCamera};
 use super::rerun::Recording;
 use super::table::CsvTable;
 use crate::robot::{LEG_NAMES, RobotModel, Shape, Visual};
-use crate::sim::WalkSample;
+use crate::sim::{WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
 use glam::{DAffine3, DQuat};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 fn quaternion(m: &DAffine3) -> rerun::Quaternion {
     rerun::Quaternion::from_xyzw(
@@ -207,6 +209,23 @@ impl HexapodRecorder {
     pub fn finish(self) -> Result<PathBuf> {
         self.recording.finish()
     }
+
+    /// The recorder as an observer of a walk, writing on its own thread (see
+    /// [`super::background`]): the loop hands it each `every`-th sample with the links' poses.
+    pub fn in_background(
+        self,
+        model: Arc<RobotModel>,
+    ) -> Background<WalkSample, Walker, (WalkSample, Vec<DAffine3>)> {
+        Background::spawn(
+            self.every,
+            |sample: &WalkSample, walker: &Walker| (sample.clone(), walker.hexapod().link_frames()),
+            self,
+            move |r: &mut HexapodRecorder, (sample, frames): (WalkSample, Vec<DAffine3>)| {
+                r.observe_with(&sample, &model, &frames)
+            },
+            HexapodRecorder::finish,
+        )
+    }
 }
 
 /// The robot's horizontal radius: its farthest foot from the body's origin with the legs
@@ -307,16 +326,14 @@ fn log_visual(rec: &rerun::RecordingStream, entity: &str, visual: &Visual) -> Re
 }
 
 impl HexapodRecorder {
-    /// Logs a sample; `link_frames` are the world poses of the model's links.
+    /// Logs a sample (one of every `every` steps); `link_frames` are the world poses of the
+    /// model's links.
     pub fn observe_with(
         &mut self,
         s: &WalkSample,
         model: &RobotModel,
         link_frames: &[DAffine3],
     ) -> Result<()> {
-        if !s.robot.step.is_multiple_of(self.every) {
-            return Ok(());
-        }
         let sample = self.recording.set_step(s.robot.step);
         if sample.is_multiple_of(self.scene_every) {
             self.log_scene(s, model, link_frames)?;
@@ -478,14 +495,14 @@ impl HexapodTrajectory {
             every,
         })
     }
-
-    pub fn finish(self) -> Result<PathBuf> {
-        self.table.finish()
-    }
 }
 
-impl Observer<WalkSample> for HexapodTrajectory {
-    fn observe(&mut self, s: &WalkSample) -> Result<()> {
+impl<W: ?Sized> Observer<WalkSample, W> for HexapodTrajectory {
+    fn finish(&mut self, _complete: bool) -> Result<Option<PathBuf>> {
+        self.table.finish()
+    }
+
+    fn observe(&mut self, s: &WalkSample, _: &W) -> Result<()> {
         let r = &s.robot;
         if !r.step.is_multiple_of(self.every) {
             return Ok(());
@@ -560,6 +577,9 @@ pub struct HexapodMetrics {
     pub max_joint_drift_deg: f64,
     #[serde(skip)]
     acc: Accumulators,
+    /// Where the metrics are written as JSON when the run ends, if anywhere.
+    #[serde(skip)]
+    output: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -579,24 +599,28 @@ struct Accumulators {
 }
 
 impl HexapodMetrics {
-    pub fn new(dt: f64, mass: f64) -> Self {
+    /// Metrics of a walk at step `dt` of a robot of `mass`; written to `output` at the end.
+    pub fn new(dt: f64, mass: f64, output: Option<PathBuf>) -> Self {
         HexapodMetrics {
             acc: Accumulators {
                 dt,
                 mass,
                 ..Default::default()
             },
+            output,
             ..Default::default()
         }
     }
-
-    pub fn set_clamped(&mut self, steps: u64) {
-        self.clamped_ik_steps = steps;
-    }
 }
 
-impl Observer<WalkSample> for HexapodMetrics {
-    fn observe(&mut self, s: &WalkSample) -> Result<()> {
+impl Observer<WalkSample, Walker> for HexapodMetrics {
+    fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
+        self.complete = complete;
+        super::output::write_json(self.output.as_deref(), self)
+    }
+
+    fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {
+        self.clamped_ik_steps = walker.clamped_steps;
         let r = &s.robot;
         self.steps = r.step;
         self.sim_time = r.time;

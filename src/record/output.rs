@@ -41,3 +41,10 @@ pub fn write_atomically(path: &Path, contents: &[u8]) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))?;
     commit(path)
 }
+
+/// Writes `value` as JSON to `path`, if there is one, through the temporary name; names it.
+pub fn write_json(path: Option<&Path>, value: &impl serde::Serialize) -> Result<Option<PathBuf>> {
+    let Some(path) = path else { return Ok(None) };
+    write_atomically(path, serde_json::to_string_pretty(value)?.as_bytes())?;
+    Ok(Some(path.to_path_buf()))
+}

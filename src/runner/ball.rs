@@ -1,10 +1,13 @@
 //! The ball experiment end to end: terrain + ball + contact → step loop → recording, CSV, metrics.
 
+use super::step_loop::{self, Stepper};
+use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::record::ball::{BallMetrics, BallRecorder, BallTrajectory};
 use crate::record::output::check_writable;
+use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};
-use crate::sim::{BallConfig, BallSim};
+use crate::sim::{BallConfig, BallSample, BallSim};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
 use std::path::PathBuf;
@@ -22,6 +25,8 @@ pub struct BallRun {
     pub log_rate: f64,
     pub trajectory: Option<PathBuf>,
     pub metrics: Option<PathBuf>,
+    /// Called now and then with the steps done so far, for a progress bar.
+    pub progress: Option<Box<dyn Fn(u64)>>,
 }
 
 /// What a run produced.
@@ -33,85 +38,89 @@ pub struct BallOutcome {
     pub failure: Option<String>,
 }
 
+/// The ball falling and rolling, watched for divergence.
+struct Dropping {
+    sim: BallSim,
+    watchdog: Watchdog,
+}
+
+impl Stepper for Dropping {
+    type Sample = BallSample;
+    type World = BallSim;
+
+    fn initial(&self) -> Option<BallSample> {
+        Some(self.sim.sample())
+    }
+
+    fn step(&mut self) -> BallSample {
+        self.sim.step()
+    }
+
+    fn world(&self) -> &BallSim {
+        &self.sim
+    }
+
+    fn diverged(&self, sample: &BallSample) -> Option<String> {
+        self.watchdog.check_ball(sample)
+    }
+}
+
 impl BallRun {
     /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
     /// (every command builds its runs from a scenario).
-    pub fn execute(&self) -> Result<BallOutcome> {
+    pub fn execute(self) -> Result<BallOutcome> {
         for path in [&self.record, &self.trajectory, &self.metrics]
             .into_iter()
             .flatten()
         {
             check_writable(path)?;
         }
-        let mut sim = BallSim::new(self.ball, self.terrain.clone(), self.contact, self.dt);
+        let sim = BallSim::new(self.ball, self.terrain.clone(), self.contact, self.dt);
         let every = decimation(self.log_rate, self.dt);
         let initial = sim.sample();
-        let mut metrics = BallMetrics::new(&initial, self.ball.radius);
-        let mut recorder = match &self.record {
-            Some(path) => Some(BallRecorder::create(
+
+        let mut observers: Vec<Box<dyn Observer<BallSample, BallSim>>> = Vec::new();
+        if let Some(path) = &self.record {
+            let recorder = BallRecorder::create(
                 path,
                 format!("ball on {}", self.terrain_name),
                 self.dt,
                 &self.terrain,
                 &self.ball,
                 every,
-            )?),
-            None => None,
-        };
-        let mut trajectory = match &self.trajectory {
-            Some(path) => Some(BallTrajectory::create(path, every)?),
-            None => None,
-        };
+            )?;
+            observers.push(Box::new(recorder.in_background()));
+        }
+        if let Some(path) = &self.trajectory {
+            observers.push(Box::new(BallTrajectory::create(path, every)?));
+        }
+        if let Some(progress) = self.progress {
+            observers.push(Box::new(Progress::new(progress)));
+        }
+        // last: its file is written once the others are complete
+        let mut metrics = BallMetrics::new(&initial, self.ball.radius, self.metrics.clone());
+
         let steps = (self.duration / self.dt).round() as u64;
-        let watchdog = super::watchdog::Watchdog::ball(
-            &initial,
-            self.ball.radius,
-            self.ball.mass,
-            self.contact.normal,
-            self.dt,
-            self.ball.gravity,
-        );
-        let mut observe = |sample: &crate::sim::BallSample| -> Result<()> {
-            metrics.observe(sample)?;
-            if let Some(r) = recorder.as_mut() {
-                r.observe(sample)?;
-            }
-            if let Some(t) = trajectory.as_mut() {
-                t.observe(sample)?;
-            }
-            Ok(())
+        let mut dropping = Dropping {
+            watchdog: Watchdog::ball(
+                &initial,
+                self.ball.radius,
+                self.ball.mass,
+                self.contact.normal,
+                self.dt,
+                self.ball.gravity,
+            ),
+            sim,
         };
-        observe(&initial)?;
-        let started = std::time::Instant::now();
-        let mut complete = true;
-        let mut failure = None;
-        for _ in 0..steps {
-            if super::interrupted() {
-                complete = false;
-                break;
-            }
-            let sample = sim.step();
-            if let Some(message) = watchdog.check_ball(&sample) {
-                complete = false;
-                failure = Some(message);
-                break;
-            }
-            observe(&sample)?;
-        }
-        metrics.complete = complete;
-        let mut written = Vec::new();
-        if let Some(r) = recorder {
-            written.push(r.finish()?);
-        }
-        if let Some(t) = trajectory {
-            written.push(t.finish()?);
-        }
-        super::conclude(&mut written, self.metrics.as_deref(), &metrics)?;
+        let mut list: Vec<&mut dyn Observer<BallSample, BallSim>> =
+            observers.iter_mut().map(|o| o.as_mut() as _).collect();
+        list.push(&mut metrics);
+        let end = step_loop::run(&mut dropping, steps, &mut list)?;
         Ok(BallOutcome {
-            steps_per_second: metrics.steps as f64 / started.elapsed().as_secs_f64().max(1e-9),
+            steps_per_second: end.steps as f64 / end.seconds.max(1e-9),
             metrics,
-            written,
-            failure,
+            written: end.written,
+            failure: end.failure,
         })
     }
 }

@@ -2,6 +2,7 @@
 //! This is where simulation and recording meet; neither knows the other.
 
 pub mod ball;
+pub mod step_loop;
 pub mod walk;
 pub mod watchdog;
 
@@ -12,22 +13,6 @@ pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
 pub fn interrupted() -> bool {
     INTERRUPTED.load(Ordering::Relaxed)
-}
-
-/// Writes the metrics (if asked for) after the recording and trajectory have been finished.
-pub(crate) fn conclude(
-    written: &mut Vec<std::path::PathBuf>,
-    metrics_path: Option<&std::path::Path>,
-    metrics: &impl serde::Serialize,
-) -> anyhow::Result<()> {
-    if let Some(path) = metrics_path {
-        crate::record::output::write_atomically(
-            path,
-            serde_json::to_string_pretty(metrics)?.as_bytes(),
-        )?;
-        written.push(path.to_path_buf());
-    }
-    Ok(())
 }
 
 /// A failed run's error: what happened and every file the run still wrote.

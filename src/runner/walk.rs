@@ -1,16 +1,18 @@
-//! A hexapod run end to end: robot + terrain + gait + contact → walker → recording, CSV, metrics.
+//! A hexapod run end to end: robot + terrain + gait + contact → walker → step loop → recording,
+//! CSV, metrics.
 
+use super::step_loop::{self, Stepper};
+use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, GaitController, GaitSpec};
-use crate::record::background::Background;
 use crate::record::hexapod::{HexapodMetrics, HexapodRecorder, HexapodTrajectory};
 use crate::record::output::check_writable;
+use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
 use crate::sim::{Articulation, Hexapod, HexapodSettings, Placement, WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
-use glam::DAffine3;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -49,6 +51,32 @@ pub struct WalkOutcome {
     pub failure: Option<String>,
 }
 
+/// The walker following its velocity commands, watched for divergence.
+struct Walking {
+    walker: Walker,
+    commands: CommandSchedule,
+    watchdog: Watchdog,
+}
+
+impl Stepper for Walking {
+    type Sample = WalkSample;
+    type World = Walker;
+
+    fn step(&mut self) -> WalkSample {
+        let command = self.commands.at(self.walker.gait_time().max(0.0));
+        self.walker.set_command(command);
+        self.walker.step()
+    }
+
+    fn world(&self) -> &Walker {
+        &self.walker
+    }
+
+    fn diverged(&self, sample: &WalkSample) -> Option<String> {
+        self.watchdog.check_walk(&sample.robot)
+    }
+}
+
 impl WalkRun {
     /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
     /// (every command builds its runs from a scenario).
@@ -79,103 +107,61 @@ impl WalkRun {
         let mut walker = Walker::new(hexapod, controller, self.commands.at(0.0), self.settle_time);
         walker.terrain_following = self.terrain_following;
         let every = decimation(self.log_rate, dt);
-        let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass());
-        let recorder = match &self.record {
-            Some(path) => {
-                let name = match self.settings.articulation {
-                    Articulation::Multibody => {
-                        format!("{} on {}", self.gait.name, self.terrain_name)
-                    }
-                    Articulation::Impulse => format!(
-                        "{} on {} (impulse joints)",
-                        self.gait.name, self.terrain_name
-                    ),
-                };
-                let recorder = HexapodRecorder::create(
-                    path,
-                    name,
-                    dt,
-                    &self.terrain,
-                    &self.robot,
-                    every,
-                    self.settings.articulation == Articulation::Impulse,
-                )?;
-                let robot = self.robot.clone();
-                Some(Background::spawn(
-                    recorder,
-                    move |r, (sample, frames): (WalkSample, Vec<DAffine3>)| {
-                        r.observe_with(&sample, &robot, &frames)
-                    },
-                    HexapodRecorder::finish,
-                ))
-            }
-            None => None,
-        };
-        let mut trajectory = match &self.trajectory {
-            Some(path) => Some(HexapodTrajectory::create(path, &self.robot, every)?),
-            None => None,
-        };
+
+        let mut observers: Vec<Box<dyn Observer<WalkSample, Walker>>> = Vec::new();
+        if let Some(path) = &self.record {
+            let name = match self.settings.articulation {
+                Articulation::Multibody => format!("{} on {}", self.gait.name, self.terrain_name),
+                Articulation::Impulse => format!(
+                    "{} on {} (impulse joints)",
+                    self.gait.name, self.terrain_name
+                ),
+            };
+            let recorder = HexapodRecorder::create(
+                path,
+                name,
+                dt,
+                &self.terrain,
+                &self.robot,
+                every,
+                self.settings.articulation == Articulation::Impulse,
+            )?;
+            observers.push(Box::new(recorder.in_background(self.robot.clone())));
+        }
+        if let Some(path) = &self.trajectory {
+            observers.push(Box::new(HexapodTrajectory::create(
+                path,
+                &self.robot,
+                every,
+            )?));
+        }
+        if let Some(progress) = self.progress {
+            observers.push(Box::new(Progress::new(progress)));
+        }
+        // last: its file is written once the others are complete
+        let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass(), self.metrics.clone());
+
         let steps = ((self.settle_time + self.duration) / dt).round() as u64;
-        let watchdog = super::watchdog::Watchdog::walk(
-            &self.robot,
-            self.contact.normal,
-            dt,
-            crate::sim::STANDARD_GRAVITY,
-        );
-        let started = std::time::Instant::now();
-        let mut complete = true;
-        let mut failure = None;
-        for k in 0..steps {
-            if super::interrupted() {
-                complete = false;
-                break;
-            }
-            walker.set_command(self.commands.at(walker.gait_time().max(0.0)));
-            let sample = walker.step();
-            if let Some(message) = watchdog.check_walk(&sample.robot) {
-                complete = false;
-                failure = Some(message);
-                // the diverged step is still observed: the recording shows where it went wrong
-                let _ = metrics.observe(&sample);
-                if let Some(t) = trajectory.as_mut() {
-                    let _ = t.observe(&sample);
-                }
-                break;
-            }
-            metrics.observe(&sample)?;
-            if let Some(r) = &recorder
-                && sample.robot.step.is_multiple_of(every)
-                && r.send((sample.clone(), walker.hexapod().link_frames()))
-                    .is_err()
-            {
-                break; // the writer failed: `finish` below reports why
-            }
-            if let Some(t) = trajectory.as_mut() {
-                t.observe(&sample)?;
-            }
-            if let Some(progress) = &self.progress
-                && k % 256 == 255
-            {
-                progress(k + 1);
-            }
-        }
-        let elapsed = started.elapsed().as_secs_f64();
-        metrics.complete = complete;
-        metrics.set_clamped(walker.clamped_steps);
-        let mut written = Vec::new();
-        if let Some(r) = recorder {
-            written.push(r.finish()?);
-        }
-        if let Some(t) = trajectory {
-            written.push(t.finish()?);
-        }
-        super::conclude(&mut written, self.metrics.as_deref(), &metrics)?;
+        let mut walking = Walking {
+            walker,
+            commands: self.commands,
+            watchdog: Watchdog::walk(
+                &self.robot,
+                self.contact.normal,
+                dt,
+                crate::sim::STANDARD_GRAVITY,
+            ),
+        };
+        let mut list: Vec<&mut dyn Observer<WalkSample, Walker>> =
+            observers.iter_mut().map(|o| o.as_mut() as _).collect();
+        list.push(&mut metrics);
+        let end = step_loop::run(&mut walking, steps, &mut list)?;
         Ok(WalkOutcome {
-            steps_per_second: metrics.steps as f64 / elapsed.max(1e-9),
-            physics_seconds: walker.hexapod().physics_seconds(),
+            steps_per_second: end.steps as f64 / end.seconds.max(1e-9),
+            physics_seconds: walking.walker.hexapod().physics_seconds(),
             metrics,
-            written,
-            failure,
+            written: end.written,
+            failure: end.failure,
         })
     }
 }

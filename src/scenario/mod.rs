@@ -542,11 +542,9 @@ impl Scenario {
                     log_rate: spec.record.log_rate.unwrap_or(100.0),
                     trajectory: outputs.trajectory,
                     metrics: outputs.metrics,
+                    progress: outputs.progress,
                 };
                 let o = run.execute()?;
-                if let Some(progress) = &outputs.progress {
-                    progress(o.metrics.steps);
-                }
                 (
                     Metrics::Ball(o.metrics),
                     o.steps_per_second,

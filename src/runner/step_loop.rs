@@ -1,0 +1,248 @@
+//! The one step loop every run goes through: step the simulation, check it has not left physics
+//! (the watchdog), hand the sample to the observers; stop early on divergence, on an observer's
+//! error or when interrupted, and finish every observer either way, so each file holds the run as
+//! far as it went.
+
+use crate::record::Observer;
+use anyhow::Result;
+use std::path::PathBuf;
+
+/// A simulation the loop can drive.
+pub trait Stepper {
+    type Sample: crate::record::Sample;
+    /// What observers may read besides the sample (e.g. the walker, for the links' poses).
+    type World: ?Sized;
+
+    /// The state before the first step, if the observers should see it (the ball's drop).
+    fn initial(&self) -> Option<Self::Sample> {
+        None
+    }
+
+    fn step(&mut self) -> Self::Sample;
+
+    fn world(&self) -> &Self::World;
+
+    /// Why `sample` is not physical, if it is not: what, where and the likely cause (see
+    /// [`super::watchdog`]).
+    fn diverged(&self, sample: &Self::Sample) -> Option<String>;
+}
+
+/// How the loop ended.
+pub struct LoopEnd {
+    /// False when the run stopped early (interrupted or diverged).
+    pub complete: bool,
+    /// What diverged, if the run did.
+    pub failure: Option<String>,
+    /// Steps taken.
+    pub steps: u64,
+    /// Wall-clock seconds of the stepping (observers included, their finishing not).
+    pub seconds: f64,
+    /// Every file the observers wrote, in their order.
+    pub written: Vec<PathBuf>,
+}
+
+/// Takes up to `steps` steps, each observed by every observer in order, then finishes them in
+/// that order. An observer's error stops the run; it is returned (naming the files still written)
+/// after every observer has been finished.
+pub fn run<T: Stepper>(
+    stepper: &mut T,
+    steps: u64,
+    observers: &mut [&mut dyn Observer<T::Sample, T::World>],
+) -> Result<LoopEnd> {
+    fn observe<T: Stepper>(
+        observers: &mut [&mut dyn Observer<T::Sample, T::World>],
+        sample: &T::Sample,
+        world: &T::World,
+    ) -> Result<()> {
+        observers
+            .iter_mut()
+            .try_for_each(|o| o.observe(sample, world))
+    }
+    let mut error = match stepper.initial() {
+        Some(initial) => observe::<T>(observers, &initial, stepper.world()).err(),
+        None => None,
+    };
+    let started = std::time::Instant::now();
+    let mut failure = None;
+    let mut taken = 0;
+    while error.is_none() && taken < steps && !super::interrupted() {
+        let sample = stepper.step();
+        taken += 1;
+        if let Some(message) = stepper.diverged(&sample) {
+            // the diverged step is still observed: the files show where it went wrong
+            let _ = observe::<T>(observers, &sample, stepper.world());
+            failure = Some(message);
+            break;
+        }
+        error = observe::<T>(observers, &sample, stepper.world()).err();
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let complete = taken == steps && failure.is_none() && error.is_none();
+    let mut written = Vec::new();
+    let mut finish_error = None;
+    for observer in observers.iter_mut() {
+        match observer.finish(complete) {
+            Ok(file) => written.extend(file),
+            Err(e) => {
+                finish_error.get_or_insert(e);
+            }
+        }
+    }
+    // a writer's own error says more than the observe error it caused ("the writer stopped")
+    if let Some(e) = finish_error.or(error) {
+        return Err(super::failure_error(&format!("{e:#}"), &written));
+    }
+    Ok(LoopEnd {
+        complete,
+        failure,
+        steps: taken,
+        seconds,
+        written,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::Sample;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    struct Count(u64);
+
+    impl Sample for Count {
+        fn step(&self) -> u64 {
+            self.0
+        }
+    }
+
+    /// Counts up; "diverges" at `diverge_at`.
+    struct Counter {
+        n: u64,
+        diverge_at: u64,
+        initial: bool,
+    }
+
+    impl Stepper for Counter {
+        type Sample = Count;
+        type World = ();
+        fn initial(&self) -> Option<Count> {
+            self.initial.then_some(Count(0))
+        }
+        fn step(&mut self) -> Count {
+            self.n += 1;
+            Count(self.n)
+        }
+        fn world(&self) -> &() {
+            &()
+        }
+        fn diverged(&self, s: &Count) -> Option<String> {
+            (s.0 == self.diverge_at).then(|| format!("diverged at {}", s.0))
+        }
+    }
+
+    /// Logs what it saw into a shared list; fails at `fail_at`.
+    struct Log {
+        name: &'static str,
+        seen: Rc<RefCell<Vec<String>>>,
+        fail_at: Option<u64>,
+    }
+
+    impl Observer<Count, ()> for Log {
+        fn observe(&mut self, s: &Count, _: &()) -> Result<()> {
+            self.seen
+                .borrow_mut()
+                .push(format!("{} {}", self.name, s.0));
+            if self.fail_at == Some(s.0) {
+                anyhow::bail!("{} cannot write", self.name);
+            }
+            Ok(())
+        }
+        fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
+            self.seen
+                .borrow_mut()
+                .push(format!("{} finished {complete}", self.name));
+            Ok(Some(PathBuf::from(self.name)))
+        }
+    }
+
+    fn logs(seen: &Rc<RefCell<Vec<String>>>, fail_at: Option<u64>) -> (Log, Log) {
+        let log = |name| Log {
+            name,
+            seen: seen.clone(),
+            fail_at: None,
+        };
+        (
+            log("a"),
+            Log {
+                fail_at,
+                ..log("b")
+            },
+        )
+    }
+
+    #[test]
+    fn a_complete_run_observes_every_step_in_order_then_finishes_each() {
+        let seen = Rc::new(RefCell::new(Vec::new()));
+        let (mut a, mut b) = logs(&seen, None);
+        let mut counter = Counter {
+            n: 0,
+            diverge_at: 0,
+            initial: true,
+        };
+        let end = run(&mut counter, 2, &mut [&mut a, &mut b]).unwrap();
+        assert!(end.complete && end.failure.is_none());
+        assert_eq!(end.steps, 2);
+        assert_eq!(end.written, [PathBuf::from("a"), PathBuf::from("b")]);
+        let expected = ["a 0", "b 0", "a 1", "b 1", "a 2", "b 2"];
+        let mut expected: Vec<String> = expected.map(String::from).to_vec();
+        expected.extend(["a finished true".into(), "b finished true".into()]);
+        assert_eq!(*seen.borrow(), expected);
+    }
+
+    #[test]
+    fn the_diverged_step_is_observed_and_every_file_finished_incomplete() {
+        let seen = Rc::new(RefCell::new(Vec::new()));
+        let (mut a, mut b) = logs(&seen, None);
+        let mut counter = Counter {
+            n: 0,
+            diverge_at: 3,
+            initial: false,
+        };
+        let end = run(&mut counter, 10, &mut [&mut a, &mut b]).unwrap();
+        assert!(!end.complete);
+        assert_eq!(end.failure.as_deref(), Some("diverged at 3"));
+        assert_eq!(end.steps, 3);
+        let seen = seen.borrow();
+        assert_eq!(
+            seen[4..],
+            ["a 3", "b 3", "a finished false", "b finished false"]
+        );
+    }
+
+    #[test]
+    fn an_observer_error_stops_the_run_finishes_the_others_and_names_their_files() {
+        let seen = Rc::new(RefCell::new(Vec::new()));
+        let (mut a, mut b) = logs(&seen, Some(2));
+        let mut counter = Counter {
+            n: 0,
+            diverge_at: 0,
+            initial: false,
+        };
+        let error = run(&mut counter, 10, &mut [&mut a, &mut b])
+            .err()
+            .expect("b's error is the run's");
+        let message = format!("{error:#}");
+        assert!(message.contains("b cannot write"), "{message}");
+        assert!(message.contains("files written: a, b"), "{message}");
+        let seen = seen.borrow();
+        assert_eq!(
+            seen[seen.len() - 2..],
+            ["a finished false", "b finished false"]
+        );
+        assert!(
+            !seen.contains(&"a 3".to_string()),
+            "stepped on after the error"
+        );
+    }
+}
