@@ -5,6 +5,7 @@ pub mod batch;
 pub mod bench;
 pub mod contact;
 pub mod gait;
+pub mod metrics;
 pub mod record;
 pub mod robot;
 pub mod runner;

@@ -403,10 +403,10 @@ fn run_one(
 pub fn describe_check(c: &scenario::Check) -> String {
     match (c.value, c.limit) {
         (Some(v), Some(l)) => {
-            let op = if c.expectation.ends_with("_min") || c.expectation.contains("_min_") {
-                "<"
-            } else {
-                ">"
+            // the value is on the wrong side of its limit
+            let op = match c.side {
+                Some(crate::metrics::Side::Min) => "<",
+                _ => ">",
             };
             format!("{}: {} {op} {}", c.expectation, round(v), l)
         }

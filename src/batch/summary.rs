@@ -3,11 +3,15 @@
 use super::baseline::Regression;
 use super::results::{Record, Status};
 use super::status_word;
+use crate::metrics::{self, HexapodMetrics, Metric, Side, walk};
+use crate::scenario::Kind;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
-fn metric(r: &Record, name: &str) -> Option<f64> {
-    r.metrics.get(name).and_then(|v| v.as_f64())
+/// A walk's metric from a result (none for a ball, or a result without metrics).
+fn walk_metric(r: &Record, metric: &Metric<HexapodMetrics>) -> Option<f64> {
+    let m: HexapodMetrics = metrics::from_json(&r.metrics)?;
+    (metric.value)(&m).bounded(Side::Max)
 }
 
 fn cell(v: Option<f64>, scale: f64, digits: usize) -> String {
@@ -39,9 +43,16 @@ pub fn table(
             "status", "scenario", "wall s", "steps/s", "dist m", "tilt°", "pen mm"
         );
         for r in shown {
-            let tilt = match (metric(r, "max_roll_deg"), metric(r, "max_pitch_deg")) {
-                (Some(a), Some(b)) => Some(a.max(b)),
-                _ => None,
+            let walk = |metric| {
+                (r.kind == Kind::Walk)
+                    .then(|| walk_metric(r, metric))
+                    .flatten()
+            };
+            // a ball's penetration too
+            let penetration = match r.kind {
+                Kind::Walk => walk(&walk::MAX_PENETRATION),
+                Kind::Ball => metrics::from_json::<metrics::BallMetrics>(&r.metrics)
+                    .map(|m| m.max_penetration),
             };
             let mut notes = r.message.clone().unwrap_or_default();
             let mut status = status_word(r.status).to_string();
@@ -61,9 +72,9 @@ pub fn table(
                 r.name,
                 r.wall_time_s,
                 r.steps_per_second,
-                cell(metric(r, "distance"), 1.0, 3),
-                cell(tilt, 1.0, 1),
-                cell(metric(r, "max_penetration"), 1e3, 2),
+                cell(walk(&walk::DISTANCE), 1.0, 3),
+                cell(walk(&walk::TILT), 1.0, 1),
+                cell(penetration, 1e3, 2),
             );
         }
         out.push('\n');

@@ -1,4 +1,5 @@
-//! Observers for the ball experiment: rerun recording, trajectory CSV, summary metrics.
+//! Observers for the ball experiment: rerun recording and trajectory CSV (its metrics:
+//! `crate::metrics`).
 
 use super::Observer;
 use super::background::Background;
@@ -9,7 +10,6 @@ use super::table::CsvTable;
 use crate::sim::{BallConfig, BallSample};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// Records the ball, its contact force, its path and time series to rerun, every `every` steps,
@@ -212,94 +212,5 @@ impl<W: ?Sized> Observer<BallSample, W> for BallTrajectory {
             s.total_energy(),
         ];
         self.table.row(&row)
-    }
-}
-
-/// The ball run's summary, written as JSON.
-#[derive(Debug, Clone, Serialize, Default)]
-pub struct BallMetrics {
-    /// False when the run stopped early (interrupted or diverged).
-    pub complete: bool,
-    pub steps: u64,
-    pub sim_time: f64,
-    /// Number of touch-downs (contact starts).
-    pub touchdowns: u64,
-    pub max_penetration: f64,
-    pub max_normal_force: f64,
-    pub max_speed: f64,
-    pub initial_energy: f64,
-    pub final_energy: f64,
-    /// Largest rise of total energy above its running minimum (J): the contact is passive when ~0.
-    pub max_energy_rise: f64,
-    pub final_position: [f64; 3],
-    pub final_speed: f64,
-    /// z of the ball's lowest point at the first apex after the first bounce, if there was one (on
-    /// flat ground at z = 0 the restitution is √(apex / drop height)).
-    pub first_apex_height: Option<f64>,
-    #[serde(skip)]
-    lowest_energy: f64,
-    #[serde(skip)]
-    was_in_contact: bool,
-    #[serde(skip)]
-    after_first_bounce: bool,
-    #[serde(skip)]
-    radius: f64,
-    /// Where the metrics are written as JSON when the run ends, if anywhere.
-    #[serde(skip)]
-    output: Option<PathBuf>,
-}
-
-impl BallMetrics {
-    /// Metrics of a ball of `radius` starting at `initial`; written to `output` at the end.
-    pub fn new(initial: &BallSample, radius: f64, output: Option<PathBuf>) -> Self {
-        BallMetrics {
-            output,
-            initial_energy: initial.total_energy(),
-            lowest_energy: initial.total_energy(),
-            final_energy: initial.total_energy(),
-            final_position: initial.position.to_array(),
-            radius,
-            ..Default::default()
-        }
-    }
-}
-
-impl<W: ?Sized> Observer<BallSample, W> for BallMetrics {
-    fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
-        self.complete = complete;
-        super::output::write_json(self.output.as_deref(), self)
-    }
-
-    fn observe(&mut self, s: &BallSample, _: &W) -> Result<()> {
-        self.steps = s.step;
-        self.sim_time = s.time;
-        let in_contact = s.contact.is_some();
-        if in_contact && !self.was_in_contact {
-            self.touchdowns += 1;
-        }
-        if !in_contact && self.was_in_contact && self.touchdowns == 1 {
-            self.after_first_bounce = true;
-        }
-        if self.after_first_bounce
-            && self.touchdowns == 1
-            && s.velocity.z <= 0.0
-            && self.first_apex_height.is_none()
-        {
-            self.first_apex_height = Some(s.position.z - self.radius);
-        }
-        self.was_in_contact = in_contact;
-        if let Some(c) = s.contact {
-            self.max_penetration = self.max_penetration.max(c.penetration);
-            self.max_normal_force = self.max_normal_force.max(c.normal_force);
-        }
-        let speed = s.velocity.length();
-        self.max_speed = self.max_speed.max(speed);
-        let energy = s.total_energy();
-        self.max_energy_rise = self.max_energy_rise.max(energy - self.lowest_energy);
-        self.lowest_energy = self.lowest_energy.min(energy);
-        self.final_energy = energy;
-        self.final_position = s.position.to_array();
-        self.final_speed = speed;
-        Ok(())
     }
 }

@@ -1,4 +1,4 @@
-//! Observers for a hexapod run: rerun recording, trajectory CSV, summary metrics.
+//! Observers for a hexapod run: rerun recording and trajectory CSV (its metrics: `crate::metrics`).
 
 use super::Observer;
 use super::background::Background;
@@ -11,7 +11,6 @@ use crate::sim::{WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
 use glam::{DAffine3, DQuat};
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -534,162 +533,5 @@ impl<W: ?Sized> Observer<WalkSample, W> for HexapodTrajectory {
             }
         }
         self.table.row(&row)
-    }
-}
-
-/// A hexapod run's summary, written as JSON.
-#[derive(Debug, Clone, Serialize, Default)]
-pub struct HexapodMetrics {
-    /// False when the run stopped early (interrupted or diverged).
-    pub complete: bool,
-    pub steps: u64,
-    pub sim_time: f64,
-    /// Seconds walked (after settling).
-    pub walk_time: f64,
-    /// Body displacement over the walk along the starting heading, across it, and in total (m).
-    pub forward_distance: f64,
-    pub sideways_distance: f64,
-    pub distance: f64,
-    pub mean_speed: f64,
-    pub heading_change_deg: f64,
-    pub max_roll_deg: f64,
-    pub max_pitch_deg: f64,
-    pub rms_roll_deg: f64,
-    pub rms_pitch_deg: f64,
-    /// Body height above the terrain under it (m).
-    pub body_height_mean: f64,
-    pub body_height_std: f64,
-    /// Per foot: distance slid while on the ground (m).
-    pub foot_slip: [f64; 6],
-    /// Per foot: fraction of the walk on the ground.
-    pub stance_fraction: [f64; 6],
-    pub peak_normal_force: [f64; 6],
-    pub mean_normal_force: [f64; 6],
-    pub max_penetration: f64,
-    /// Mechanical work done by the servos, ∫Σ|τ·q̇| dt (J), and the cost of transport E/(m·g·d).
-    pub servo_energy: f64,
-    pub cost_of_transport: f64,
-    /// Steps in which some leg's target was out of reach and was clamped.
-    pub clamped_ik_steps: u64,
-    /// Impulse joints: the largest distance between a joint's two anchors (m) and rotation about
-    /// a locked axis (deg) over the run; zero for the multibody.
-    pub max_joint_drift: f64,
-    pub max_joint_drift_deg: f64,
-    #[serde(skip)]
-    acc: Accumulators,
-    /// Where the metrics are written as JSON when the run ends, if anywhere.
-    #[serde(skip)]
-    output: Option<PathBuf>,
-}
-
-#[derive(Debug, Clone, Default)]
-struct Accumulators {
-    start: Option<(glam::DVec3, f64)>,
-    walk_steps: u64,
-    roll2: f64,
-    pitch2: f64,
-    height: f64,
-    height2: f64,
-    yaw_prev: f64,
-    yaw_total: f64,
-    stance_steps: [u64; 6],
-    force_sum: [f64; 6],
-    dt: f64,
-    mass: f64,
-}
-
-impl HexapodMetrics {
-    /// Metrics of a walk at step `dt` of a robot of `mass`; written to `output` at the end.
-    pub fn new(dt: f64, mass: f64, output: Option<PathBuf>) -> Self {
-        HexapodMetrics {
-            acc: Accumulators {
-                dt,
-                mass,
-                ..Default::default()
-            },
-            output,
-            ..Default::default()
-        }
-    }
-}
-
-impl Observer<WalkSample, Walker> for HexapodMetrics {
-    fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
-        self.complete = complete;
-        super::output::write_json(self.output.as_deref(), self)
-    }
-
-    fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {
-        self.clamped_ik_steps = walker.clamped_steps;
-        let r = &s.robot;
-        self.steps = r.step;
-        self.sim_time = r.time;
-        self.max_joint_drift = self.max_joint_drift.max(r.joint_drift.anchor);
-        self.max_joint_drift_deg = self
-            .max_joint_drift_deg
-            .max(r.joint_drift.angle.to_degrees());
-        if s.gait.is_none() {
-            return Ok(()); // settling: not part of the walk
-        }
-        let a = &mut self.acc;
-        let (roll, pitch, yaw) = r.roll_pitch_yaw();
-        let position = r.body.translation;
-        let (start, heading) = *a.start.get_or_insert((position, yaw));
-        if a.walk_steps == 0 {
-            a.yaw_prev = yaw;
-        }
-        a.walk_steps += 1;
-        let dt = a.dt;
-        // unwrap the yaw so turning several times is counted
-        let mut dyaw = yaw - a.yaw_prev;
-        dyaw -= (dyaw / std::f64::consts::TAU).round() * std::f64::consts::TAU;
-        a.yaw_total += dyaw;
-        a.yaw_prev = yaw;
-        let moved = position - start;
-        let (s_h, c_h) = heading.sin_cos();
-        self.forward_distance = moved.x * c_h + moved.y * s_h;
-        self.sideways_distance = -moved.x * s_h + moved.y * c_h;
-        self.distance = moved.truncate().length();
-        self.walk_time = a.walk_steps as f64 * dt;
-        self.mean_speed = self.distance / self.walk_time;
-        self.heading_change_deg = a.yaw_total.to_degrees();
-        self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
-        self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
-        a.roll2 += roll * roll;
-        a.pitch2 += pitch * pitch;
-        let n = a.walk_steps as f64;
-        self.rms_roll_deg = (a.roll2 / n).sqrt().to_degrees();
-        self.rms_pitch_deg = (a.pitch2 / n).sqrt().to_degrees();
-        a.height += r.body_height;
-        a.height2 += r.body_height * r.body_height;
-        self.body_height_mean = a.height / n;
-        self.body_height_std = (a.height2 / n - self.body_height_mean.powi(2))
-            .max(0.0)
-            .sqrt();
-        for (k, c) in r.foot_contacts.iter().enumerate() {
-            if let Some(c) = c {
-                a.stance_steps[k] += 1;
-                a.force_sum[k] += c.normal_force;
-                self.foot_slip[k] += c.slip.length() * dt;
-                self.peak_normal_force[k] = self.peak_normal_force[k].max(c.normal_force);
-                self.max_penetration = self.max_penetration.max(c.penetration);
-            }
-            self.stance_fraction[k] = a.stance_steps[k] as f64 / n;
-            self.mean_normal_force[k] = a.force_sum[k] / n;
-        }
-        let power: f64 = r
-            .joint_torques
-            .iter()
-            .zip(&r.joint_velocities)
-            .map(|(t, v)| (t * v).abs())
-            .sum();
-        self.servo_energy += power * dt;
-        let weight_distance = a.mass * crate::sim::STANDARD_GRAVITY * self.distance;
-        self.cost_of_transport = if weight_distance > 0.0 {
-            self.servo_energy / weight_distance
-        } else {
-            0.0
-        };
-        Ok(())
     }
 }

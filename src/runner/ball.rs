@@ -3,7 +3,8 @@
 use super::step_loop::{self, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
-use crate::record::ball::{BallMetrics, BallRecorder, BallTrajectory};
+use crate::metrics::BallMetrics;
+use crate::record::ball::{BallRecorder, BallTrajectory};
 use crate::record::output::check_writable;
 use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};

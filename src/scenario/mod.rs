@@ -7,7 +7,8 @@ pub mod expect;
 pub mod spec;
 pub mod sweep;
 
-pub use expect::{Check, Metrics};
+pub use crate::metrics::Metrics;
+pub use expect::Check;
 pub use spec::{FileOr, Kind, ScenarioSpec};
 
 use crate::gait::{CommandChange, CommandSchedule, GaitSpec, VelocityCommand};
@@ -554,10 +555,7 @@ impl Scenario {
                 )
             }
         };
-        let steps = match &metrics {
-            Metrics::Walk(m) => m.steps,
-            Metrics::Ball(m) => m.steps,
-        };
+        let steps = metrics.steps();
         let checks = spec.expect.check(&metrics, failure.is_some());
         Ok(Report {
             metrics,

@@ -363,70 +363,58 @@ pub struct RecordSpec {
     pub log_rate: Option<f64>,
 }
 
-/// What the run must achieve. Unset expectations are not checked, except `no_divergence`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+/// What the run must achieve: `no_divergence` (default true), `no_clamped_ik`, and bounds on the
+/// metrics, `KEY = limit`, with the keys of the metrics tables (`crate::metrics::walk::TABLE`,
+/// `crate::metrics::ball::TABLE`: e.g. `distance_min`, `max_tilt_deg`, `apex_max`). Unset
+/// expectations are not checked; keys are checked against the tables when the scenario resolves.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Expectations {
     /// The run must not diverge (non-finite state).
     pub no_divergence: bool,
-    /// Deepest penetration of any foot (or the ball), mm.
-    pub max_penetration_mm: Option<f64>,
-    // walk
-    /// Body distance covered, m.
-    pub distance_min: Option<f64>,
-    pub distance_max: Option<f64>,
-    /// Distance along the starting heading, m.
-    pub forward_min: Option<f64>,
-    /// |distance across the starting heading|, m.
-    pub sideways_max: Option<f64>,
-    /// Mean speed over the walk, m/s.
-    pub speed_min: Option<f64>,
-    /// Signed heading change (left positive), degrees.
-    pub heading_change_min_deg: Option<f64>,
-    pub heading_change_max_deg: Option<f64>,
-    /// Largest |roll| or |pitch| of the body, degrees.
-    pub max_tilt_deg: Option<f64>,
-    /// Largest distance any foot slid while on the ground, mm.
-    pub max_foot_slip_mm: Option<f64>,
-    /// Mean body height above the terrain under it, m.
-    pub body_height_min: Option<f64>,
-    pub body_height_max: Option<f64>,
-    pub cost_of_transport_max: Option<f64>,
     /// No leg target out of reach.
     pub no_clamped_ik: bool,
-    // ball
-    pub touchdowns_min: Option<f64>,
-    /// Largest rise of the ball's total energy, J (the contact is passive when ≈ 0).
-    pub max_energy_rise_j: Option<f64>,
-    pub final_speed_max: Option<f64>,
-    /// Height of the lowest point at the first apex after the first bounce, m.
-    pub apex_min: Option<f64>,
-    pub apex_max: Option<f64>,
+    /// Each bound's limit, by its key.
+    #[serde(flatten)]
+    pub bounds: BTreeMap<String, f64>,
+}
+
+impl<'de> Deserialize<'de> for Expectations {
+    /// By hand, so that a wrong value names its key (`expect.distance_min: expected a number`).
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let table = toml::Table::deserialize(d)?;
+        let mut expect = Expectations::default();
+        for (key, value) in table {
+            match (key.as_str(), value) {
+                ("no_divergence", toml::Value::Boolean(b)) => expect.no_divergence = b,
+                ("no_clamped_ik", toml::Value::Boolean(b)) => expect.no_clamped_ik = b,
+                ("no_divergence" | "no_clamped_ik", other) => {
+                    return Err(D::Error::custom(format!(
+                        "expect.{key}: expected true or false, got {other}"
+                    )));
+                }
+                (_, toml::Value::Float(v)) => {
+                    expect.bounds.insert(key, v);
+                }
+                (_, toml::Value::Integer(v)) => {
+                    expect.bounds.insert(key, v as f64);
+                }
+                (_, other) => {
+                    return Err(D::Error::custom(format!(
+                        "expect.{key}: expected a number (the limit), got {other}"
+                    )));
+                }
+            }
+        }
+        Ok(expect)
+    }
 }
 
 impl Default for Expectations {
     fn default() -> Self {
         Expectations {
             no_divergence: true,
-            max_penetration_mm: None,
-            distance_min: None,
-            distance_max: None,
-            forward_min: None,
-            sideways_max: None,
-            speed_min: None,
-            heading_change_min_deg: None,
-            heading_change_max_deg: None,
-            max_tilt_deg: None,
-            max_foot_slip_mm: None,
-            body_height_min: None,
-            body_height_max: None,
-            cost_of_transport_max: None,
             no_clamped_ik: false,
-            touchdowns_min: None,
-            max_energy_rise_j: None,
-            final_speed_max: None,
-            apex_min: None,
-            apex_max: None,
+            bounds: BTreeMap::new(),
         }
     }
 }
