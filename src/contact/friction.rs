@@ -29,10 +29,8 @@
 //! friction on a light foot does at once). That limit only ever removes energy.
 
 use glam::DVec2;
-use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FrictionLaw {
     /// No friction (the paper's non-slip ball needs none; a frictionless check needs it).
     None,

@@ -21,17 +21,12 @@ pub use normal::{NormalLaw, exact_decay_factor};
 
 use crate::terrain::{GroundFrame, Orientation};
 use glam::{DMat2, DMat3, DVec2, DVec3};
-use serde::{Deserialize, Serialize};
 
 /// The contact model's parameters: normal law, friction law, and how the ground's orientation is found.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactModel {
-    #[serde(default)]
     pub normal: NormalLaw,
-    #[serde(default)]
     pub friction: FrictionLaw,
-    #[serde(default)]
     pub orientation: Orientation,
 }
 

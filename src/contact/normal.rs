@@ -10,11 +10,8 @@
 //! energy out: passive) however light the body. The spring stays explicit; semi-implicit Euler keeps
 //! it stable while √(k/m)·h < 2, which [`NormalLaw::stable_time_step`] reports.
 
-use serde::{Deserialize, Serialize};
-
 /// A normal force law on the penetration x ≥ 0 and its rate ẋ (positive when sinking in).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NormalLaw {
     /// F = k·x + c·ẋ, clamped at ≥ 0 (the ground pushes, never pulls).
     SpringDamper { stiffness: f64, damping: f64 },

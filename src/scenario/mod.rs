@@ -11,6 +11,7 @@ pub use crate::metrics::Metrics;
 pub use expect::Check;
 pub use spec::{FileOr, Kind, ScenarioSpec};
 
+use crate::contact::ContactModel;
 use crate::gait::{CommandChange, CommandSchedule, GaitSpec, VelocityCommand};
 use crate::robot::RobotModel;
 use crate::runner::ball::BallRun;
@@ -20,6 +21,7 @@ use crate::sim::{
 };
 use crate::terrain::{HeightGrid, Source, TerrainSpec};
 use sha2::{Digest, Sha256};
+use spec::{BALL_LOG_RATE, DEFAULT_SETTLE, START_INSET, WALK_LOG_RATE};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -56,6 +58,9 @@ pub struct Scenario {
     /// What is doubtful but allowed (a missing visual mesh, a gait that lifts too many feet).
     pub warnings: Vec<String>,
     terrain: TerrainSource,
+    /// Every setting typed, with its default applied: what `run` runs.
+    contact: ContactModel,
+    log_rate: f64,
     setup: Setup,
 }
 
@@ -75,6 +80,24 @@ struct WalkSetup {
     robot: Arc<RobotModel>,
     gait: GaitSpec,
     commands: CommandSchedule,
+    settings: HexapodSettings,
+    settle: f64,
+    follow_terrain: bool,
+    start: spec::StartSpec,
+}
+
+impl WalkSetup {
+    /// Where the body starts on `grid`: as set, else [`START_INSET`] inside its −x edge, centred
+    /// in y.
+    fn placement(&self, grid: &HeightGrid) -> Placement {
+        let [x_min, _] = grid.x_range();
+        let [y_min, y_max] = grid.y_range();
+        Placement {
+            x: self.start.x.unwrap_or(x_min + START_INSET),
+            y: self.start.y.unwrap_or(0.5 * (y_min + y_max)),
+            yaw: self.start.heading_deg.to_radians(),
+        }
+    }
 }
 
 /// Files a run writes besides its results.
@@ -352,7 +375,7 @@ impl Scenario {
                         )));
                     }
                 }
-                let settle = spec.settle.unwrap_or(1.0);
+                let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
                 if !(settle.is_finite() && settle >= 0.0) {
                     return Err(fail(format!(
                         "settle: expected a finite number ≥ 0 s, got {settle}"
@@ -410,6 +433,21 @@ impl Scenario {
                     robot: Arc::new(robot),
                     gait,
                     commands,
+                    settings: HexapodSettings {
+                        articulation: spec.articulation.unwrap_or_default(),
+                        dt: spec.dt,
+                        solver_iterations: spec
+                            .solver_iterations
+                            .unwrap_or(DEFAULT_SOLVER_ITERATIONS),
+                        pgs_iterations: spec.pgs_iterations,
+                        gains: ServoGains {
+                            stiffness: servo.stiffness,
+                            damping: servo.damping,
+                        },
+                    },
+                    settle,
+                    follow_terrain: spec.follow_terrain.unwrap_or(false),
+                    start: spec.start.unwrap_or_default(),
                 }))
             }
         };
@@ -417,6 +455,10 @@ impl Scenario {
             .iter()
             .map(|b| format!("{b:02x}"))
             .collect();
+        let log_rate = spec.record.log_rate.unwrap_or(match spec.kind {
+            Kind::Walk => WALK_LOG_RATE,
+            Kind::Ball => BALL_LOG_RATE,
+        });
         Ok(Scenario {
             name,
             file: origin.to_path_buf(),
@@ -425,6 +467,8 @@ impl Scenario {
             seed,
             warnings,
             terrain,
+            contact,
+            log_rate,
             setup,
         })
     }
@@ -456,9 +500,9 @@ impl Scenario {
 
     /// Steps the run will take.
     pub fn total_steps(&self) -> u64 {
-        let time = match self.spec.kind {
-            Kind::Walk => self.spec.settle.unwrap_or(1.0) + self.spec.duration,
-            Kind::Ball => self.spec.duration,
+        let time = match &self.setup {
+            Setup::Walk(w) => w.settle + self.spec.duration,
+            Setup::Ball(_) => self.spec.duration,
         };
         (time / self.spec.dt).round() as u64
     }
@@ -482,40 +526,20 @@ impl Scenario {
         let started = std::time::Instant::now();
         let (metrics, steps_per_second, physics_seconds, failure, written) = match &self.setup {
             Setup::Walk(w) => {
-                let [x_min, _] = grid.x_range();
-                let [y_min, y_max] = grid.y_range();
-                let start = spec.start.unwrap_or_default();
-                let placement = Placement {
-                    x: start.x.unwrap_or(x_min + 0.75),
-                    y: start.y.unwrap_or(0.5 * (y_min + y_max)),
-                    yaw: start.heading_deg.to_radians(),
-                };
-                let servo = spec.servo.unwrap_or_default();
                 let run = WalkRun {
                     robot: w.robot.clone(),
+                    placement: w.placement(&grid),
                     terrain: grid,
                     terrain_name: self.terrain.name.clone(),
                     gait: w.gait.clone(),
                     commands: w.commands.clone(),
-                    contact: spec.contact.model(),
-                    settings: HexapodSettings {
-                        articulation: spec.articulation.unwrap_or_default(),
-                        dt: spec.dt,
-                        solver_iterations: spec
-                            .solver_iterations
-                            .unwrap_or(DEFAULT_SOLVER_ITERATIONS),
-                        pgs_iterations: spec.pgs_iterations,
-                        gains: ServoGains {
-                            stiffness: servo.stiffness,
-                            damping: servo.damping,
-                        },
-                    },
-                    placement,
-                    settle_time: spec.settle.unwrap_or(1.0),
-                    terrain_following: spec.follow_terrain.unwrap_or(false),
+                    contact: self.contact,
+                    settings: w.settings,
+                    settle_time: w.settle,
+                    terrain_following: w.follow_terrain,
                     duration: spec.duration,
                     record: outputs.record,
-                    log_rate: spec.record.log_rate.unwrap_or(50.0),
+                    log_rate: self.log_rate,
                     trajectory: outputs.trajectory,
                     metrics: outputs.metrics,
                     progress: outputs.progress,
@@ -536,11 +560,11 @@ impl Scenario {
                     ball: config,
                     terrain: grid,
                     terrain_name: self.terrain.name.clone(),
-                    contact: spec.contact.model(),
+                    contact: self.contact,
                     dt: spec.dt,
                     duration: spec.duration,
                     record: outputs.record,
-                    log_rate: spec.record.log_rate.unwrap_or(100.0),
+                    log_rate: self.log_rate,
                     trajectory: outputs.trajectory,
                     metrics: outputs.metrics,
                     progress: outputs.progress,

@@ -105,7 +105,7 @@ pub struct ScenarioSpec {
     /// Default: gaits/tripod.toml (built in).
     #[serde(default)]
     pub gait: Option<FileOr<crate::gait::GaitSpec>>,
-    /// Seconds standing before the gait starts (default 1).
+    /// Seconds standing before the gait starts (default [`DEFAULT_SETTLE`]).
     #[serde(default)]
     pub settle: Option<f64>,
     /// Keep the body level by following the terrain under the feet (default false).
@@ -141,10 +141,22 @@ pub struct ScenarioSpec {
 }
 
 fn default_dt() -> f64 {
-    1e-3
+    DEFAULT_DT
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+/// The defaults of unset fields, in one place (the command line's options take theirs from here).
+/// Time step (s).
+pub const DEFAULT_DT: f64 = 1e-3;
+/// Seconds a walk stands before the gait starts.
+pub const DEFAULT_SETTLE: f64 = 1.0;
+/// Samples per second in a walk's recording and trajectory.
+pub const WALK_LOG_RATE: f64 = 50.0;
+/// Samples per second in a ball's recording and trajectory (a bounce lasts ~10 ms).
+pub const BALL_LOG_RATE: f64 = 100.0;
+/// Metres inside the terrain's −x edge where a walk starts unless `start.x` is set.
+pub const START_INSET: f64 = 0.75;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum NormalChoice {
     /// The paper's F = k·x + c·ẋ.
@@ -154,7 +166,7 @@ pub enum NormalChoice {
     HuntCrossley,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum FrictionChoice {
     #[default]
@@ -165,7 +177,7 @@ pub enum FrictionChoice {
     None,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum OrientationChoice {
     /// The exact normal of the interpolated surface.
@@ -282,15 +294,17 @@ pub struct ServoSpec {
 }
 
 impl Default for ServoSpec {
+    /// The simulator's servo (`ServoGains::default`).
     fn default() -> Self {
+        let gains = crate::sim::ServoGains::default();
         ServoSpec {
-            stiffness: 20.0,
-            damping: 0.05,
+            stiffness: gains.stiffness,
+            damping: gains.damping,
         }
     }
 }
 
-/// Where the body starts; unset x/y: 0.75 m inside the terrain's −x edge, centred in y.
+/// Where the body starts; unset x/y: [`START_INSET`] inside the terrain's −x edge, centred in y.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StartSpec {
@@ -427,4 +441,15 @@ pub struct Tolerance {
     pub rel: Option<f64>,
     #[serde(default)]
     pub abs: Option<f64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The file's defaults are the model's: one reference contact, whichever way it is built.
+    #[test]
+    fn the_default_contact_is_the_reference_contact() {
+        assert_eq!(ContactSpec::default().model(), ContactModel::default());
+    }
 }

@@ -6,13 +6,11 @@ use crate::contact::{ContactForce, ContactModel, ContactState, EffectiveMass, sp
 use crate::terrain::HeightGrid;
 use glam::{DMat3, DVec3, Vec3};
 use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
-use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
 /// A ball's set-up. A solid sphere (I = 2/5·m·r²) unless `lock_rotation`, which makes it a
 /// non-rotating foot (a sliding block with a round sole).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BallConfig {
     pub radius: f64,
     pub mass: f64,

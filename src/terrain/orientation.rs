@@ -15,11 +15,9 @@
 
 use super::HeightGrid;
 use glam::{DMat3, DVec3};
-use serde::{Deserialize, Serialize};
 
 /// How the contact finds the ground's orientation.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Orientation {
     /// Exact normal of the interpolated surface.
     #[default]

@@ -127,8 +127,7 @@ pub(super) trait Joints: Send {
 }
 
 /// Servo gains (the reference's: 20 N·m/rad, 0.05 N·m·s/rad).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ServoGains {
     /// N·m/rad
     pub stiffness: f64,

@@ -1,0 +1,104 @@
+//! `hexsim bench`: simulated steps per second on the reference workloads.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use hexsim::sim::Articulation;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Which articulations to measure.
+    #[arg(long, value_enum, default_values_t = [Articulation::Multibody, Articulation::Impulse])]
+    articulation: Vec<Articulation>,
+    /// Seconds walked (after 1 s settling), and seconds of the ball.
+    #[arg(long, default_value_t = 20.0)]
+    duration: f64,
+    /// Threads for the batch figure. Default: all cores.
+    #[arg(short, long)]
+    jobs: Option<usize>,
+    /// Runs per figure; the median is reported, and the best beside it.
+    #[arg(long, default_value_t = 5)]
+    repeats: usize,
+    /// Also write the figures and the configuration as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+pub fn bench(args: BenchArgs) -> Result<()> {
+    if !(args.duration.is_finite() && args.duration > 0.0) {
+        anyhow::bail!("--duration: expected seconds > 0, got {}", args.duration);
+    }
+    if let Some(path) = &args.json {
+        hexsim::record::output::check_writable(path)?;
+    }
+    let options = hexsim::bench::BenchOptions {
+        articulations: args.articulation.clone(),
+        duration: args.duration,
+        threads: args
+            .jobs
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+            .max(1),
+        repeats: args.repeats,
+        scratch: std::env::temp_dir().join(format!("hexsim-bench-{}.rrd", std::process::id())),
+    };
+    for (key, value) in hexsim::bench::configuration(&options) {
+        println!("{key:>13}: {value}");
+    }
+    println!();
+    println!(
+        "{:<30} {:<10} {:>7} {:>9} {:>8} {:>12} {:>9}  notes",
+        "workload", "joints", "threads", "steps", "wall s", "steps/s", "best"
+    );
+    let report = hexsim::bench::run_bench(&options, |f| {
+        let mut notes = Vec::new();
+        if let Some(ok) = f.v13 {
+            notes.push(if ok { "V13 met" } else { "V13 NOT MET" }.to_string());
+        }
+        if let Some(d) = f.max_joint_drift {
+            notes.push(format!("joint drift ≤ {:.1} µm", d * 1e6));
+        }
+        if let (Some(share), Some(ceiling)) = (f.rapier_share, f.rapier_ceiling()) {
+            notes.push(format!(
+                "rapier's step {:.0} % (alone {ceiling:.0} steps/s)",
+                share * 100.0
+            ));
+        }
+        println!(
+            "{:<30} {:<10} {:>7} {:>9} {:>8.2} {:>12.0} {:>9.0}  {}",
+            f.workload,
+            f.articulation.as_deref().unwrap_or("-"),
+            f.threads,
+            f.steps,
+            f.wall_time,
+            f.steps_per_second,
+            f.best_steps_per_second,
+            notes.join(", ")
+        );
+    })?;
+    for a in &args.articulation {
+        let single = report
+            .figures
+            .iter()
+            .find(|f| f.workload == "walk" && f.articulation.as_deref() == Some(a.name()));
+        let batch = report.figures.iter().find(|f| {
+            f.workload.starts_with("batch") && f.articulation.as_deref() == Some(a.name())
+        });
+        if let (Some(s), Some(b)) = (single, batch) {
+            println!(
+                "{}: batch on {} threads = {:.2}× one thread",
+                a.name(),
+                b.threads,
+                b.steps_per_second / s.steps_per_second
+            );
+        }
+    }
+    println!(
+        "V1–V15 in both articulations: cargo test --release --test validation_hexapod --test validation_ball"
+    );
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

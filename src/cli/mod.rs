@@ -1,0 +1,139 @@
+//! hexsim's command line: one file per command (its clap arguments and its function), as cargo
+//! keeps its `commands/`; what they share (warnings, the progress bar, the end of a run) here.
+
+mod ball;
+mod batch;
+mod bench;
+mod contact;
+mod merge;
+mod run;
+mod terrain;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use hexsim::scenario::{Report, Scenario};
+use std::io::IsTerminal;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "hexsim",
+    version,
+    about = "Hexapod walking-robot simulator on uneven ground, built on the Burkus & Odry ground contact model",
+    long_about = "Hexapod walking-robot simulator on uneven ground, built on the Burkus & Odry ground contact \
+                  model (spring-damper normal force, exchangeable friction laws, height-grid terrain).\n\n\
+                  Without a subcommand, runs `hexsim run`: hex18 walks a tripod gait on the paper's natural terrain for 20 s \
+                  and the run is recorded to hexsim.rrd."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Walk the hexapod on a terrain with a gait and record it (the main job).
+    Run(Box<run::RunArgs>),
+    /// Drop a ball on a terrain (the paper's experiment) and record it.
+    Ball(Box<ball::BallArgs>),
+    /// Run scenario files headless in parallel and check their expectations (exit 0: all met,
+    /// 1: some failed, diverged or regressed, 2: input error, 130: interrupted).
+    Batch(Box<batch::BatchArgs>),
+    /// Measure simulated steps per second on the reference workloads (build with --release):
+    /// the walk with the recording off and on, a batch on every core, and the ball.
+    Bench(bench::BenchArgs),
+    /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
+    Merge(merge::MergeArgs),
+    /// Inspect or export terrains.
+    #[command(subcommand)]
+    Terrain(terrain::TerrainCommand),
+}
+
+impl Cli {
+    /// Runs the command (without one, `hexsim run` on its defaults). Exit codes: 0 done, 1 the
+    /// run failed (diverged, expectations not met), 2 a usage or input error, 130 interrupted.
+    pub fn execute(self) -> Result<ExitCode> {
+        match self.command {
+            None => run::run(run::RunArgs::default()),
+            Some(Command::Run(args)) => run::run(*args),
+            Some(Command::Ball(args)) => ball::ball(*args),
+            Some(Command::Batch(args)) => batch::batch(*args),
+            Some(Command::Merge(args)) => merge::merge(args).map(|()| ExitCode::SUCCESS),
+            Some(Command::Bench(args)) => bench::bench(args).map(|()| ExitCode::SUCCESS),
+            Some(Command::Terrain(command)) => {
+                terrain::terrain_command(command).map(|()| ExitCode::SUCCESS)
+            }
+        }
+    }
+}
+
+/// Prints the scenarios' warnings (a missing visual mesh, a gait with too few feet down), each
+/// once; with `strict` they are errors.
+pub(crate) fn warn_about<'a>(
+    scenarios: impl IntoIterator<Item = &'a Scenario>,
+    strict: bool,
+) -> Result<()> {
+    let warnings: std::collections::BTreeSet<&String> =
+        scenarios.into_iter().flat_map(|s| &s.warnings).collect();
+    for warning in &warnings {
+        eprintln!("{}: {warning}", if strict { "error" } else { "warning" });
+    }
+    if strict && !warnings.is_empty() {
+        anyhow::bail!(
+            "{} warning{} treated as errors (--strict); nothing was run",
+            warnings.len(),
+            if warnings.len() == 1 { "" } else { "s" }
+        );
+    }
+    Ok(())
+}
+
+/// A progress bar on a terminal, nothing otherwise.
+pub(crate) fn progress_bar(steps: u64, what: String) -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(steps);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} simulating [{bar:40}] {percent:>3}% ({eta} left) {msg}",
+            )
+            .expect("the template is valid")
+            .progress_chars("=> "),
+        );
+        bar.set_message(what);
+        bar
+    })
+}
+
+/// A command-line run has no scenario file: relative paths resolve from the working folder, and
+/// errors name the option's own file.
+pub(crate) const COMMAND_LINE: &str = "";
+
+/// Lists the files written. Exit code: 0 done, 1 diverged (the message says when, where and why),
+/// 130 interrupted (Ctrl-C, SIGTERM); the files hold the run so far either way.
+pub(crate) fn conclude(report: &Report) -> ExitCode {
+    for path in &report.written {
+        println!("  wrote {}", path.display());
+    }
+    if let Some(rrd) = report
+        .written
+        .iter()
+        .find(|p| p.extension().is_some_and(|e| e == "rrd"))
+    {
+        println!(
+            "  view it: `rerun {}` (the viewer: `pip install rerun-sdk==0.36.3`), or run with --spawn",
+            rrd.display()
+        );
+    }
+    if let Some(failure) = &report.failure {
+        eprintln!(
+            "error: {:#}",
+            hexsim::runner::failure_error(failure, &report.written)
+        );
+        ExitCode::from(1)
+    } else if !report.metrics.complete() {
+        eprintln!("interrupted: the files hold the run so far, marked incomplete");
+        ExitCode::from(130)
+    } else {
+        ExitCode::SUCCESS
+    }
+}

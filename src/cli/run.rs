@@ -1,0 +1,218 @@
+//! `hexsim run` (and hexsim without a command): the hexapod walks a gait on a terrain.
+
+use anyhow::Result;
+use clap::{Args, Parser};
+use hexsim::scenario::spec::{
+    CommandSpec, DEFAULT_DT, DEFAULT_SETTLE, RecordSpec, ServoSpec, StartSpec, WALK_LOG_RATE,
+};
+use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Scenario, ScenarioSpec};
+use hexsim::sim::Articulation;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use super::contact::ContactArgs;
+use super::{COMMAND_LINE, Cli, Command, conclude, progress_bar, warn_about};
+
+#[derive(Args)]
+pub struct RunArgs {
+    /// Robot URDF. Default: robots/hex18.urdf (built in).
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Terrain file (TOML). Default: terrains/natural.toml (built in): the paper's natural terrain,
+    /// 0.04 m peak-to-peak over 4 m × 4 m.
+    #[arg(long)]
+    terrain: Option<PathBuf>,
+    /// Gait file (TOML). Default: gaits/tripod.toml (built in).
+    #[arg(long)]
+    gait: Option<PathBuf>,
+    /// Seconds walked (after settling).
+    #[arg(long, default_value_t = 20.0)]
+    duration: f64,
+    /// Seconds standing still before the gait starts.
+    #[arg(long, default_value_t = DEFAULT_SETTLE)]
+    settle: f64,
+    /// Keep the body level on slopes: raise or lower each foot's path by the terrain under it.
+    #[arg(long)]
+    follow_terrain: bool,
+    /// Time step (s).
+    #[arg(long, default_value_t = DEFAULT_DT)]
+    dt: f64,
+    /// Forward speed (m/s). Default: the gait's nominal stride / (duty · period).
+    #[arg(long, allow_negative_numbers = true)]
+    speed: Option<f64>,
+    /// Sideways speed (m/s, left positive).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    sideways: f64,
+    /// Turn rate (deg/s, left positive).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    turn: f64,
+    /// Start position x, y of the body (m). Default: 0.75 m inside the terrain's −x edge, centred in y.
+    #[arg(long, num_args = 2, value_names = ["X", "Y"], allow_negative_numbers = true)]
+    start: Option<Vec<f64>>,
+    /// Start heading (deg).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    heading: f64,
+    /// Seed for generated terrains (natural, rough); replaces the terrain file's.
+    #[arg(long)]
+    seed: Option<u32>,
+    #[command(flatten)]
+    contact: ContactArgs,
+    /// Servo stiffness (N·m/rad).
+    #[arg(long, default_value_t = ServoSpec::default().stiffness)]
+    servo_stiffness: f64,
+    /// Servo damping (N·m·s/rad).
+    #[arg(long, default_value_t = ServoSpec::default().damping)]
+    servo_damping: f64,
+    /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
+    /// impulse joints (about 4× faster; the joints drift apart by up to ~0.4 mm)
+    #[arg(long, value_enum, default_value_t = Articulation::default())]
+    articulation: Articulation,
+    /// rapier substeps per step (each rebuilds the multibody's mass matrix).
+    #[arg(long, default_value_t = hexsim::sim::DEFAULT_SOLVER_ITERATIONS)]
+    solver_iterations: usize,
+    /// Constraint-solver sweeps per substep. Default: 1 for the multibody (it has no
+    /// constraints), 3 for impulse joints (the joints are held by the solver: with 2 the legs
+    /// shake loose)
+    #[arg(long)]
+    pgs_iterations: Option<usize>,
+    /// Recording file (.rrd) for the rerun viewer.
+    #[arg(long, default_value = "hexsim.rrd")]
+    record: PathBuf,
+    /// Do not write a recording.
+    #[arg(long)]
+    no_record: bool,
+    /// Samples per second in the recording and trajectory.
+    #[arg(long, default_value_t = WALK_LOG_RATE)]
+    log_rate: f64,
+    /// Trajectory CSV (time, body pose and velocity, joint angles/targets/torques, foot forces and contact).
+    #[arg(long)]
+    trajectory: Option<PathBuf>,
+    /// Summary metrics as JSON.
+    #[arg(long)]
+    metrics: Option<PathBuf>,
+    /// Open the recording in the rerun viewer when done.
+    #[arg(long)]
+    spawn: bool,
+    /// Run even if dt is above the contact spring's stability limit.
+    #[arg(long)]
+    allow_unstable_dt: bool,
+    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors.
+    #[arg(long)]
+    strict: bool,
+}
+
+impl Default for RunArgs {
+    fn default() -> Self {
+        let cli = Cli::parse_from(["hexsim", "run"]);
+        match cli.command {
+            Some(Command::Run(args)) => *args,
+            _ => unreachable!("`hexsim run` parses to the run command"),
+        }
+    }
+}
+
+pub fn run(args: RunArgs) -> Result<ExitCode> {
+    let spec = ScenarioSpec {
+        name: Some("run".into()),
+        description: String::new(),
+        kind: Kind::Walk,
+        terrain: args.terrain.clone().map(FileOr::File),
+        seed: args.seed,
+        duration: args.duration,
+        dt: args.dt,
+        contact: args.contact.spec(),
+        allow_unstable_dt: args.allow_unstable_dt,
+        robot: args.robot.clone(),
+        gait: args.gait.clone().map(FileOr::File),
+        settle: Some(args.settle),
+        follow_terrain: Some(args.follow_terrain),
+        articulation: Some(args.articulation),
+        solver_iterations: Some(args.solver_iterations),
+        pgs_iterations: args.pgs_iterations,
+        servo: Some(ServoSpec {
+            stiffness: args.servo_stiffness,
+            damping: args.servo_damping,
+        }),
+        start: Some(StartSpec {
+            x: args.start.as_ref().map(|v| v[0]),
+            y: args.start.as_ref().map(|v| v[1]),
+            heading_deg: args.heading,
+        }),
+        command: Some(vec![CommandSpec {
+            at: 0.0,
+            forward: args.speed,
+            sideways: args.sideways,
+            turn_deg_s: args.turn,
+            ramp: 0.0,
+        }]),
+        ball: None,
+        record: RecordSpec {
+            log_rate: Some(args.log_rate),
+            ..Default::default()
+        },
+        expect: Default::default(),
+        tolerance: Default::default(),
+    };
+    let scenario = Scenario::resolve(spec, "run".into(), Path::new(COMMAND_LINE))?;
+    warn_about([&scenario], args.strict)?;
+    let gait_name = scenario.gait().map_or(String::new(), |g| g.name.clone());
+    let terrain_name = scenario.terrain_name().to_string();
+    let bar = progress_bar(
+        scenario.total_steps(),
+        format!("{} s", args.settle + args.duration),
+    );
+    let outputs = Outputs {
+        record: (!args.no_record).then(|| args.record.clone()),
+        trajectory: args.trajectory.clone(),
+        metrics: args.metrics.clone(),
+        progress: bar
+            .clone()
+            .map(|b| Box::new(move |done: u64| b.set_position(done)) as Box<dyn Fn(u64)>),
+    };
+    let report = scenario.run(outputs);
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let report = report?;
+    let Metrics::Walk(m) = &report.metrics else {
+        unreachable!("a walk scenario reports walk metrics")
+    };
+    println!(
+        "{gait_name} ({}) on {terrain_name}: walked {:.2} s{}",
+        args.robot
+            .as_deref()
+            .map_or("hex18".into(), |p| p.display().to_string()),
+        m.walk_time,
+        if m.complete { "" } else { " (stopped early)" }
+    );
+    println!(
+        "  distance {:.3} m (forward {:.3}, sideways {:.3}), mean speed {:.4} m/s, heading change {:.2}°",
+        m.distance, m.forward_distance, m.sideways_distance, m.mean_speed, m.heading_change_deg
+    );
+    println!(
+        "  max roll {:.2}°, max pitch {:.2}°; body height {:.4} ± {:.4} m; deepest foot {:.2} mm",
+        m.max_roll_deg,
+        m.max_pitch_deg,
+        m.body_height_mean,
+        m.body_height_std,
+        m.max_penetration * 1e3
+    );
+    let slip: Vec<String> = m
+        .foot_slip
+        .iter()
+        .map(|s| format!("{:.1}", s * 1e3))
+        .collect();
+    println!("  foot slip (mm, lf lm lr rf rm rr): {}", slip.join(" "));
+    if m.clamped_ik_steps > 0 {
+        println!(
+            "  warning: {} steps had foot targets out of reach (IK clamped)",
+            m.clamped_ik_steps
+        );
+    }
+    println!("  {:.0} steps/s", report.steps_per_second);
+    let code = conclude(&report);
+    if args.spawn && !args.no_record {
+        hexsim::record::rerun::spawn_viewer(&args.record)?;
+    }
+    Ok(code)
+}

@@ -1,0 +1,78 @@
+//! `hexsim terrain`: inspect and export terrains.
+
+use anyhow::{Context, Result};
+use clap::Subcommand;
+use hexsim::terrain;
+use std::path::PathBuf;
+
+#[derive(Subcommand)]
+pub enum TerrainCommand {
+    /// Export a terrain file's surface as STL (mesh), PNG (16-bit heights) and/or CSV.
+    Export {
+        /// Terrain file (TOML).
+        terrain: PathBuf,
+        #[arg(long)]
+        stl: Option<PathBuf>,
+        #[arg(long)]
+        png: Option<PathBuf>,
+        #[arg(long)]
+        csv: Option<PathBuf>,
+    },
+    /// Print a terrain's size, resolution and height range.
+    Info { terrain: PathBuf },
+}
+
+pub fn terrain_command(command: TerrainCommand) -> Result<()> {
+    match command {
+        TerrainCommand::Export {
+            terrain,
+            stl,
+            png,
+            csv,
+        } => {
+            let grid = terrain::load(&terrain)?;
+            if stl.is_none() && png.is_none() && csv.is_none() {
+                anyhow::bail!("nothing to export: give --stl FILE, --png FILE and/or --csv FILE");
+            }
+            if let Some(path) = stl {
+                terrain::io::write_stl(&grid, &path)
+                    .with_context(|| format!("writing {}", path.display()))?;
+                println!("wrote {}", path.display());
+            }
+            if let Some(path) = png {
+                let (offset, scale) = terrain::io::write_png(&grid, &path)
+                    .with_context(|| format!("writing {}", path.display()))?;
+                let [x0, x1] = grid.x_range();
+                let [y0, y1] = grid.y_range();
+                println!(
+                    "wrote {} — to read it back: kind = \"png\", height_scale = {scale}, height_offset = {offset}, x_range = [{x0}, {x1}], y_range = [{y0}, {y1}]",
+                    path.display()
+                );
+            }
+            if let Some(path) = csv {
+                terrain::io::write_csv(&grid, &path)
+                    .with_context(|| format!("writing {}", path.display()))?;
+                println!("wrote {}", path.display());
+            }
+            Ok(())
+        }
+        TerrainCommand::Info { terrain } => {
+            let grid = terrain::load(&terrain)?;
+            let (lo, hi) = grid.height_bounds();
+            let (dx, dy) = grid.spacing();
+            println!("{}", terrain.display());
+            println!(
+                "  {} × {} samples, cell {dx:.4} × {dy:.4} m",
+                grid.cols(),
+                grid.rows()
+            );
+            println!("  x ∈ {:?}, y ∈ {:?} m", grid.x_range(), grid.y_range());
+            println!(
+                "  height ∈ [{lo:.4}, {hi:.4}] m ({:.4} m peak to peak)",
+                hi - lo
+            );
+            println!("  interpolation {:?}", grid.interpolation());
+            Ok(())
+        }
+    }
+}
