@@ -130,3 +130,200 @@ pub fn respond_jointly(
         out[i] = Some(model.finish(p(i), stops[s], dt, &mut states[i]));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::EffectiveMass;
+    use crate::terrain::GroundFrame;
+
+    const DT: f64 = 1e-3;
+
+    /// A rigid body (mass, inverse inertia about its centre of mass at the origin) and contact
+    /// points on it: W_ij = I/m − [r_i]×·I⁻¹·[r_j]× in world axes, expressed in the contacts'
+    /// ground-frame axes (t₁, t₂, n).
+    struct Body {
+        mass: f64,
+        inverse_inertia: DMat3,
+        arms: Vec<DVec3>,
+        frames: Vec<GroundFrame>,
+    }
+
+    fn cross(r: DVec3) -> DMat3 {
+        DMat3::from_cols(
+            DVec3::new(0.0, r.z, -r.y),
+            DVec3::new(-r.z, 0.0, r.x),
+            DVec3::new(r.y, -r.x, 0.0),
+        )
+    }
+
+    impl Body {
+        fn axes(&self, i: usize) -> DMat3 {
+            let f = &self.frames[i];
+            DMat3::from_cols(f.tangent_x, f.tangent_y, f.normal)
+        }
+
+        fn mobility(&self, i: usize, j: usize) -> DMat3 {
+            let world = DMat3::from_diagonal(DVec3::splat(1.0 / self.mass))
+                - cross(self.arms[i]) * self.inverse_inertia * cross(self.arms[j]);
+            self.axes(i).transpose() * world * self.axes(j)
+        }
+
+        fn geometry(&self, i: usize, penetration: f64) -> SphereGeometry {
+            SphereGeometry {
+                penetration,
+                point: self.arms[i],
+                frame: self.frames[i],
+            }
+        }
+    }
+
+    fn tilted(nx: f64, ny: f64) -> GroundFrame {
+        GroundFrame::from_normal(DVec3::new(nx, ny, 1.0).normalize())
+    }
+
+    /// A contact alone on its body gets exactly the force `ContactModel::respond` gives it with
+    /// the same effective mass, step after step, sticking and sliding (a ball: its arm is along
+    /// the normal, so the normal force does not push the contact sideways).
+    #[test]
+    fn a_lone_contact_gets_the_force_of_respond() {
+        let frame = tilted(0.2, -0.1);
+        let (m, r) = (1.0, 0.05);
+        let body = Body {
+            mass: m,
+            inverse_inertia: DMat3::from_diagonal(DVec3::splat(1.0 / (0.4 * m * r * r))),
+            arms: vec![-r * frame.normal],
+            frames: vec![frame],
+        };
+        let mass = EffectiveMass::rigid_body(m, body.inverse_inertia, body.arms[0], &frame);
+        let model = ContactModel::default();
+        let (mut alone, mut jointly) = (ContactState::default(), ContactState::default());
+        let mut sticking = [0, 0];
+        for k in 0..200 {
+            // slow enough to stick, then fast enough to slide, with the load changing
+            let speed = if k < 100 { 2e-4 } else { 0.3 };
+            let velocity = frame.to_world(DVec3::new(
+                speed * (k as f64 * 0.1).cos(),
+                speed * (k as f64 * 0.07).sin(),
+                -0.01 * (k as f64 * 0.2).sin(),
+            ));
+            let geometry = body.geometry(0, 1e-3 * (1.0 + 0.3 * (k as f64 * 0.05).sin()));
+            let expected = model
+                .respond(&geometry, velocity, &mass, DT, &mut alone)
+                .unwrap();
+            let mut out = [None];
+            respond_jointly(
+                &model,
+                &[JointContact {
+                    geometry: &geometry,
+                    velocity,
+                }],
+                |i, j| body.mobility(i, j),
+                DT,
+                std::slice::from_mut(&mut jointly),
+                &mut out,
+            );
+            let got = out[0].unwrap();
+            assert_eq!(got.sticking, expected.sticking, "step {k}");
+            let error = (got.force - expected.force).length();
+            assert!(
+                error <= 1e-9 * expected.force.length(),
+                "step {k}: {:?} against {:?}",
+                got.force,
+                expected.force
+            );
+            sticking[usize::from(got.sticking)] += 1;
+        }
+        assert!(
+            sticking[0] > 50 && sticking[1] > 50,
+            "{sticking:?} (slid, stuck)"
+        );
+    }
+
+    /// A body with two contacts off its centre (two feet of one robot), both touching down slowly
+    /// enough to stick: the joint forces, applied as impulses over the step through the body's
+    /// mobility, leave both contact points without in-plane velocity. Solving each alone (a Jacobi
+    /// sweep) does not: each foot's force moves the other.
+    #[test]
+    fn two_coupled_contacts_that_stick_are_both_stopped() {
+        let body = Body {
+            mass: 3.0,
+            inverse_inertia: DMat3::from_diagonal(DVec3::new(1.0 / 0.02, 1.0 / 0.03, 1.0 / 0.04)),
+            // on opposite sides of the centre of mass and a little below it, so the touch-down's
+            // normal forces nearly balance (one-sided or far below, they would tip the body over,
+            // swinging the points sideways, whatever the friction)
+            arms: vec![
+                DVec3::new(0.12, 0.09, -0.02),
+                DVec3::new(-0.11, -0.1, -0.02),
+            ],
+            frames: vec![tilted(0.1, 0.0), tilted(-0.05, 0.15)],
+        };
+        // a grippy ground, so that the touch-down's normal impulse, which pushes each point
+        // sideways through the body's rotation, stays inside the friction cones
+        let model = ContactModel {
+            friction: crate::contact::FrictionLaw::Karnopp {
+                mu_static: 1.5,
+                mu_kinetic: 1.4,
+                stick_band: 1e-3,
+            },
+            ..ContactModel::default()
+        };
+        let slips = [
+            DVec3::new(3e-4, -2e-4, -0.005),
+            DVec3::new(-1e-4, 4e-4, -0.005),
+        ];
+        let velocities: Vec<DVec3> = (0..2).map(|i| body.axes(i) * slips[i]).collect();
+        let geometries = [body.geometry(0, 1e-3), body.geometry(1, 1e-3)];
+        let contacts = [0, 1].map(|i| JointContact {
+            geometry: &geometries[i],
+            velocity: velocities[i],
+        });
+        let mut states = [ContactState::default(); 2];
+        let mut out = [None; 2];
+        respond_jointly(
+            &model,
+            &contacts,
+            |i, j| body.mobility(i, j),
+            DT,
+            &mut states,
+            &mut out,
+        );
+        let forces = out.map(|f| f.unwrap());
+        assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
+        // v⁺_i = v_i + dt·Σ_j W_ij·F_j, in contact i's axes (forces in contact j's)
+        let after = |jointly: [DVec3; 2]| {
+            [0, 1].map(|i| {
+                let change: DVec3 = (0..2)
+                    .map(|j| body.mobility(i, j) * (body.axes(j).transpose() * jointly[j]))
+                    .sum();
+                slips[i] + DT * change
+            })
+        };
+        for (i, v) in after([forces[0].force, forces[1].force]).iter().enumerate() {
+            let in_plane = v.truncate().length();
+            assert!(in_plane < 1e-9, "contact {i} still slips at {in_plane} m/s");
+        }
+        // each contact stopped as if alone leaves them moving
+        let alone: [DVec3; 2] = [0, 1].map(|i| {
+            let mut state = ContactState::default();
+            let mass = EffectiveMass::rigid_body(
+                body.mass,
+                body.inverse_inertia,
+                body.arms[i],
+                &body.frames[i],
+            );
+            model
+                .respond(&geometries[i], velocities[i], &mass, DT, &mut state)
+                .unwrap()
+                .force
+        });
+        let worst = after(alone)
+            .iter()
+            .map(|v| v.truncate().length())
+            .fold(0.0, f64::max);
+        assert!(
+            worst > 1e-5,
+            "solved alone, the contacts still slip at most {worst} m/s"
+        );
+    }
+}

@@ -117,13 +117,6 @@ pub struct ContactState {
     normal_force: f64,
 }
 
-impl ContactState {
-    /// True while the sphere was in contact at the last step.
-    pub fn in_contact(&self) -> bool {
-        self.previous.is_some()
-    }
-}
-
 /// The contact's response over one step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactForce {

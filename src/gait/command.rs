@@ -20,17 +20,6 @@ pub struct CommandSchedule {
 }
 
 impl CommandSchedule {
-    /// One command from the start of the walk.
-    pub fn constant(command: VelocityCommand) -> Self {
-        CommandSchedule {
-            changes: vec![CommandChange {
-                at: 0.0,
-                command,
-                ramp: 0.0,
-            }],
-        }
-    }
-
     /// Changes must be in time order with finite values and ramps ≥ 0; the error names the entry.
     pub fn new(changes: Vec<CommandChange>) -> Result<Self, String> {
         for (i, c) in changes.iter().enumerate() {

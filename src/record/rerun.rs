@@ -124,7 +124,7 @@ impl Recording {
     }
 
     /// Pushes what has been logged so far to the file, so an interrupted run loses little.
-    pub fn flush(&self) {
+    fn flush(&self) {
         let _ = self.stream.flush_blocking();
     }
 

@@ -74,12 +74,6 @@ impl LegChain {
         (joints, frame.transform_point3(self.foot))
     }
 
-    /// ∂(foot position)/∂q, column k = axis_k × (foot − joint_k).
-    pub fn jacobian(&self, q: [f64; 3]) -> DMat3 {
-        let (joints, foot) = self.frames(q);
-        Self::jacobian_of(&joints, foot)
-    }
-
     fn jacobian_of(joints: &[(DVec3, DVec3); 3], foot: DVec3) -> DMat3 {
         DMat3::from_cols(
             joints[0].1.cross(foot - joints[0].0),

@@ -69,11 +69,6 @@ impl Engine {
         self.dt
     }
 
-    /// rapier's substeps per step (`num_solver_iterations`).
-    pub fn substeps(&self) -> usize {
-        self.params.num_solver_iterations
-    }
-
     /// Advances the world by one step.
     pub fn step(&mut self) {
         self.pipeline.step(

@@ -51,10 +51,6 @@ impl Walker {
         &self.hexapod
     }
 
-    pub fn controller(&self) -> &GaitController {
-        &self.controller
-    }
-
     pub fn set_command(&mut self, command: VelocityCommand) {
         self.command = command;
     }
