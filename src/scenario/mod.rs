@@ -19,7 +19,7 @@ use crate::runner::walk::WalkRun;
 use crate::sim::{
     BallConfig, DEFAULT_SOLVER_ITERATIONS, HexapodSettings, Placement, STANDARD_GRAVITY, ServoGains,
 };
-use crate::terrain::{HeightGrid, Source, TerrainSpec};
+use crate::terrain::{HeightGrid, TerrainSpec};
 use sha2::{Digest, Sha256};
 use spec::{BALL_LOG_RATE, DEFAULT_SETTLE, START_INSET, WALK_LOG_RATE};
 use std::path::{Path, PathBuf};
@@ -251,15 +251,10 @@ impl Scenario {
         if let Some(seed) = spec.seed {
             terrain.spec = terrain.spec.clone().with_seed(seed);
         }
-        let seed = match terrain.spec.source {
-            Source::Natural { seed, .. } | Source::Rough { seed, .. } => Some(seed),
-            _ => None,
-        };
+        let seed = terrain.spec.seed();
         hasher.update(serde_json::to_vec(&terrain.spec).expect("a spec is plain data"));
         let data_base = terrain.origin.parent().unwrap_or(Path::new(""));
-        if let Source::Csv { path, .. } | Source::Png { path, .. } | Source::Stl { path, .. } =
-            &terrain.spec.source
-        {
+        if let Some(path) = terrain.spec.source.get().data_file() {
             hasher.update(read_bytes(&data_base.join(path)));
         }
 

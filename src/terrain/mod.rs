@@ -5,12 +5,14 @@ mod generate;
 mod grid;
 pub mod io;
 mod orientation;
+pub mod source;
 mod spec;
 
 pub use generate::{MatlabRand, bell, flat, natural, rough, sine, slope, steps};
 pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
 pub use orientation::{GroundFrame, Orientation};
-pub use spec::{Source, TerrainError, TerrainSpec};
+pub use source::Source;
+pub use spec::{TerrainError, TerrainSpec};
 
 /// Loads a terrain file and builds its grid.
 pub fn load(path: &std::path::Path) -> Result<HeightGrid, TerrainError> {

@@ -1,0 +1,547 @@
+//! Where a terrain's heights come from: one parameter struct per generator or height file, each
+//! with its defaults, its checks and its build, so a new source is one struct here and one line in
+//! [`Source`].
+
+use super::generate;
+use super::grid::{GridError, HeightGrid};
+use super::io::{self, HeightFileError};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A field out of range: its name within `[source]`, and what was expected.
+pub type FieldError = (&'static str, String);
+
+/// Why a source gave no grid.
+pub enum BuildError {
+    Grid(GridError),
+    /// A height file could not be read (its path, relative to the terrain file).
+    Data(PathBuf, HeightFileError),
+}
+
+/// What every source does.
+pub trait HeightSource {
+    /// Checks every parameter's range, naming the field that is wrong.
+    fn validate(&self) -> Result<(), FieldError>;
+
+    /// Builds the grid; a height file's path resolves against `base`.
+    fn build(&self, base: &Path) -> Result<HeightGrid, BuildError>;
+
+    /// The random generator's seed, for sources that have one.
+    fn seed(&self) -> Option<u32> {
+        None
+    }
+
+    fn seed_mut(&mut self) -> Option<&mut u32> {
+        None
+    }
+
+    /// The height file read, for sources that read one (relative to the terrain file).
+    fn data_file(&self) -> Option<&Path> {
+        None
+    }
+}
+
+/// Where the heights come from (`kind = "..."` in `[source]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Source {
+    Natural(Natural),
+    Bell(Bell),
+    Flat(Flat),
+    Slope(Slope),
+    Steps(Steps),
+    Rough(Rough),
+    Sine(Sine),
+    Csv(Csv),
+    Png(Png),
+    Stl(Stl),
+}
+
+impl Source {
+    pub fn get(&self) -> &dyn HeightSource {
+        match self {
+            Source::Natural(s) => s,
+            Source::Bell(s) => s,
+            Source::Flat(s) => s,
+            Source::Slope(s) => s,
+            Source::Steps(s) => s,
+            Source::Rough(s) => s,
+            Source::Sine(s) => s,
+            Source::Csv(s) => s,
+            Source::Png(s) => s,
+            Source::Stl(s) => s,
+        }
+    }
+
+    pub fn get_mut(&mut self) -> &mut dyn HeightSource {
+        match self {
+            Source::Natural(s) => s,
+            Source::Bell(s) => s,
+            Source::Flat(s) => s,
+            Source::Slope(s) => s,
+            Source::Steps(s) => s,
+            Source::Rough(s) => s,
+            Source::Sine(s) => s,
+            Source::Csv(s) => s,
+            Source::Png(s) => s,
+            Source::Stl(s) => s,
+        }
+    }
+}
+
+fn zero2() -> [f64; 2] {
+    [0.0, 0.0]
+}
+fn one() -> f64 {
+    1.0
+}
+fn cell_1cm() -> f64 {
+    0.01
+}
+fn flat_size() -> [f64; 2] {
+    [20.0, 20.0]
+}
+
+// the checks the sources share
+fn positive(field: &'static str, v: f64) -> Result<(), FieldError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err((field, format!("expected a finite number > 0, got {v}")))
+    }
+}
+fn finite(field: &'static str, v: f64) -> Result<(), FieldError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err((field, format!("expected a finite number, got {v}")))
+    }
+}
+fn size2(field: &'static str, s: [f64; 2]) -> Result<(), FieldError> {
+    if s.iter().all(|v| v.is_finite() && *v > 0.0) {
+        Ok(())
+    } else {
+        Err((field, format!("expected two finite sizes > 0, got {s:?}")))
+    }
+}
+fn finite2(field: &'static str, s: [f64; 2]) -> Result<(), FieldError> {
+    if s.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err((field, format!("expected two finite numbers, got {s:?}")))
+    }
+}
+fn range(field: &'static str, r: [f64; 2]) -> Result<(), FieldError> {
+    if r.iter().all(|v| v.is_finite()) && r[1] > r[0] {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!("expected [min, max] with min < max, got {r:?}"),
+        ))
+    }
+}
+fn samples(field: &'static str, n: usize) -> Result<(), FieldError> {
+    if (2..=8192).contains(&n) {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!("expected 2 to 8192 samples per side, got {n}"),
+        ))
+    }
+}
+
+/// The paper's fractal terrain (eq. 7); seed 5489 is MATLAB's `rng default`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Natural {
+    #[serde(default = "Natural::paper_seed")]
+    pub seed: u32,
+    #[serde(default = "Natural::samples")]
+    pub samples: usize,
+    #[serde(default = "Natural::size")]
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    /// The hexapod's scale by default (0.04 m).
+    #[serde(default = "Natural::peak_to_peak")]
+    pub peak_to_peak: f64,
+}
+
+impl Natural {
+    fn paper_seed() -> u32 {
+        5489
+    }
+    fn samples() -> usize {
+        100
+    }
+    fn size() -> [f64; 2] {
+        [4.0, 4.0]
+    }
+    fn peak_to_peak() -> f64 {
+        0.04
+    }
+}
+
+impl HeightSource for Natural {
+    fn validate(&self) -> Result<(), FieldError> {
+        samples("samples", self.samples)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        if !(self.peak_to_peak.is_finite() && self.peak_to_peak >= 0.0) {
+            return Err((
+                "peak_to_peak",
+                format!("expected a finite number ≥ 0, got {}", self.peak_to_peak),
+            ));
+        }
+        Ok(())
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::natural(
+            self.seed,
+            self.samples,
+            self.size,
+            self.center,
+            self.peak_to_peak,
+        )
+        .map_err(BuildError::Grid)
+    }
+
+    fn seed(&self) -> Option<u32> {
+        Some(self.seed)
+    }
+
+    fn seed_mut(&mut self) -> Option<&mut u32> {
+        Some(&mut self.seed)
+    }
+}
+
+/// The paper's inverted bell (eq. 8), −depth·exp(−(x²+y²)/2σ²).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bell {
+    #[serde(default = "Bell::half_width")]
+    pub half_width: f64,
+    #[serde(default = "Bell::samples")]
+    pub samples: usize,
+    #[serde(default = "one")]
+    pub depth: f64,
+    #[serde(default = "one")]
+    pub sigma: f64,
+}
+
+impl Bell {
+    fn half_width() -> f64 {
+        3.0
+    }
+    fn samples() -> usize {
+        241
+    }
+}
+
+impl HeightSource for Bell {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("half_width", self.half_width)?;
+        samples("samples", self.samples)?;
+        finite("depth", self.depth)?;
+        positive("sigma", self.sigma)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::bell(self.half_width, self.samples, self.depth, self.sigma)
+            .map_err(BuildError::Grid)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Flat {
+    #[serde(default = "flat_size")]
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default)]
+    pub height: f64,
+}
+
+impl HeightSource for Flat {
+    fn validate(&self) -> Result<(), FieldError> {
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        finite("height", self.height)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::flat(self.size, self.center, self.height).map_err(BuildError::Grid)
+    }
+}
+
+/// A plane rising at `angle_deg` towards the azimuth `ascent_deg` (0 = +x).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Slope {
+    pub angle_deg: f64,
+    #[serde(default)]
+    pub ascent_deg: f64,
+    #[serde(default = "flat_size")]
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+}
+
+impl HeightSource for Slope {
+    fn validate(&self) -> Result<(), FieldError> {
+        if !(self.angle_deg.is_finite() && self.angle_deg.abs() < 89.0) {
+            return Err((
+                "angle_deg",
+                format!("expected an angle within ±89°, got {}", self.angle_deg),
+            ));
+        }
+        finite("ascent_deg", self.ascent_deg)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::slope(
+            self.size,
+            self.center,
+            self.angle_deg.to_radians(),
+            self.ascent_deg.to_radians(),
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// Stairs along +x.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Steps {
+    pub step_height: f64,
+    pub step_length: f64,
+    #[serde(default)]
+    pub first_step: f64,
+    #[serde(default = "flat_size")]
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for Steps {
+    fn validate(&self) -> Result<(), FieldError> {
+        finite("step_height", self.step_height)?;
+        positive("step_length", self.step_length)?;
+        finite("first_step", self.first_step)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        positive("cell", self.cell)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::steps(
+            self.size,
+            self.center,
+            self.first_step,
+            self.step_length,
+            self.step_height,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// A seeded sum of random sinusoids.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rough {
+    pub peak_to_peak: f64,
+    pub wavelength_min: f64,
+    pub wavelength_max: f64,
+    #[serde(default = "Rough::waves")]
+    pub waves: usize,
+    #[serde(default)]
+    pub seed: u32,
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl Rough {
+    fn waves() -> usize {
+        16
+    }
+}
+
+impl HeightSource for Rough {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("peak_to_peak", self.peak_to_peak)?;
+        positive("wavelength_min", self.wavelength_min)?;
+        positive("wavelength_max", self.wavelength_max)?;
+        if self.wavelength_max < self.wavelength_min {
+            return Err((
+                "wavelength_max",
+                format!(
+                    "expected ≥ wavelength_min ({}), got {}",
+                    self.wavelength_min, self.wavelength_max
+                ),
+            ));
+        }
+        if !(1..=4096).contains(&self.waves) {
+            return Err((
+                "waves",
+                format!("expected 1 to 4096 waves, got {}", self.waves),
+            ));
+        }
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        positive("cell", self.cell)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::rough(
+            self.size,
+            self.center,
+            self.peak_to_peak,
+            self.wavelength_min,
+            self.wavelength_max,
+            self.waves,
+            self.seed,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+
+    fn seed(&self) -> Option<u32> {
+        Some(self.seed)
+    }
+
+    fn seed_mut(&mut self) -> Option<&mut u32> {
+        Some(&mut self.seed)
+    }
+}
+
+/// amplitude·sin(2πx/λ)·sin(2πy/λ).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sine {
+    pub amplitude: f64,
+    pub wavelength: f64,
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for Sine {
+    fn validate(&self) -> Result<(), FieldError> {
+        finite("amplitude", self.amplitude)?;
+        positive("wavelength", self.wavelength)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        positive("cell", self.cell)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::sine(
+            self.size,
+            self.center,
+            self.amplitude,
+            self.wavelength,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// A CSV grid: row i → y, column j → x, spanning the given ranges.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Csv {
+    pub path: PathBuf,
+    pub x_range: [f64; 2],
+    pub y_range: [f64; 2],
+}
+
+impl HeightSource for Csv {
+    fn validate(&self) -> Result<(), FieldError> {
+        range("x_range", self.x_range)?;
+        range("y_range", self.y_range)
+    }
+
+    fn build(&self, base: &Path) -> Result<HeightGrid, BuildError> {
+        let data = |e| BuildError::Data(self.path.clone(), e);
+        let (rows, cols, heights) = io::read_csv(&base.join(&self.path)).map_err(data)?;
+        HeightGrid::new(rows, cols, self.x_range, self.y_range, heights).map_err(|e| data(e.into()))
+    }
+
+    fn data_file(&self) -> Option<&Path> {
+        Some(&self.path)
+    }
+}
+
+/// A grayscale PNG: height = offset + scale·v/v_max; image top = largest y.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Png {
+    pub path: PathBuf,
+    pub x_range: [f64; 2],
+    pub y_range: [f64; 2],
+    pub height_scale: f64,
+    #[serde(default)]
+    pub height_offset: f64,
+}
+
+impl HeightSource for Png {
+    fn validate(&self) -> Result<(), FieldError> {
+        range("x_range", self.x_range)?;
+        range("y_range", self.y_range)?;
+        finite("height_scale", self.height_scale)?;
+        finite("height_offset", self.height_offset)
+    }
+
+    fn build(&self, base: &Path) -> Result<HeightGrid, BuildError> {
+        let data = |e| BuildError::Data(self.path.clone(), e);
+        let (rows, cols, heights) = io::read_png(
+            &base.join(&self.path),
+            self.height_scale,
+            self.height_offset,
+        )
+        .map_err(data)?;
+        HeightGrid::new(rows, cols, self.x_range, self.y_range, heights).map_err(|e| data(e.into()))
+    }
+
+    fn data_file(&self) -> Option<&Path> {
+        Some(&self.path)
+    }
+}
+
+/// An STL surface rasterised to a grid with `cell` spacing.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stl {
+    pub path: PathBuf,
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for Stl {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("cell", self.cell)
+    }
+
+    fn build(&self, base: &Path) -> Result<HeightGrid, BuildError> {
+        io::read_stl(&base.join(&self.path), self.cell)
+            .map_err(|e| BuildError::Data(self.path.clone(), e))
+    }
+
+    fn data_file(&self) -> Option<&Path> {
+        Some(&self.path)
+    }
+}
