@@ -1,0 +1,370 @@
+//! Resolving a scenario: every field checked (the error names it), every file it refers to loaded,
+//! every default applied, once — what [`Scenario::run`] gets is fully typed. The scenario's hash
+//! covers its fields and the content of every file it uses.
+
+use super::spec::{BALL_LOG_RATE, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, WALK_LOG_RATE};
+use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
+use crate::contact::ContactModel;
+use crate::gait::{CommandChange, CommandSchedule, GaitSpec, VelocityCommand};
+use crate::robot::RobotModel;
+use crate::sim::{
+    BallConfig, DEFAULT_SOLVER_ITERATIONS, HexapodSettings, STANDARD_GRAVITY, ServoGains,
+};
+use crate::terrain::TerrainSpec;
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+fn read_bytes(path: &Path) -> Vec<u8> {
+    std::fs::read(path).unwrap_or_default()
+}
+
+impl Scenario {
+    /// Checks the spec and loads what it refers to. `origin` is the scenario's file: relative paths
+    /// resolve against its folder, and errors name it.
+    pub fn resolve(spec: ScenarioSpec, name: String, origin: &Path) -> Result<Self, ScenarioError> {
+        let fail = |message: String| ScenarioError {
+            file: origin.to_path_buf(),
+            message,
+        };
+        let base = origin.parent().unwrap_or(Path::new(""));
+        check_common(&spec, &name).map_err(fail)?;
+        let contact = spec.contact.model();
+        let mut hasher = Sha256::new();
+        hasher.update(serde_json::to_vec(&spec).expect("a spec is plain data"));
+        let terrain = resolve_terrain(&spec, &name, origin, &mut hasher).map_err(fail)?;
+        let seed = terrain.spec.seed();
+        let mut warnings = Vec::new();
+        let setup = match spec.kind {
+            Kind::Ball => Setup::Ball(resolve_ball(&spec, &contact).map_err(fail)?),
+            Kind::Walk => Setup::Walk(Box::new(
+                resolve_walk(&spec, &contact, base, &mut hasher, &mut warnings).map_err(fail)?,
+            )),
+        };
+        let hash: String = hasher.finalize()[..8]
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        let log_rate = spec.record.log_rate.unwrap_or(match spec.kind {
+            Kind::Walk => WALK_LOG_RATE,
+            Kind::Ball => BALL_LOG_RATE,
+        });
+        Ok(Scenario {
+            name,
+            file: origin.to_path_buf(),
+            hash,
+            spec,
+            seed,
+            warnings,
+            terrain,
+            contact,
+            log_rate,
+            setup,
+        })
+    }
+}
+
+/// The fields every kind has: name, time step, duration, contact, expectations, tolerances, log
+/// rate.
+fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
+    if name.is_empty() || name.contains(['/', '\\']) {
+        return Err(format!(
+            "name: expected a non-empty name without slashes, got {name:?}"
+        ));
+    }
+    if !(spec.dt.is_finite() && spec.dt > 0.0 && spec.dt <= 0.01) {
+        return Err(format!(
+            "dt: expected a time step in (0, 0.01] s, got {}",
+            spec.dt
+        ));
+    }
+    if !(spec.duration.is_finite() && spec.duration >= 0.0) {
+        return Err(format!(
+            "duration: expected a finite number ≥ 0 s, got {}",
+            spec.duration
+        ));
+    }
+    if let Err((field, expected)) = spec.contact.model().validate() {
+        return Err(format!("contact.{field}: {expected}"));
+    }
+    spec.expect.validate(spec.kind)?;
+    for (field, tolerance) in &spec.tolerance {
+        for v in [tolerance.rel, tolerance.abs].into_iter().flatten() {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("tolerance.{field}: expected numbers ≥ 0, got {v}"));
+            }
+        }
+    }
+    if let Some(rate) = spec.record.log_rate
+        && !(rate.is_finite() && rate > 0.0)
+    {
+        return Err(format!(
+            "record.log_rate: expected a rate > 0 per second, got {rate}"
+        ));
+    }
+    Ok(())
+}
+
+/// The terrain: the built-in natural terrain of the kind's scale, a file, or an inline table;
+/// with the scenario's seed.
+fn resolve_terrain(
+    spec: &ScenarioSpec,
+    name: &str,
+    origin: &Path,
+    hasher: &mut Sha256,
+) -> Result<TerrainSource, String> {
+    let default_terrain = match spec.kind {
+        Kind::Walk => builtin::NATURAL,
+        Kind::Ball => builtin::NATURAL_BALL,
+    };
+    let mut terrain = match &spec.terrain {
+        None => TerrainSource {
+            spec: TerrainSpec::from_toml(default_terrain.text, Path::new(default_terrain.path))
+                .map_err(|e| e.to_string())?,
+            origin: PathBuf::from(default_terrain.path),
+            name: format!("{} (built in)", default_terrain.path),
+        },
+        Some(FileOr::File(file)) => {
+            let path = origin.parent().unwrap_or(Path::new("")).join(file);
+            TerrainSource {
+                spec: TerrainSpec::from_file(&path).map_err(|e| e.to_string())?,
+                name: file.display().to_string(),
+                origin: path,
+            }
+        }
+        Some(FileOr::Inline(inline)) => TerrainSource {
+            spec: inline.clone(),
+            origin: origin.to_path_buf(),
+            name: format!("{name} (inline terrain)"),
+        },
+    };
+    if let Some(seed) = spec.seed {
+        terrain.spec = terrain.spec.clone().with_seed(seed);
+    }
+    hasher.update(serde_json::to_vec(&terrain.spec).expect("a spec is plain data"));
+    let data_base = terrain.origin.parent().unwrap_or(Path::new(""));
+    if let Some(path) = terrain.spec.source.get().data_file() {
+        hasher.update(read_bytes(&data_base.join(path)));
+    }
+    Ok(terrain)
+}
+
+/// A walk's fields that a ball scenario must not set.
+fn walk_fields(spec: &ScenarioSpec) -> [(&'static str, bool); 10] {
+    [
+        ("robot", spec.robot.is_some()),
+        ("gait", spec.gait.is_some()),
+        ("settle", spec.settle.is_some()),
+        ("follow_terrain", spec.follow_terrain.is_some()),
+        ("articulation", spec.articulation.is_some()),
+        ("solver_iterations", spec.solver_iterations.is_some()),
+        ("pgs_iterations", spec.pgs_iterations.is_some()),
+        ("servo", spec.servo.is_some()),
+        ("start", spec.start.is_some()),
+        ("command", spec.command.is_some()),
+    ]
+}
+
+/// The explicit contact spring's stability: dt below 2/√(k/m) for the lightest `mass` it acts on.
+fn check_stable_dt(
+    spec: &ScenarioSpec,
+    contact: &ContactModel,
+    mass: f64,
+    radius: f64,
+    what: &str,
+) -> Result<(), String> {
+    let limit = contact.normal.stable_time_step(mass, radius * 0.1);
+    if spec.dt >= limit && !spec.allow_unstable_dt {
+        return Err(format!(
+            "dt = {} s is too large for the contact spring on {what}: the explicit spring needs dt < {limit:.2e} s (2/√(k/m)); reduce dt or the stiffness (or set allow_unstable_dt = true to run it anyway)",
+            spec.dt
+        ));
+    }
+    Ok(())
+}
+
+/// A ball scenario's ball, its lowest point `drop_height` above the ground (the ground's height is
+/// added when the terrain is built).
+fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfig, String> {
+    if let Some((field, _)) = walk_fields(spec).iter().find(|(_, set)| *set) {
+        return Err(format!(
+            "{field}: applies to walk scenarios, but kind = \"ball\""
+        ));
+    }
+    let b = spec.ball.unwrap_or_default();
+    let config = BallConfig {
+        radius: b.radius,
+        mass: b.mass,
+        position: [b.at[0], b.at[1], b.drop_height + b.radius],
+        velocity: b.velocity,
+        angular_velocity: b.angular_velocity,
+        lock_rotation: b.lock_rotation,
+        gravity: STANDARD_GRAVITY,
+    };
+    if let Err((field, expected)) = config.validate() {
+        return Err(format!("ball.{field}: {expected}"));
+    }
+    check_stable_dt(
+        spec,
+        contact,
+        b.mass,
+        b.radius,
+        &format!("a {} kg ball", b.mass),
+    )?;
+    Ok(config)
+}
+
+/// A walk's robot, gait, commands and settings.
+fn resolve_walk(
+    spec: &ScenarioSpec,
+    contact: &ContactModel,
+    base: &Path,
+    hasher: &mut Sha256,
+    warnings: &mut Vec<String>,
+) -> Result<WalkSetup, String> {
+    if spec.ball.is_some() {
+        return Err("ball: applies to ball scenarios; set kind = \"ball\"".into());
+    }
+    let robot = resolve_robot(spec, base, hasher)?;
+    let (gait, gait_name) = resolve_gait(spec, base)?;
+    hasher.update(serde_json::to_vec(&gait).expect("a spec is plain data"));
+    crate::gait::GaitController::new(&robot, gait.clone())
+        .map_err(|e| format!("{gait_name}: {e}"))?;
+    let support = crate::gait::minimum_support(&gait.offsets(), gait.duty_factor);
+    if support < 3 {
+        warnings.push(format!(
+            "{gait_name}: at times only {support} feet are on the ground (a hexapod needs 3 to stand statically); check its duty_factor and phase_offsets"
+        ));
+    }
+    warnings.extend(robot.warnings.iter().cloned());
+    // the lightest foot link bounds the effective mass the contact spring acts on
+    if let Some((foot, mass)) = robot
+        .legs
+        .iter()
+        .map(|leg| {
+            let link = &robot.links[leg.foot_link];
+            (&link.name, link.mass)
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+    {
+        let what = format!("the lightest foot link (`{foot}`, {mass} kg)");
+        check_stable_dt(spec, contact, mass, robot.legs[0].foot.radius, &what)?;
+    }
+    let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
+    if !(settle.is_finite() && settle >= 0.0) {
+        return Err(format!(
+            "settle: expected a finite number ≥ 0 s, got {settle}"
+        ));
+    }
+    if spec.solver_iterations == Some(0) {
+        return Err("solver_iterations: expected at least 1".into());
+    }
+    if spec.pgs_iterations == Some(0) {
+        return Err("pgs_iterations: expected at least 1".into());
+    }
+    let servo = spec.servo.unwrap_or_default();
+    if !(servo.stiffness.is_finite()
+        && servo.stiffness > 0.0
+        && servo.damping.is_finite()
+        && servo.damping >= 0.0)
+    {
+        return Err(format!(
+            "servo: expected stiffness > 0 and damping ≥ 0, got {} and {}",
+            servo.stiffness, servo.damping
+        ));
+    }
+    let commands = resolve_commands(spec, &gait)?;
+    if let Some(start) = spec.start
+        && ![start.x, start.y, Some(start.heading_deg)]
+            .into_iter()
+            .flatten()
+            .all(f64::is_finite)
+    {
+        return Err("start: expected finite numbers".into());
+    }
+    Ok(WalkSetup {
+        robot: Arc::new(robot),
+        gait,
+        commands,
+        settings: HexapodSettings {
+            articulation: spec.articulation.unwrap_or_default(),
+            dt: spec.dt,
+            solver_iterations: spec.solver_iterations.unwrap_or(DEFAULT_SOLVER_ITERATIONS),
+            pgs_iterations: spec.pgs_iterations,
+            gains: ServoGains {
+                stiffness: servo.stiffness,
+                damping: servo.damping,
+            },
+        },
+        settle,
+        follow_terrain: spec.follow_terrain.unwrap_or(false),
+        start: spec.start.unwrap_or_default(),
+    })
+}
+
+/// The robot: hex18 built in, or a URDF (and its robot file beside it).
+fn resolve_robot(
+    spec: &ScenarioSpec,
+    base: &Path,
+    hasher: &mut Sha256,
+) -> Result<RobotModel, String> {
+    match &spec.robot {
+        None => {
+            hasher.update(builtin::HEX18.text);
+            crate::robot::urdf::from_str(builtin::HEX18.text, Path::new(builtin::HEX18.path))
+        }
+        Some(file) => {
+            let path = base.join(file);
+            hasher.update(read_bytes(&path));
+            hasher.update(read_bytes(&path.with_extension("toml")));
+            crate::robot::load(&path)
+        }
+    }
+    .map_err(|e| format!("robot: {e}"))
+}
+
+/// The gait (the built-in tripod, a file, or an inline table) and its name for messages.
+fn resolve_gait(spec: &ScenarioSpec, base: &Path) -> Result<(GaitSpec, String), String> {
+    Ok(match &spec.gait {
+        None => (
+            GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))
+                .map_err(|e| e.to_string())?,
+            format!("gait {} (built in)", builtin::TRIPOD.path),
+        ),
+        Some(FileOr::File(file)) => (
+            GaitSpec::from_file(&base.join(file)).map_err(|e| format!("gait: {e}"))?,
+            format!("gait {}", base.join(file).display()),
+        ),
+        Some(FileOr::Inline(gait)) => {
+            gait.validate().map_err(|e| format!("gait: {e}"))?;
+            (gait.clone(), "gait (inline)".to_string())
+        }
+    })
+}
+
+/// The velocity commands over the walk: the gait's nominal speed straight ahead unless given.
+fn resolve_commands(spec: &ScenarioSpec, gait: &GaitSpec) -> Result<CommandSchedule, String> {
+    let changes = match &spec.command {
+        None => vec![CommandChange {
+            at: 0.0,
+            command: VelocityCommand {
+                forward: gait.nominal_speed(),
+                ..Default::default()
+            },
+            ramp: 0.0,
+        }],
+        Some(list) => list
+            .iter()
+            .map(|c| CommandChange {
+                at: c.at,
+                command: VelocityCommand {
+                    forward: c.forward.unwrap_or_else(|| gait.nominal_speed()),
+                    sideways: c.sideways,
+                    yaw_rate: c.turn_deg_s.to_radians(),
+                },
+                ramp: c.ramp,
+            })
+            .collect(),
+    };
+    CommandSchedule::new(changes)
+}
