@@ -12,17 +12,13 @@ use crate::robot::kinematics::LegChain;
 use glam::DVec3;
 
 /// A velocity command in the body frame.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct VelocityCommand {
     /// m/s along the body's x.
-    #[serde(default)]
     pub forward: f64,
     /// m/s along the body's y (left).
-    #[serde(default)]
     pub sideways: f64,
     /// rad/s about z (left turn positive).
-    #[serde(default)]
     pub yaw_rate: f64,
 }
 
