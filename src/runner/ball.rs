@@ -1,11 +1,11 @@
 //! The ball experiment end to end: terrain + ball + contact → step loop → recording, CSV, metrics.
 
+use super::Outputs;
 use super::step_loop::{self, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::metrics::BallMetrics;
 use crate::record::ball::{BallRecorder, BallTrajectory};
-use crate::record::output::check_writable;
 use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};
 use crate::sim::{BallConfig, BallSample, BallSim};
@@ -22,12 +22,9 @@ pub struct BallRun {
     pub contact: ContactModel,
     pub dt: f64,
     pub duration: f64,
-    pub record: Option<PathBuf>,
+    /// Samples per second in the recording and trajectory.
     pub log_rate: f64,
-    pub trajectory: Option<PathBuf>,
-    pub metrics: Option<PathBuf>,
-    /// Called now and then with the steps done so far, for a progress bar.
-    pub progress: Option<Box<dyn Fn(u64)>>,
+    pub outputs: Outputs,
 }
 
 /// What a run produced.
@@ -70,18 +67,13 @@ impl BallRun {
     /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
     /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<BallOutcome> {
-        for path in [&self.record, &self.trajectory, &self.metrics]
-            .into_iter()
-            .flatten()
-        {
-            check_writable(path)?;
-        }
+        self.outputs.check_writable()?;
         let sim = BallSim::new(self.ball, self.terrain.clone(), self.contact, self.dt);
         let every = decimation(self.log_rate, self.dt);
         let initial = sim.sample();
 
         let mut observers: Vec<Box<dyn Observer<BallSample, BallSim>>> = Vec::new();
-        if let Some(path) = &self.record {
+        if let Some(path) = &self.outputs.record {
             let recorder = BallRecorder::create(
                 path,
                 format!("ball on {}", self.terrain_name),
@@ -92,14 +84,15 @@ impl BallRun {
             )?;
             observers.push(Box::new(recorder.in_background()));
         }
-        if let Some(path) = &self.trajectory {
+        if let Some(path) = &self.outputs.trajectory {
             observers.push(Box::new(BallTrajectory::create(path, every)?));
         }
-        if let Some(progress) = self.progress {
+        if let Some(progress) = self.outputs.progress {
             observers.push(Box::new(Progress::new(progress)));
         }
         // last: its file is written once the others are complete
-        let mut metrics = BallMetrics::new(&initial, self.ball.radius, self.metrics.clone());
+        let mut metrics =
+            BallMetrics::new(&initial, self.ball.radius, self.outputs.metrics.clone());
 
         let steps = (self.duration / self.dt).round() as u64;
         let mut dropping = Dropping {

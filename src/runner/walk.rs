@@ -1,13 +1,13 @@
 //! A hexapod run end to end: robot + terrain + gait + contact → walker → step loop → recording,
 //! CSV, metrics.
 
+use super::Outputs;
 use super::step_loop::{self, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, GaitController, GaitSpec};
 use crate::metrics::HexapodMetrics;
 use crate::record::hexapod::{HexapodRecorder, HexapodTrajectory};
-use crate::record::output::check_writable;
 use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};
 use crate::robot::RobotModel;
@@ -34,12 +34,9 @@ pub struct WalkRun {
     pub terrain_following: bool,
     /// Seconds walked.
     pub duration: f64,
-    pub record: Option<PathBuf>,
+    /// Samples per second in the recording and trajectory.
     pub log_rate: f64,
-    pub trajectory: Option<PathBuf>,
-    pub metrics: Option<PathBuf>,
-    /// Called now and then with the steps done so far, for a progress bar.
-    pub progress: Option<Box<dyn Fn(u64)>>,
+    pub outputs: Outputs,
 }
 
 /// What a run produced. A run that diverged still wrote its files; `failure` says what happened.
@@ -82,12 +79,7 @@ impl WalkRun {
     /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
     /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<WalkOutcome> {
-        for path in [&self.record, &self.trajectory, &self.metrics]
-            .into_iter()
-            .flatten()
-        {
-            check_writable(path)?;
-        }
+        self.outputs.check_writable()?;
         let controller = GaitController::new(&self.robot, self.gait.clone())
             .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.name))?;
         let mut pose = vec![0.0; self.robot.joints.len()];
@@ -110,7 +102,7 @@ impl WalkRun {
         let every = decimation(self.log_rate, dt);
 
         let mut observers: Vec<Box<dyn Observer<WalkSample, Walker>>> = Vec::new();
-        if let Some(path) = &self.record {
+        if let Some(path) = &self.outputs.record {
             let name = match self.settings.articulation {
                 Articulation::Multibody => format!("{} on {}", self.gait.name, self.terrain_name),
                 Articulation::Impulse => format!(
@@ -129,18 +121,19 @@ impl WalkRun {
             )?;
             observers.push(Box::new(recorder.in_background(self.robot.clone())));
         }
-        if let Some(path) = &self.trajectory {
+        if let Some(path) = &self.outputs.trajectory {
             observers.push(Box::new(HexapodTrajectory::create(
                 path,
                 &self.robot,
                 every,
             )?));
         }
-        if let Some(progress) = self.progress {
+        if let Some(progress) = self.outputs.progress {
             observers.push(Box::new(Progress::new(progress)));
         }
         // last: its file is written once the others are complete
-        let mut metrics = HexapodMetrics::new(dt, self.robot.total_mass(), self.metrics.clone());
+        let mut metrics =
+            HexapodMetrics::new(dt, self.robot.total_mass(), self.outputs.metrics.clone());
 
         let steps = ((self.settle_time + self.duration) / dt).round() as u64;
         let mut walking = Walking {

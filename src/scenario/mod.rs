@@ -9,6 +9,7 @@ pub mod spec;
 pub mod sweep;
 
 pub use crate::metrics::Metrics;
+pub use crate::runner::Outputs;
 pub use expect::Check;
 pub use spec::{FileOr, Kind, ScenarioSpec};
 
@@ -96,16 +97,6 @@ impl WalkSetup {
             yaw: self.start.heading_deg.to_radians(),
         }
     }
-}
-
-/// Files a run writes besides its results.
-#[derive(Default)]
-pub struct Outputs {
-    pub record: Option<PathBuf>,
-    pub trajectory: Option<PathBuf>,
-    pub metrics: Option<PathBuf>,
-    /// Called now and then with the steps done so far.
-    pub progress: Option<Box<dyn Fn(u64)>>,
 }
 
 /// What a run of a scenario produced.
@@ -232,11 +223,8 @@ impl Scenario {
                     settle_time: w.settle,
                     terrain_following: w.follow_terrain,
                     duration: spec.duration,
-                    record: outputs.record,
                     log_rate: self.log_rate,
-                    trajectory: outputs.trajectory,
-                    metrics: outputs.metrics,
-                    progress: outputs.progress,
+                    outputs,
                 };
                 let o = run.execute()?;
                 (
@@ -257,11 +245,8 @@ impl Scenario {
                     contact: self.contact,
                     dt: spec.dt,
                     duration: spec.duration,
-                    record: outputs.record,
                     log_rate: self.log_rate,
-                    trajectory: outputs.trajectory,
-                    metrics: outputs.metrics,
-                    progress: outputs.progress,
+                    outputs,
                 };
                 let o = run.execute()?;
                 (
