@@ -290,7 +290,41 @@ mod tests {
         );
         let forces = out.map(|f| f.unwrap());
         assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
-        // v⁺_i = v_i + dt·Σ_j W_ij·F_j, in contact i's axes (forces in contact j's)
+        // against a dense solve of the module's equation, F_S = F_prev − T⁻¹·(u + W_n·ΔN), with
+        // u, ΔN and F_prev from each contact's own `begin`
+        let pending = [0, 1].map(|i| {
+            model
+                .begin(
+                    &geometries[i],
+                    velocities[i],
+                    1.0 / body.mobility(i, i).z_axis.z,
+                    DT,
+                    &mut ContactState::default(),
+                )
+                .unwrap()
+        });
+        let t = na::DMatrix::<f64>::from_fn(4, 4, |r, c| {
+            let w = body.mobility(r / 2, c / 2);
+            w.col(c % 2)[r % 2]
+        });
+        let rhs = na::DVector::<f64>::from_fn(4, |r, _| {
+            let i = r / 2;
+            let coupling: f64 = (0..2)
+                .map(|j| body.mobility(i, j).z_axis[r % 2] * pending[j].normal_change)
+                .sum();
+            pending[i].demand[r % 2] + coupling
+        });
+        let x = t.lu().solve(&rhs).expect("T is invertible");
+        for i in 0..2 {
+            let expected = pending[i].previous_friction - DVec2::new(x[2 * i], x[2 * i + 1]);
+            let got = body.axes(i).transpose() * forces[i].friction;
+            let error = (got.truncate() - expected).length();
+            assert!(
+                error < 1e-9 * expected.length(),
+                "contact {i}: {got} against {expected}"
+            );
+        }
+        // and what that means: v⁺_i = v_i + dt·Σ_j W_ij·F_j (contact i's axes; forces in j's)
         let after = |jointly: [DVec3; 2]| {
             [0, 1].map(|i| {
                 let change: DVec3 = (0..2)
