@@ -1,7 +1,7 @@
 //! The `hexsim` binary end to end: outputs written, errors reported with exit code 2.
 
 mod common;
-use common::{hexsim, scratch};
+use common::{hexsim, project_file, scratch};
 use std::process::Command;
 
 #[test]
@@ -265,6 +265,59 @@ fn a_diverging_run_is_caught_with_when_where_and_why() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("dt < 3.16e-4 s"), "{stderr}");
+}
+
+/// A robot file can set the walking direction (`forward = "-y"`); the run says it and walks
+/// that way (the body frame's x, so forward distance is positive and sideways small).
+#[test]
+fn a_robot_file_sets_the_walking_direction() {
+    let dir = scratch("forward");
+    std::fs::copy(
+        project_file("tests/data/round_hexapod_y.urdf"),
+        dir.join("round.urdf"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("round.toml"), "forward = \"-y\"\n").unwrap();
+    let gait = std::fs::read_to_string(project_file("gaits/tripod.toml"))
+        .unwrap()
+        .replace("stance_height = 0.10", "stance_height = 0.11")
+        .replace("reach = 0.15", "reach = 0.16");
+    std::fs::write(dir.join("gait.toml"), gait).unwrap();
+    let json = dir.join("m.json");
+    let out = hexsim()
+        .args([
+            "run",
+            "--terrain",
+            "terrains/flat.toml",
+            "--duration",
+            "3",
+            "--no-record",
+        ])
+        .arg("--robot")
+        .arg(dir.join("round.urdf"))
+        .arg("--gait")
+        .arg(dir.join("gait.toml"))
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("walking direction -y (set in the robot file)"),
+        "{stdout}"
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let forward = metrics["forward_distance"].as_f64().unwrap();
+    let sideways = metrics["sideways_distance"].as_f64().unwrap();
+    // nominal 0.06 m / 0.5 s = 0.12 m/s for 3 s, the first cycle ramping up
+    assert!(forward > 0.25, "walked {forward} m forward");
+    assert!(sideways.abs() < 0.05, "{sideways} m sideways");
 }
 
 /// The ball goes through the same step loop as the walk: when it diverges, every file asked for

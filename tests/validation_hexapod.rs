@@ -462,6 +462,62 @@ fn a_hexapod_of_another_design_loads_and_walks() {
     );
 }
 
+/// A round hexapod whose legs sit at 0°, ±45°, 180° and ±135° (two of them on the URDF's x axis):
+/// hexsim walks it along +y, the direction that splits its legs three a side, names the legs by
+/// their angle about that direction, and it walks there with the same gait as the round hexapod.
+#[test]
+fn a_hexapod_whose_legs_straddle_x_walks_along_y() {
+    use hexsim::robot::legs::ForwardFrom;
+    let model = Arc::new(robot::load(&project_file("tests/data/round_hexapod_y.urdf")).unwrap());
+    assert_eq!(model.forward.from, ForwardFrom::Legs);
+    assert!((model.forward.yaw.to_degrees() - 90.0).abs() < 1e-9);
+    // lf lm lr: the legs at 135°, 180°, 225° in the URDF; rf rm rr: 45°, 0°, 315°
+    let hip_link = |leg: &hexsim::robot::Leg| model.joints[leg.joints[0]].name.clone();
+    let names: Vec<String> = model.legs.iter().map(hip_link).collect();
+    assert_eq!(
+        names,
+        [
+            "leg2_hip_j",
+            "leg3_hip_j",
+            "leg4_hip_j",
+            "leg1_hip_j",
+            "leg0_hip_j",
+            "leg5_hip_j"
+        ]
+    );
+    // in hexsim's body frame the walking direction is x: lf ahead of lr, left legs at y > 0
+    let hip = |k: usize| model.joints[model.legs[k].joints[0]].origin.translation;
+    assert!(hip(0).x > hip(2).x && hip(0).y > 0.0 && hip(3).y < 0.0);
+    let gait = GaitSpec {
+        reach: Some(0.16),
+        stance_height: 0.11,
+        ..tripod()
+    };
+    let speed = gait.nominal_speed();
+    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let placement = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let mut walker = walker(model, ground, placement, gait, 1.0, Articulation::Multibody);
+    let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
+    let start = samples[999].body.translation;
+    let end = samples.last().unwrap().body.translation;
+    println!(
+        "round hexapod along y: {:.3} m in 5 s (nominal {:.3}), {:.3} m sideways",
+        end.x - start.x,
+        speed * 5.0,
+        end.y - start.y
+    );
+    assert!(
+        end.x - start.x > 0.8 * speed * 5.0,
+        "walked only {:.3} m",
+        end.x - start.x
+    );
+    assert!((end.y - start.y).abs() < 0.1 * speed * 5.0);
+}
+
 /// Uphill on 10°: planned for level ground the body pitches with the slope; following the terrain
 /// under the feet keeps it level.
 #[test]

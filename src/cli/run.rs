@@ -185,6 +185,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         m.walk_time,
         if m.complete { "" } else { " (stopped early)" }
     );
+    if let Some(robot) = scenario.robot()
+        && robot.forward.from != hexsim::robot::legs::ForwardFrom::Urdf
+    {
+        println!("  walking direction {}", robot.forward.describe());
+    }
     println!(
         "  distance {:.3} m (forward {:.3}, sideways {:.3}), mean speed {:.4} m/s, heading change {:.2}°",
         m.distance, m.forward_distance, m.sideways_distance, m.mean_speed, m.heading_change_deg

@@ -1,6 +1,7 @@
 //! The robot: URDF loading and validation, leg discovery, and leg kinematics.
 
 pub mod kinematics;
+pub mod legs;
 mod model;
 pub mod urdf;
 

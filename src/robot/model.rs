@@ -102,6 +102,9 @@ pub struct RobotModel {
     pub joints: Vec<Joint>,
     /// In the order of [`LEG_NAMES`].
     pub legs: Vec<Leg>,
+    /// The walking direction in the URDF's base link frame; the model's body frame is that frame
+    /// turned about z so that its x points this way (see `legs`).
+    pub forward: super::legs::Forward,
     /// Things that were accepted with a fallback (e.g. a missing visual mesh).
     pub warnings: Vec<String>,
 }

@@ -3,7 +3,8 @@
 //!
 //! Every error names the file and the element (link or joint) and says what was expected.
 
-use super::model::{Foot, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual};
+use super::legs::{self, Forward};
+use super::model::{Foot, Joint, Link, RobotModel, Shape, Visual};
 use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -21,11 +22,11 @@ fn pose(p: &urdf_rs::Pose) -> DAffine3 {
     DAffine3::from_rotation_translation(rotation, DVec3::from_array(p.xyz.0))
 }
 
-/// Feet named in a robot file beside the URDF (`NAME.toml` next to `NAME.urdf`), for a robot whose
-/// URDF does not mark its feet with collision spheres:
+/// A robot file beside the URDF (`NAME.toml` next to `NAME.urdf`) says what the URDF does not:
 ///
 /// ```toml
-/// [feet]
+/// forward = "+y"              # walking direction: "+x" (default) "-x" "+y" "-y", or degrees about z
+/// [feet]                      # for a URDF that does not mark its feet with collision spheres
 /// links = ["lf_tibia", "lm_tibia", "lr_tibia", "rf_tibia", "rm_tibia", "rr_tibia"]
 /// offset = [0.12, 0.0, 0.0]   # foot centre in each link's frame (m)
 /// radius = 0.01               # m
@@ -41,7 +42,35 @@ pub struct FeetConfig {
 #[derive(Debug, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RobotFile {
-    feet: FeetConfig,
+    #[serde(default)]
+    feet: Option<FeetConfig>,
+    #[serde(default)]
+    forward: Option<toml::Value>,
+}
+
+/// The robot file's `forward` as an angle about z (rad).
+fn forward_yaw(value: &toml::Value) -> Result<f64, String> {
+    let yaw = match value {
+        toml::Value::String(s) => match s.as_str() {
+            "+x" | "x" => 0.0,
+            "+y" | "y" => 90.0,
+            "-x" => 180.0,
+            "-y" => -90.0,
+            other => {
+                return Err(format!(
+                    "field `forward`: expected \"+x\", \"-x\", \"+y\", \"-y\" or an angle in degrees, got {other:?}"
+                ));
+            }
+        },
+        toml::Value::Integer(d) => *d as f64,
+        toml::Value::Float(d) if d.is_finite() => *d,
+        other => {
+            return Err(format!(
+                "field `forward`: expected \"+x\", \"-x\", \"+y\", \"-y\" or an angle in degrees, got {other}"
+            ));
+        }
+    };
+    Ok(yaw.to_radians())
 }
 
 /// Loads and validates a URDF robot, with the robot file beside it if there is one.
@@ -56,7 +85,7 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
         urdf_rs::read_from_string(&text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let robot_file = path.with_extension("toml");
-    let feet = if robot_file.is_file() {
+    let (feet, forward) = if robot_file.is_file() {
         let fail = |message: String| RobotError {
             file: robot_file.clone(),
             message,
@@ -65,28 +94,35 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
             .map_err(|e| fail(format!("cannot read the robot file: {e}")))?;
         let file: RobotFile =
             toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
-        if !(file.feet.radius.is_finite() && file.feet.radius > 0.0) {
-            return Err(fail(format!(
-                "field `feet.radius`: expected a finite number > 0, got {}",
-                file.feet.radius
-            )));
+        if let Some(feet) = &file.feet {
+            if !(feet.radius.is_finite() && feet.radius > 0.0) {
+                return Err(fail(format!(
+                    "field `feet.radius`: expected a finite number > 0, got {}",
+                    feet.radius
+                )));
+            }
+            if let Some(missing) = feet
+                .links
+                .iter()
+                .find(|name| !robot.links.iter().any(|l| &l.name == *name))
+            {
+                return Err(fail(format!(
+                    "field `feet.links`: `{missing}` is not a link of {}",
+                    path.display()
+                )));
+            }
         }
-        if let Some(missing) = file
-            .feet
-            .links
-            .iter()
-            .find(|name| !robot.links.iter().any(|l| &l.name == *name))
-        {
-            return Err(fail(format!(
-                "field `feet.links`: `{missing}` is not a link of {}",
-                path.display()
-            )));
-        }
-        Some(file.feet)
+        let forward = file
+            .forward
+            .as_ref()
+            .map(forward_yaw)
+            .transpose()
+            .map_err(fail)?;
+        (file.feet, forward)
     } else {
-        None
+        (None, None)
     };
-    build(&robot, base, feet.as_ref()).map_err(fail)
+    build(&robot, base, feet.as_ref(), forward).map_err(fail)
 }
 
 /// Parses URDF text (for tests); `base` resolves mesh paths.
@@ -97,7 +133,13 @@ pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
     };
     let robot =
         urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
-    build(&robot, origin.parent().unwrap_or(Path::new(".")), None).map_err(fail)
+    build(
+        &robot,
+        origin.parent().unwrap_or(Path::new(".")),
+        None,
+        None,
+    )
+    .map_err(fail)
 }
 
 struct Tree<'a> {
@@ -278,6 +320,7 @@ fn build(
     robot: &urdf_rs::Robot,
     base: &Path,
     feet: Option<&FeetConfig>,
+    forward: Option<f64>,
 ) -> Result<RobotModel, String> {
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
@@ -426,13 +469,16 @@ fn build(
             ));
         }
     }
-    let legs = find_legs(&links, &joints, &mesh_collisions)?;
+    let (legs, forward): (_, Forward) =
+        legs::find_legs(&links, &joints, &mesh_collisions, forward)?;
+    legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
     Ok(RobotModel {
         name: robot.name.clone(),
         source: PathBuf::new(),
         links,
         joints,
         legs,
+        forward,
         warnings,
     })
 }
@@ -467,99 +513,4 @@ fn add_mass(body: &mut Link, mass: f64, com: DVec3, inertia: DMat3) {
 
 fn outer(a: DVec3, b: DVec3) -> DMat3 {
     DMat3::from_cols(a * b.x, a * b.y, a * b.z)
-}
-
-/// The legs: every body with a foot, traced back to the root; each must hang from the root by
-/// exactly three joints, three on each side of the body.
-/// `mesh_collisions`: (link, mesh file, folder it resolves from) of every collision mesh, to say
-/// what is wrong with a leg whose foot is a mesh.
-fn find_legs(
-    links: &[Link],
-    joints: &[Joint],
-    mesh_collisions: &[(String, String, std::path::PathBuf)],
-) -> Result<Vec<Leg>, String> {
-    let mut found = Vec::new();
-    for (k, link) in links.iter().enumerate() {
-        let Some(foot) = link.foot else { continue };
-        let mut chain = Vec::new();
-        let mut at = k;
-        while let Some(j) = links[at].parent_joint {
-            chain.push(j);
-            at = joints[j].parent;
-        }
-        chain.reverse();
-        if chain.len() != 3 {
-            return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",
-                link.name,
-                chain.len()
-            ));
-        }
-        found.push((chain, k, foot));
-    }
-    // leaves without a foot are legs without a foot
-    for (k, link) in links.iter().enumerate() {
-        let is_leaf = !joints.iter().any(|j| j.parent == k);
-        if is_leaf && k != 0 && link.foot.is_none() {
-            if let Some((_, file, base)) = mesh_collisions.iter().find(|(l, ..)| *l == link.name) {
-                let relative = file
-                    .trim_start_matches("package://")
-                    .trim_start_matches("file://");
-                let path = base.join(relative);
-                let problem = if path.is_file() {
-                    "hexsim's feet are spheres".to_string()
-                } else {
-                    format!("{} does not exist", path.display())
-                };
-                return Err(format!(
-                    "link `{}` ends a leg and its foot is a collision mesh ({file}): {problem}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
-                    link.name
-                ));
-            }
-            return Err(format!(
-                "link `{}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot",
-                link.name
-            ));
-        }
-    }
-    if found.len() != 6 {
-        return Err(format!(
-            "found {} legs (chains of 3 revolute joints ending in a foot sphere), expected 6 for a hexapod",
-            found.len()
-        ));
-    }
-    let shared = found
-        .iter()
-        .flat_map(|(c, ..)| c.iter())
-        .collect::<std::collections::HashSet<_>>();
-    if shared.len() != 18 {
-        return Err("legs share joints: each of the six legs needs its own three joints".into());
-    }
-    // classify by where the first joint sits on the body
-    let hip = |chain: &[usize]| joints[chain[0]].origin.translation;
-    let (mut left, mut right): (Vec<_>, Vec<_>) =
-        found.into_iter().partition(|(c, ..)| hip(c).y > 0.0);
-    if left.len() != 3 || right.len() != 3 {
-        return Err(format!(
-            "expected three legs on each side of the body (hip y > 0 left, y < 0 right), found {} left and {} right",
-            left.len(),
-            right.len()
-        ));
-    }
-    let by_x_descending = |a: &(Vec<usize>, usize, Foot), b: &(Vec<usize>, usize, Foot)| {
-        hip(&b.0).x.total_cmp(&hip(&a.0).x)
-    };
-    left.sort_by(by_x_descending);
-    right.sort_by(by_x_descending);
-    Ok(left
-        .into_iter()
-        .chain(right)
-        .zip(LEG_NAMES)
-        .map(|((chain, foot_link, foot), name)| Leg {
-            name,
-            joints: [chain[0], chain[1], chain[2]],
-            foot_link,
-            foot,
-        })
-        .collect())
 }

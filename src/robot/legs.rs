@@ -1,0 +1,356 @@
+//! The six legs of a robot, whatever its outline (rectangular, round, hexagonal) and whichever
+//! way its URDF points: the chains of three joints from the body to a foot, the walking direction,
+//! and each leg's name (`lf lm lr rf rm rr`) from where it sits around the body about that
+//! direction, so every gait file works for every robot.
+//!
+//! The walking direction is the URDF's +x unless the robot file says otherwise
+//! (`forward = "+y"`, or an angle in degrees about z). When the hips do not lie three on each side
+//! of the x axis (a round robot with legs at 0° and 180°), hexsim picks the direction that splits
+//! them: +y if it does, else the one that leaves the hips farthest from the axis, and says so.
+//! The model is then turned about z so that its body frame's x is the walking direction.
+
+use super::model::{Foot, Joint, LEG_NAMES, Leg, Link};
+use glam::{DAffine3, DMat3, DVec2};
+
+/// Where the walking direction came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForwardFrom {
+    /// The URDF's +x.
+    Urdf,
+    /// The robot file's `forward`.
+    RobotFile,
+    /// Chosen from the legs: the URDF's x does not split them three a side.
+    Legs,
+}
+
+/// The walking direction: its angle about z in the URDF's base link frame (rad), and where it
+/// came from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forward {
+    pub yaw: f64,
+    pub from: ForwardFrom,
+}
+
+impl Forward {
+    pub const URDF_X: Forward = Forward {
+        yaw: 0.0,
+        from: ForwardFrom::Urdf,
+    };
+
+    /// "+x", "+y", "-x", "-y", or the angle in degrees.
+    pub fn describe(&self) -> String {
+        let deg = self.yaw.to_degrees();
+        let name = [
+            (0.0, "+x"),
+            (90.0, "+y"),
+            (180.0, "-x"),
+            (-180.0, "-x"),
+            (-90.0, "-y"),
+        ]
+        .iter()
+        .find(|(a, _)| (deg - a).abs() < 1e-9)
+        .map_or(format!("{deg:.1}° from +x"), |(_, n)| n.to_string());
+        let from = match self.from {
+            ForwardFrom::Urdf => "the URDF's",
+            ForwardFrom::RobotFile => "set in the robot file",
+            ForwardFrom::Legs => "chosen: the legs do not split three a side about x",
+        };
+        format!("{name} ({from})")
+    }
+}
+
+/// A leg before it is named: its joints from the body out, and its foot.
+struct Chain {
+    joints: [usize; 3],
+    foot_link: usize,
+    foot: Foot,
+}
+
+/// A hip this close to the walking axis (as a fraction of the hips' mean distance from their
+/// centre) is on neither side: the axis does not split the legs.
+const SIDE_MARGIN: f64 = 0.05;
+
+/// The legs found, named, and the walking direction. `forward`: the robot file's direction
+/// (yaw, rad), if it gives one.
+pub(super) fn find_legs(
+    links: &[Link],
+    joints: &[Joint],
+    mesh_collisions: &[(String, String, std::path::PathBuf)],
+    forward: Option<f64>,
+) -> Result<(Vec<Leg>, Forward), String> {
+    let chains = chains(links, joints, mesh_collisions)?;
+    // each hip in the body frame (the first joint hangs from the root)
+    let hips: Vec<DVec2> = chains
+        .iter()
+        .map(|c| joints[c.joints[0]].origin.translation.truncate())
+        .collect();
+    let forward = match forward {
+        Some(yaw) => {
+            let f = Forward {
+                yaw,
+                from: ForwardFrom::RobotFile,
+            };
+            if split(&hips, yaw).is_none() {
+                return Err(format!(
+                    "the walking direction {} does not have three hips on each side ({}); set `forward` in the robot file to a direction that does",
+                    f.describe(),
+                    sides(&hips, yaw)
+                ));
+            }
+            f
+        }
+        None => choose_forward(&hips).ok_or_else(|| {
+            format!(
+                "the hips cannot be split three on each side of any walking direction (about x: {}); is it a hexapod?",
+                sides(&hips, 0.0)
+            )
+        })?,
+    };
+    // name by angle from the walking direction: left legs (to its left) front to rear, then right
+    let (along, across) = axes(forward.yaw);
+    let centre = hips.iter().copied().sum::<DVec2>() / hips.len() as f64;
+    let angle = |h: DVec2| {
+        let d = h - centre;
+        d.dot(across).atan2(d.dot(along))
+    };
+    let mut order: Vec<usize> = (0..chains.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (aa, ab) = (angle(hips[a]), angle(hips[b]));
+        // left (angle > 0) before right, each by |angle| from the front
+        (ab > 0.0)
+            .cmp(&(aa > 0.0))
+            .then(aa.abs().total_cmp(&ab.abs()))
+    });
+    let legs = order
+        .into_iter()
+        .zip(LEG_NAMES)
+        .map(|(k, name)| Leg {
+            name,
+            joints: chains[k].joints,
+            foot_link: chains[k].foot_link,
+            foot: chains[k].foot,
+        })
+        .collect();
+    Ok((legs, forward))
+}
+
+/// The walking direction and the direction to its left, in the body's xy plane.
+fn axes(yaw: f64) -> (DVec2, DVec2) {
+    let (s, c) = yaw.sin_cos();
+    (DVec2::new(c, s), DVec2::new(-s, c))
+}
+
+/// How far each hip sits to the left of the walking axis through the hips' centre, if three sit
+/// clearly on each side: the smallest such distance.
+fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
+    let centre = hips.iter().copied().sum::<DVec2>() / hips.len() as f64;
+    let scale = hips.iter().map(|h| (*h - centre).length()).sum::<f64>() / hips.len() as f64;
+    let (_, across) = axes(yaw);
+    let lateral: Vec<f64> = hips.iter().map(|h| (*h - centre).dot(across)).collect();
+    let left = lateral.iter().filter(|&&l| l > 0.0).count();
+    let clear = lateral.iter().all(|l| l.abs() > SIDE_MARGIN * scale);
+    (left == 3 && lateral.len() == 6 && clear)
+        .then(|| lateral.iter().fold(f64::INFINITY, |m, l| m.min(l.abs())))
+}
+
+/// Counts of hips left, right and on the axis, for messages.
+fn sides(hips: &[DVec2], yaw: f64) -> String {
+    let centre = hips.iter().copied().sum::<DVec2>() / hips.len().max(1) as f64;
+    let scale = hips.iter().map(|h| (*h - centre).length()).sum::<f64>() / hips.len().max(1) as f64;
+    let (_, across) = axes(yaw);
+    let lateral: Vec<f64> = hips.iter().map(|h| (*h - centre).dot(across)).collect();
+    let on = lateral
+        .iter()
+        .filter(|l| l.abs() <= SIDE_MARGIN * scale)
+        .count();
+    let left = lateral.iter().filter(|&&l| l > SIDE_MARGIN * scale).count();
+    format!(
+        "{left} left, {} right, {on} on the axis",
+        lateral.len() - left - on
+    )
+}
+
+/// The URDF's +x if it splits the hips three a side; else +y; else, of the whole degrees, the
+/// direction whose nearest hip is farthest from the axis (the first such from +x).
+fn choose_forward(hips: &[DVec2]) -> Option<Forward> {
+    if split(hips, 0.0).is_some() {
+        return Some(Forward::URDF_X);
+    }
+    let chosen = |yaw: f64| Forward {
+        yaw,
+        from: ForwardFrom::Legs,
+    };
+    if split(hips, std::f64::consts::FRAC_PI_2).is_some() {
+        return Some(chosen(std::f64::consts::FRAC_PI_2));
+    }
+    let mut best: Option<(f64, f64)> = None;
+    for deg in 1..360 {
+        let yaw = (deg as f64).to_radians();
+        if let Some(margin) = split(hips, yaw)
+            && best.is_none_or(|(_, m)| margin > m + 1e-12)
+        {
+            best = Some((yaw, margin));
+        }
+    }
+    best.map(|(yaw, _)| chosen(yaw))
+}
+
+/// Turns the model about z so that its body frame's x is the walking direction `yaw`: what hangs
+/// from the root (its visuals, mass, the joints on it) is re-expressed in the turned frame.
+pub(super) fn turn_to_forward(links: &mut [Link], joints: &mut [Joint], yaw: f64) {
+    if yaw == 0.0 {
+        return;
+    }
+    let turn = DAffine3::from_rotation_z(-yaw);
+    let rotation = DMat3::from_rotation_z(-yaw);
+    let root = &mut links[0];
+    root.com = rotation * root.com;
+    root.inertia = rotation * root.inertia * rotation.transpose();
+    for visual in &mut root.visuals {
+        visual.origin = turn * visual.origin;
+    }
+    if let Some(foot) = &mut root.foot {
+        foot.center = rotation * foot.center;
+    }
+    for joint in joints.iter_mut().filter(|j| j.parent == 0) {
+        joint.origin = turn * joint.origin;
+    }
+}
+
+/// The six chains from the body to a foot: every link with a foot, traced back to the root; each
+/// must hang from it by exactly three joints of its own. `mesh_collisions`: (link, mesh file,
+/// folder it resolves from) of every collision mesh, to say what is wrong with a leg whose foot is
+/// a mesh.
+fn chains(
+    links: &[Link],
+    joints: &[Joint],
+    mesh_collisions: &[(String, String, std::path::PathBuf)],
+) -> Result<Vec<Chain>, String> {
+    let mut found = Vec::new();
+    for (k, link) in links.iter().enumerate() {
+        let Some(foot) = link.foot else { continue };
+        let mut chain = Vec::new();
+        let mut at = k;
+        while let Some(j) = links[at].parent_joint {
+            chain.push(j);
+            at = joints[j].parent;
+        }
+        chain.reverse();
+        if chain.len() != 3 {
+            return Err(format!(
+                "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",
+                link.name,
+                chain.len()
+            ));
+        }
+        found.push(Chain {
+            joints: [chain[0], chain[1], chain[2]],
+            foot_link: k,
+            foot,
+        });
+    }
+    // leaves without a foot are legs without a foot
+    for (k, link) in links.iter().enumerate() {
+        let is_leaf = !joints.iter().any(|j| j.parent == k);
+        if is_leaf && k != 0 && link.foot.is_none() {
+            if let Some((_, file, base)) = mesh_collisions.iter().find(|(l, ..)| *l == link.name) {
+                let relative = file
+                    .trim_start_matches("package://")
+                    .trim_start_matches("file://");
+                let path = base.join(relative);
+                let problem = if path.is_file() {
+                    "hexsim's feet are spheres".to_string()
+                } else {
+                    format!("{} does not exist", path.display())
+                };
+                return Err(format!(
+                    "link `{}` ends a leg and its foot is a collision mesh ({file}): {problem}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
+                    link.name
+                ));
+            }
+            return Err(format!(
+                "link `{}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot",
+                link.name
+            ));
+        }
+    }
+    if found.len() != 6 {
+        return Err(format!(
+            "found {} legs (chains of 3 revolute joints ending in a foot sphere), expected 6 for a hexapod",
+            found.len()
+        ));
+    }
+    let shared = found
+        .iter()
+        .flat_map(|c| c.joints.iter())
+        .collect::<std::collections::HashSet<_>>();
+    if shared.len() != 18 {
+        return Err("legs share joints: each of the six legs needs its own three joints".into());
+    }
+    Ok(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ring(degrees: &[f64]) -> Vec<DVec2> {
+        degrees
+            .iter()
+            .map(|d| 0.1 * DVec2::new(d.to_radians().cos(), d.to_radians().sin()))
+            .collect()
+    }
+
+    #[test]
+    fn a_rectangular_or_round_robot_split_about_x_walks_along_x() {
+        let rectangle = [(0.12, 0.06), (0.0, 0.08), (-0.12, 0.06)]
+            .iter()
+            .flat_map(|&(x, y)| [DVec2::new(x, y), DVec2::new(x, -y)])
+            .collect::<Vec<_>>();
+        assert_eq!(choose_forward(&rectangle), Some(Forward::URDF_X));
+        let round = ring(&[30.0, 90.0, 150.0, 210.0, 270.0, 330.0]);
+        assert_eq!(choose_forward(&round), Some(Forward::URDF_X));
+    }
+
+    #[test]
+    fn legs_on_the_x_axis_make_it_walk_along_y() {
+        for hips in [
+            ring(&[0.0, 45.0, 135.0, 180.0, 225.0, 315.0]),
+            ring(&[0.0, 60.0, 120.0, 180.0, 240.0, 300.0]),
+        ] {
+            let forward = choose_forward(&hips).unwrap();
+            assert_eq!(forward.from, ForwardFrom::Legs);
+            assert!((forward.yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+            assert!(
+                forward.describe().starts_with("+y"),
+                "{}",
+                forward.describe()
+            );
+        }
+    }
+
+    #[test]
+    fn an_off_axis_layout_gets_the_direction_that_clears_the_hips_most() {
+        // legs on both the x and the y axis: neither splits them three a side
+        let hips = ring(&[0.0, 90.0, 150.0, 180.0, 270.0, 330.0]);
+        assert!(split(&hips, 0.0).is_none() && split(&hips, std::f64::consts::FRAC_PI_2).is_none());
+        let forward = choose_forward(&hips).unwrap();
+        assert_eq!(forward.from, ForwardFrom::Legs);
+        let margin = split(&hips, forward.yaw).unwrap();
+        for deg in 0..360 {
+            if let Some(m) = split(&hips, (deg as f64).to_radians()) {
+                assert!(
+                    m <= margin + 1e-12,
+                    "{deg}° clears the hips by {m} > {margin}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_direction_with_hips_on_its_axis_is_refused() {
+        let hips = ring(&[0.0, 45.0, 135.0, 180.0, 225.0, 315.0]);
+        assert!(split(&hips, 0.0).is_none());
+        assert_eq!(sides(&hips, 0.0), "2 left, 2 right, 2 on the axis");
+    }
+}
