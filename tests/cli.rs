@@ -267,6 +267,44 @@ fn a_diverging_run_is_caught_with_when_where_and_why() {
     assert!(stderr.contains("dt < 3.16e-4 s"), "{stderr}");
 }
 
+/// `hexsim robot` says what hexsim found: legs by name with their hips, the walking direction,
+/// the masses, and what each servo holds standing; a robot it cannot use is an input error.
+#[test]
+fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
+    let out = hexsim()
+        .args(["robot", "robots/hex18.urdf"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    for fragment in [
+        "walking direction +x (the URDF's)",
+        "mass 2.520 kg: body 1.500 kg",
+        "lf  hip (+0.120, +0.060, +0.000) m; joints lf_coxa_joint lf_femur_joint lf_tibia_joint; segments 0.050 0.080 0.120 m",
+        "rr  hip (-0.120, -0.060, +0.000) m",
+        "standing in tripod's pose (stance height 0.1 m)",
+        "the most loaded servo: ",
+    ] {
+        assert!(stdout.contains(fragment), "no {fragment:?} in\n{stdout}");
+    }
+    let out = hexsim()
+        .args(["robot", "tests/data/round_hexapod_y.urdf"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout
+            .contains("walking direction +y (chosen: the legs do not split three a side about x)"),
+        "{stdout}"
+    );
+    let out = hexsim()
+        .args(["robot", "tests/data/bad/urdf/five_legs.urdf"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("found 5 legs"));
+}
+
 /// A robot file can set the walking direction (`forward = "-y"`); the run says it and walks
 /// that way (the body frame's x, so forward distance is positive and sideways small).
 #[test]

@@ -6,6 +6,7 @@ mod batch;
 mod bench;
 mod contact;
 mod merge;
+mod robot;
 mod run;
 mod terrain;
 
@@ -44,6 +45,9 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(merge::MergeArgs),
+    /// Show what hexsim makes of a robot: its legs, walking direction, masses, and the torque
+    /// each servo holds standing in a gait's pose.
+    Robot(robot::RobotArgs),
     /// Inspect or export terrains.
     #[command(subcommand)]
     Terrain(terrain::TerrainCommand),
@@ -60,6 +64,7 @@ impl Cli {
             Some(Command::Batch(args)) => batch::batch(*args),
             Some(Command::Merge(args)) => merge::merge(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Bench(args)) => bench::bench(args).map(|()| ExitCode::SUCCESS),
+            Some(Command::Robot(args)) => robot::robot_command(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Terrain(command)) => {
                 terrain::terrain_command(command).map(|()| ExitCode::SUCCESS)
             }

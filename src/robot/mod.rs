@@ -3,6 +3,7 @@
 pub mod kinematics;
 pub mod legs;
 mod model;
+pub mod statics;
 pub mod urdf;
 
 pub use model::{Foot, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual};

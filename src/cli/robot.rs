@@ -1,0 +1,160 @@
+//! `hexsim robot FILE`: what hexsim makes of a robot — its legs, walking direction, masses, and
+//! what its servos must hold standing in a gait's pose.
+
+use anyhow::Result;
+use clap::Args;
+use hexsim::gait::{GaitController, GaitSpec};
+use hexsim::robot::{self, RobotModel, statics};
+use hexsim::scenario::builtin;
+use hexsim::sim::STANDARD_GRAVITY;
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct RobotArgs {
+    /// Robot URDF (with its robot file, NAME.toml, beside it if there is one).
+    robot: PathBuf,
+    /// Gait whose standing pose is checked. Default: gaits/tripod.toml (built in).
+    #[arg(long)]
+    gait: Option<PathBuf>,
+}
+
+pub fn robot_command(args: RobotArgs) -> Result<()> {
+    let model = robot::load(&args.robot)?;
+    let gait = match &args.gait {
+        Some(path) => GaitSpec::from_file(path)?,
+        None => GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))?,
+    };
+    print!("{}", describe(&args.robot, &model, &gait));
+    Ok(())
+}
+
+/// Whole degrees, without a "-0".
+fn deg(r: f64) -> String {
+    format!("{:.0}°", r.to_degrees().round() + 0.0)
+}
+
+/// A signed number to the thousandth (a torque in N·m, a position in m), without a "-0.000".
+fn thousandths(t: f64) -> String {
+    format!("{:+.3}", (t * 1e3).round() / 1e3 + 0.0)
+}
+
+/// The report, as printed.
+fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{}: {}, {} links, {} joints, 6 legs",
+        file.display(),
+        model.name,
+        model.links.len(),
+        model.joints.len()
+    );
+    let _ = writeln!(out, "  walking direction {}", model.forward.describe());
+    let leg_mass = |leg: &robot::Leg| -> f64 {
+        leg.joints
+            .iter()
+            .map(|&j| model.links[model.joints[j].child].mass)
+            .sum()
+    };
+    let legs: Vec<String> = model
+        .legs
+        .iter()
+        .map(|l| format!("{:.3}", leg_mass(l)))
+        .collect();
+    let _ = writeln!(
+        out,
+        "  mass {:.3} kg: body {:.3} kg, legs {} kg (lf lm lr rf rm rr)",
+        model.total_mass(),
+        model.links[0].mass,
+        legs.join(" ")
+    );
+    let _ = writeln!(
+        out,
+        "  legs (in hexsim's body frame: x the walking direction, z up):"
+    );
+    for leg in &model.legs {
+        let joints = leg.joints.map(|j| &model.joints[j]);
+        let hip = joints[0].origin.translation;
+        let [a, b, c] = statics::segment_lengths(model, leg);
+        let _ = writeln!(
+            out,
+            "    {}  hip ({}, {}, {}) m; joints {} {} {}; segments {a:.3} {b:.3} {c:.3} m; foot radius {:.3} m",
+            leg.name,
+            thousandths(hip.x),
+            thousandths(hip.y),
+            thousandths(hip.z),
+            joints[0].name,
+            joints[1].name,
+            joints[2].name,
+            leg.foot.radius
+        );
+        let limits: Vec<String> = joints
+            .iter()
+            .map(|j| format!("[{}, {}]", deg(j.lower), deg(j.upper)))
+            .collect();
+        let efforts: Vec<String> = joints.iter().map(|j| format!("{}", j.effort)).collect();
+        let _ = writeln!(
+            out,
+            "        limits {}; effort {} N·m",
+            limits.join(" "),
+            efforts.join(" ")
+        );
+    }
+    match GaitController::new(model, gait.clone()) {
+        Err(e) => {
+            let _ = writeln!(out, "  standing in {}'s pose: does not fit: {e}", gait.name);
+        }
+        Ok(controller) => {
+            let mut pose = vec![0.0; model.joints.len()];
+            for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
+                for (j, a) in leg.joints.iter().zip(angles) {
+                    pose[*j] = a;
+                }
+            }
+            let torques = statics::standing_torques(model, &pose, STANDARD_GRAVITY);
+            let _ = writeln!(
+                out,
+                "  standing in {}'s pose (stance height {} m): joint angles, and the torque each servo holds (share of its effort):",
+                gait.name, gait.stance_height
+            );
+            let mut worst: Option<(f64, String)> = None;
+            for leg in &model.legs {
+                let cells: Vec<String> = leg
+                    .joints
+                    .iter()
+                    .map(|&j| {
+                        let joint = &model.joints[j];
+                        let share = torques[j].abs() / joint.effort;
+                        if worst.as_ref().is_none_or(|(w, _)| share > *w) {
+                            worst = Some((share, joint.name.clone()));
+                        }
+                        format!(
+                            "{} {} N·m ({:.0} %)",
+                            deg(pose[j]),
+                            thousandths(torques[j]),
+                            100.0 * share
+                        )
+                    })
+                    .collect();
+                let _ = writeln!(out, "    {}  {}", leg.name, cells.join(", "));
+            }
+            if let Some((share, joint)) = worst {
+                let _ = writeln!(
+                    out,
+                    "  the most loaded servo: {joint} at {:.0} % of its effort{}",
+                    100.0 * share,
+                    if share > 1.0 {
+                        ": it cannot hold the robot up"
+                    } else {
+                        ""
+                    }
+                );
+            }
+        }
+    }
+    for warning in &model.warnings {
+        let _ = writeln!(out, "  warning: {warning}");
+    }
+    out
+}
