@@ -282,7 +282,7 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
         "mass 2.520 kg: body 1.500 kg",
         "lf  hip (+0.120, +0.060, +0.000) m; joints lf_coxa_joint lf_femur_joint lf_tibia_joint; segments 0.050 0.080 0.120 m",
         "rr  hip (-0.120, -0.060, +0.000) m",
-        "standing in tripod's pose (stance height 0.1 m)",
+        "standing in tripod's pose (hips 0.1 m above the ground)",
         "the most loaded servo: ",
     ] {
         assert!(stdout.contains(fragment), "no {fragment:?} in\n{stdout}");

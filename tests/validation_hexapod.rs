@@ -518,6 +518,46 @@ fn a_hexapod_whose_legs_straddle_x_walks_along_y() {
     assert!((end.y - start.y).abs() < 0.1 * speed * 5.0);
 }
 
+/// The stance is measured from the hips' plane: a robot whose base link origin sits 0.2 m below
+/// its hips stands and walks with the same gait as the round hexapod it was made from (measured
+/// from the base origin, no stance would fit: its feet would have to be 0.31 m below the hips).
+#[test]
+fn a_hexapod_whose_base_origin_is_below_its_hips_walks() {
+    let model = Arc::new(robot::load(&project_file("tests/data/low_base_hexapod.urdf")).unwrap());
+    let gait = GaitSpec {
+        reach: Some(0.16),
+        stance_height: 0.11,
+        ..tripod()
+    };
+    let speed = gait.nominal_speed();
+    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let placement = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let mut walker = walker(model, ground, placement, gait, 1.0, Articulation::Multibody);
+    let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
+    let start = samples[999].body.translation;
+    let end = samples.last().unwrap().body.translation;
+    // the hips' plane stands 0.11 m above the ground (the feet's centres a radius above it)
+    let hips = end.z + 0.2;
+    println!(
+        "low base: {:.3} m in 5 s (nominal {:.3}); hips {hips:.3} m above the ground",
+        end.x - start.x,
+        speed * 5.0
+    );
+    assert!(
+        end.x - start.x > 0.8 * speed * 5.0,
+        "walked only {:.3} m",
+        end.x - start.x
+    );
+    assert!(
+        (hips - 0.11).abs() < 0.01,
+        "hips {hips:.3} m above the ground, stance 0.11 m"
+    );
+}
+
 /// Uphill on 10°: planned for level ground the body pitches with the slope; following the terrain
 /// under the feet keeps it level.
 #[test]

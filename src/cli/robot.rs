@@ -115,7 +115,7 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             let torques = statics::standing_torques(model, &pose, STANDARD_GRAVITY);
             let _ = writeln!(
                 out,
-                "  standing in {}'s pose (stance height {} m): joint angles, and the torque each servo holds (share of its effort):",
+                "  standing in {}'s pose (hips {} m above the ground): joint angles, and the torque each servo holds (share of its effort):",
                 gait.name, gait.stance_height
             );
             let mut worst: Option<(f64, String)> = None;

@@ -44,6 +44,12 @@ pub struct GaitController {
 /// Farther than this from its target (m), an IK answer counts as clamped.
 pub const REACH_TOLERANCE: f64 = 1e-4;
 
+/// Height of the hips' plane in the body frame: the mean height of the six first joints (zero for
+/// hex18, whose base link origin is at its hips).
+pub fn hips_plane(chains: &[LegChain]) -> f64 {
+    chains.iter().map(|c| c.hip().z).sum::<f64>() / chains.len().max(1) as f64
+}
+
 impl GaitController {
     /// Builds the controller and checks that the legs reach the standing pose and the swing apex.
     pub fn new(model: &RobotModel, spec: GaitSpec) -> Result<Self, String> {
@@ -54,6 +60,9 @@ impl GaitController {
             .collect();
         let mut neutral = [DVec3::ZERO; 6];
         let mut last = [[0.0; 3]; 6];
+        // the stance is measured from the hips' plane, not from the base link's origin, which a
+        // URDF may put anywhere
+        let hips = hips_plane(&chains);
         for (k, chain) in chains.iter().enumerate() {
             let leg = &model.legs[k];
             let reach = spec.reach.unwrap_or(0.6 * chain.length());
@@ -62,7 +71,7 @@ impl GaitController {
             neutral[k] = DVec3::new(
                 hip.x + reach * yaw.cos(),
                 hip.y + reach * yaw.sin(),
-                -spec.stance_height + leg.foot.radius,
+                hips - spec.stance_height + leg.foot.radius,
             );
             // a bent-knee guess: femur up, tibia down, so the solver finds the usual stance
             let guess = chain.solve(neutral[k], [0.0, -0.3, 1.2]);

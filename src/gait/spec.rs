@@ -6,7 +6,7 @@
 //! duty_factor = 0.5     # fraction of the cycle a foot is on the ground
 //! stride_length = 0.06  # m, foot travel over a stance at the nominal speed
 //! step_height = 0.03    # m, swing apex above the stance
-//! stance_height = 0.10  # m, body above the ground
+//! stance_height = 0.10  # m, the hips' plane above the ground
 //! reach = 0.15          # m, horizontal foot distance from the hip (default: 60 % of the leg)
 //! swing = "sine"        # sine | cycloid | rectangle
 //! [phase_offsets]       # cycle fraction at which each leg's stance starts
@@ -41,6 +41,8 @@ pub struct GaitSpec {
     pub duty_factor: f64,
     pub stride_length: f64,
     pub step_height: f64,
+    /// Height of the hips' plane (the mean height of the legs' first joints) above the feet's
+    /// ground, standing (m).
     pub stance_height: f64,
     #[serde(default)]
     pub reach: Option<f64>,
