@@ -165,3 +165,51 @@ fn a_walk_recording_grows_linearly_with_the_run() {
     let per_minute = (c - a) / 30.0 * 60.0;
     assert!(per_minute < 6e6, "{per_minute:.0} B a minute");
 }
+
+/// A URDF's mesh visuals are drawn from the file its `package://` URI names (found in a
+/// ROS-style package folder above the URDF), at the URDF's `scale` (a mesh in millimetres).
+#[test]
+fn mesh_visuals_are_found_by_package_and_drawn_at_their_scale() {
+    let dir = scratch("mesh_visuals");
+    let package = dir.join("round_description");
+    std::fs::create_dir_all(package.join("urdf")).unwrap();
+    std::fs::create_dir_all(package.join("meshes")).unwrap();
+    std::fs::write(
+        package.join("meshes/body.stl"),
+        "solid body\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 100 0 0\nvertex 0 100 0\nendloop\nendfacet\nendsolid body\n",
+    )
+    .unwrap();
+    let urdf = std::fs::read_to_string(common::project_file("tests/data/round_hexapod.urdf"))
+        .unwrap()
+        .replacen(
+            r#"<visual><geometry><cylinder radius="0.1" length="0.04"/></geometry></visual>"#,
+            r#"<visual><geometry><mesh filename="package://round_description/meshes/body.stl" scale="0.001 0.001 0.001"/></geometry></visual>"#,
+            1,
+        );
+    assert!(urdf.contains("package://round_description"));
+    let robot = package.join("urdf/round.urdf");
+    std::fs::write(&robot, urdf).unwrap();
+    let rrd = dir.join("mesh.rrd");
+    let out = record(
+        &[
+            "run",
+            "--robot",
+            robot.to_str().unwrap(),
+            "--terrain",
+            "terrains/flat.toml",
+            "--duration",
+            "0.2",
+            "--settle",
+            "0.2",
+            "--strict",
+        ],
+        &rrd,
+    );
+    assert!(!out.contains("warning"), "{out}");
+    let contents = read_back(&rrd).unwrap();
+    let body = contents
+        .at(false, "world/robot/chassis/visual_0")
+        .expect("the body's visual");
+    assert!(body.components.contains("Asset3D:blob"), "{:?}", body.components);
+    assert!(body.components.contains("Transform3D:scale"), "{:?}", body.components);
+}

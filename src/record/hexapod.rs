@@ -313,8 +313,18 @@ fn log_visual(rec: &rerun::RecordingStream, entity: &str, visual: &Visual) -> Re
                 .with_colors([color])
                 .with_fill_mode(rerun::FillMode::Solid),
         )?,
-        Shape::Mesh { path, .. } => match rerun::Asset3D::from_file_path(path) {
-            Ok(asset) => rec.log_static(entity, &asset.with_albedo_factor(color))?,
+        Shape::Mesh { path, scale } => match rerun::Asset3D::from_file_path(path) {
+            Ok(asset) => {
+                rec.log_static(entity, &asset.with_albedo_factor(color))?;
+                // the URDF's mesh scale (e.g. 0.001 for a mesh drawn in millimetres)
+                let transform = rerun::Transform3D::from_translation_rotation_scale(
+                    origin.translation.as_vec3().to_array(),
+                    quaternion(&origin),
+                    scale.as_vec3().to_array(),
+                );
+                rec.log_static(entity, &transform)?;
+                return Ok(());
+            }
             Err(_) => rec.log_static(
                 entity,
                 &rerun::Ellipsoids3D::from_radii([0.01f32]).with_colors([color]),

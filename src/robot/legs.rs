@@ -254,14 +254,14 @@ fn chains(
         let is_leaf = !joints.iter().any(|j| j.parent == k);
         if is_leaf && k != 0 && link.foot.is_none() {
             if let Some((_, file, base)) = mesh_collisions.iter().find(|(l, ..)| *l == link.name) {
-                let relative = file
-                    .trim_start_matches("package://")
-                    .trim_start_matches("file://");
-                let path = base.join(relative);
-                let problem = if path.is_file() {
-                    "hexsim's feet are spheres".to_string()
-                } else {
-                    format!("{} does not exist", path.display())
+                let problem = match super::mesh::resolve(file, base) {
+                    Ok(_) => "hexsim's feet are spheres".to_string(),
+                    Err(tried) => format!(
+                        "{} does not exist",
+                        tried
+                            .first()
+                            .map_or(file.clone(), |p| p.display().to_string())
+                    ),
                 };
                 return Err(format!(
                     "link `{}` ends a leg and its foot is a collision mesh ({file}): {problem}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",

@@ -2,6 +2,7 @@
 
 pub mod kinematics;
 pub mod legs;
+pub mod mesh;
 mod model;
 pub mod statics;
 pub mod urdf;

@@ -4,6 +4,7 @@
 //! Every error names the file and the element (link or joint) and says what was expected.
 
 use super::legs::{self, Forward};
+use super::mesh;
 use super::model::{Foot, Joint, Link, RobotModel, Shape, Visual};
 use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashMap;
@@ -81,6 +82,7 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
     };
     let text =
         std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read the URDF: {e}")))?;
+    refuse_xacro(&text, path).map_err(fail)?;
     let robot =
         urdf_rs::read_from_string(&text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -140,6 +142,17 @@ pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
         None,
     )
     .map_err(fail)
+}
+
+/// A xacro file is a URDF template, which only xacro (ROS) expands.
+fn refuse_xacro(text: &str, path: &Path) -> Result<(), String> {
+    let named = path.extension().is_some_and(|e| e == "xacro");
+    if named || text.contains("xmlns:xacro") || text.contains("<xacro:") {
+        return Err(
+            "this is a xacro file (a URDF template): expand it first with xacro (from ROS: `xacro FILE > robot.urdf`) and give hexsim the URDF".into(),
+        );
+    }
+    Ok(())
 }
 
 struct Tree<'a> {
@@ -274,10 +287,15 @@ fn color_of(robot: &urdf_rs::Robot, material: &Option<urdf_rs::Material>) -> [f3
     rgba.map_or(default, |c| c.rgba.0.map(|v| v as f32))
 }
 
+/// Marks a visual mesh the recording cannot draw, until `build` folds them into one warning.
+const UNDRAWABLE: &str = "\u{0}undrawable ";
+
+/// A visual's shape. `fallback`: the link's collision shape, for a mesh the recording cannot draw.
 fn shape(
     geometry: &urdf_rs::Geometry,
     base: &Path,
     link: &str,
+    fallback: &Option<Shape>,
     warnings: &mut Vec<String>,
 ) -> Shape {
     match geometry {
@@ -294,23 +312,25 @@ fn shape(
         },
         urdf_rs::Geometry::Sphere { radius } => Shape::Sphere { radius: *radius },
         urdf_rs::Geometry::Mesh { filename, scale } => {
-            let relative = filename
-                .trim_start_matches("package://")
-                .trim_start_matches("file://");
-            let path = base.join(relative);
-            if path.is_file() {
-                Shape::Mesh {
-                    path,
-                    scale: scale
-                        .as_ref()
-                        .map_or(DVec3::ONE, |s| DVec3::from_array(s.0)),
+            let scale = scale
+                .as_ref()
+                .map_or(DVec3::ONE, |s| DVec3::from_array(s.0));
+            match mesh::resolve(filename, base) {
+                Ok(path) if mesh::drawable(&path) => Shape::Mesh { path, scale },
+                Ok(path) => {
+                    // one warning for them all, added by `build`
+                    warnings.push(format!("{UNDRAWABLE}{link}: {}", path.display()));
+                    fallback.clone().unwrap_or(Shape::Sphere { radius: 0.01 })
                 }
-            } else {
-                warnings.push(format!(
-                    "link `{link}`: visual mesh {} not found; drawn as a small sphere",
-                    path.display()
-                ));
-                Shape::Sphere { radius: 0.01 }
+                Err(tried) => {
+                    let tried: Vec<String> =
+                        tried.iter().map(|p| p.display().to_string()).collect();
+                    warnings.push(format!(
+                        "link `{link}`: visual mesh {filename} not found (looked in {}); drawn as a small sphere",
+                        tried.join(", ")
+                    ));
+                    Shape::Sphere { radius: 0.01 }
+                }
             }
         }
     }
@@ -411,10 +431,22 @@ fn build(
             frame.transform_point3(com),
             frame.matrix3 * inertia * frame.matrix3.transpose(),
         );
+        // the first collision that is not a mesh stands in for a visual mesh rerun cannot draw
+        let collision_shape = urdf_link
+            .collision
+            .iter()
+            .find(|c| !matches!(c.geometry, urdf_rs::Geometry::Mesh { .. }))
+            .map(|c| shape(&c.geometry, base, &urdf_link.name, &None, &mut Vec::new()));
         for visual in &urdf_link.visual {
             body.visuals.push(Visual {
                 origin: frame * pose(&visual.origin),
-                shape: shape(&visual.geometry, base, &urdf_link.name, &mut warnings),
+                shape: shape(
+                    &visual.geometry,
+                    base,
+                    &urdf_link.name,
+                    &collision_shape,
+                    &mut warnings,
+                ),
                 color: color_of(robot, &visual.material),
             });
         }
@@ -468,6 +500,17 @@ fn build(
                 link.inertia.to_cols_array()
             ));
         }
+    }
+    let (undrawable, mut warnings): (Vec<String>, Vec<String>) = warnings
+        .into_iter()
+        .partition(|w| w.starts_with(UNDRAWABLE));
+    if let Some(first) = undrawable.first() {
+        warnings.push(format!(
+            "{} visual mesh{} in a format the recording cannot draw (it draws STL, OBJ, glTF), e.g. link {}; drawn as the link's collision shape (or a small sphere)",
+            undrawable.len(),
+            if undrawable.len() == 1 { " is" } else { "es are" },
+            first.trim_start_matches(UNDRAWABLE)
+        ));
     }
     let (legs, forward): (_, Forward) =
         legs::find_legs(&links, &joints, &mesh_collisions, forward)?;

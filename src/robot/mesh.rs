@@ -1,0 +1,101 @@
+//! Mesh files named by a URDF: where `package://NAME/...` and `file://` URIs point, and whether
+//! the recording can draw the file.
+//!
+//! `package://NAME/rest` is resolved the ROS way, without ROS: each folder of `ROS_PACKAGE_PATH`
+//! (a folder named NAME in it, or the folder itself if it is named NAME), then the URDF's own
+//! folder and its parents (a folder named NAME beside or above the URDF). `file://PATH` is PATH;
+//! anything else is relative to the URDF's folder.
+
+use std::path::{Path, PathBuf};
+
+/// Mesh formats rerun draws (STL, OBJ, glTF).
+const DRAWABLE: [&str; 4] = ["stl", "obj", "gltf", "glb"];
+
+/// Where a mesh URI points: the file, or every place looked in.
+pub fn resolve(uri: &str, base: &Path) -> Result<PathBuf, Vec<PathBuf>> {
+    if let Some(path) = uri.strip_prefix("file://") {
+        let path = base.join(path);
+        return if path.is_file() {
+            Ok(path)
+        } else {
+            Err(vec![path])
+        };
+    }
+    let Some(rest) = uri.strip_prefix("package://") else {
+        let path = base.join(uri);
+        return if path.is_file() {
+            Ok(path)
+        } else {
+            Err(vec![path])
+        };
+    };
+    let (package, inside) = rest.split_once('/').unwrap_or((rest, ""));
+    let mut roots: Vec<PathBuf> = std::env::var_os("ROS_PACKAGE_PATH")
+        .map(|p| std::env::split_paths(&p).collect())
+        .unwrap_or_default();
+    roots.extend(base.ancestors().map(Path::to_path_buf));
+    let mut tried = Vec::new();
+    for root in roots {
+        let candidates = [
+            Some(root.join(package).join(inside)),
+            (root.file_name() == Some(package.as_ref())).then(|| root.join(inside)),
+        ];
+        for candidate in candidates.into_iter().flatten() {
+            if candidate.is_file() {
+                return Ok(candidate);
+            }
+            if !tried.contains(&candidate) {
+                tried.push(candidate);
+            }
+        }
+    }
+    Err(tried)
+}
+
+/// Whether the recording can draw this mesh file (by its extension).
+pub fn drawable(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| DRAWABLE.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("hexsim-mesh-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// A ROS-style tree: robot_description/urdf/robot.urdf, meshes in robot_description/meshes.
+    #[test]
+    fn a_package_uri_resolves_to_the_package_folder_above_the_urdf() {
+        let root = scratch("package");
+        let urdf_dir = root.join("my_robot_description/urdf");
+        let meshes = root.join("my_robot_description/meshes");
+        std::fs::create_dir_all(&urdf_dir).unwrap();
+        std::fs::create_dir_all(&meshes).unwrap();
+        std::fs::write(meshes.join("body.stl"), "solid x\nendsolid x\n").unwrap();
+        let found = resolve("package://my_robot_description/meshes/body.stl", &urdf_dir).unwrap();
+        assert_eq!(found, meshes.join("body.stl"));
+        let missing = resolve("package://other_pkg/meshes/body.stl", &urdf_dir).unwrap_err();
+        assert!(missing.contains(&urdf_dir.join("other_pkg/meshes/body.stl")));
+        assert!(
+            drawable(&found) && !drawable(Path::new("leg.DAE")) && drawable(Path::new("a.OBJ"))
+        );
+    }
+
+    #[test]
+    fn file_uris_and_relative_paths() {
+        let root = scratch("file");
+        std::fs::write(root.join("a.obj"), "").unwrap();
+        let absolute = format!("file://{}", root.join("a.obj").display());
+        assert_eq!(
+            resolve(&absolute, Path::new("/nowhere")).unwrap(),
+            root.join("a.obj")
+        );
+        assert_eq!(resolve("a.obj", &root).unwrap(), root.join("a.obj"));
+    }
+}
