@@ -284,6 +284,7 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
         "rr  hip (-0.120, -0.060, +0.000) m",
         "standing in tripod's pose (hips 0.1 m above the ground)",
         "the most loaded servo: ",
+        "walking tripod's cycle at 0.120 m/s on level ground: every foot target reached; least room: ",
     ] {
         assert!(stdout.contains(fragment), "no {fragment:?} in\n{stdout}");
     }

@@ -210,6 +210,14 @@ fn mesh_visuals_are_found_by_package_and_drawn_at_their_scale() {
     let body = contents
         .at(false, "world/robot/chassis/visual_0")
         .expect("the body's visual");
-    assert!(body.components.contains("Asset3D:blob"), "{:?}", body.components);
-    assert!(body.components.contains("Transform3D:scale"), "{:?}", body.components);
+    assert!(
+        body.components.contains("Asset3D:blob"),
+        "{:?}",
+        body.components
+    );
+    assert!(
+        body.components.contains("Transform3D:scale"),
+        "{:?}",
+        body.components
+    );
 }

@@ -153,6 +153,21 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             }
         }
     }
+    if let Ok(margins) = hexsim::gait::cycle_margins(model, gait) {
+        let (joint, room) = margins.worst;
+        let reached = match margins.unreached {
+            None => "every foot target reached".to_string(),
+            Some((leg, t)) => format!("leg {leg}'s target out of reach at {t:.2} s"),
+        };
+        let _ = writeln!(
+            out,
+            "  walking {}'s cycle at {:.3} m/s on level ground: {reached}; least room: {} {} from a limit",
+            gait.name,
+            gait.nominal_speed(),
+            model.joints[joint].name,
+            deg(room)
+        );
+    }
     for warning in &model.warnings {
         let _ = writeln!(out, "  warning: {warning}");
     }

@@ -1,0 +1,98 @@
+//! How much room a gait leaves a robot's joints: over one cycle at the gait's nominal speed on
+//! level ground, each joint's smallest distance to a limit, and whether every foot target is
+//! reached. What fitting a gait to a robot maximises, and what `hexsim robot` reports.
+
+use super::controller::{GaitController, VelocityCommand};
+use super::spec::GaitSpec;
+use crate::robot::RobotModel;
+
+/// Instants sampled per cycle.
+const SAMPLES: usize = 64;
+
+/// A gait's room on a robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CycleMargins {
+    /// Per model joint, its smallest distance to a limit over the cycle (rad).
+    pub per_joint: Vec<f64>,
+    /// The joint with the least room, and that room (rad).
+    pub worst: (usize, f64),
+    /// A leg whose foot target is out of reach, and when (s into the cycle).
+    pub unreached: Option<(&'static str, f64)>,
+}
+
+/// The margins of `spec` on `model` (an error when the standing pose or the swing apex cannot
+/// be reached at all: [`GaitController::new`]'s).
+pub fn cycle_margins(model: &RobotModel, spec: &GaitSpec) -> Result<CycleMargins, String> {
+    let mut controller = GaitController::new(model, spec.clone())?;
+    let command = VelocityCommand {
+        forward: spec.nominal_speed(),
+        ..Default::default()
+    };
+    let mut per_joint = vec![f64::INFINITY; model.joints.len()];
+    let mut unreached = None;
+    for i in 0..SAMPLES {
+        let t = spec.period * i as f64 / SAMPLES as f64;
+        let targets = controller.targets(t, command, 1.0, |_| 0.0);
+        for (k, leg) in model.legs.iter().enumerate() {
+            if targets.clamped[k] && unreached.is_none() {
+                unreached = Some((leg.name, t));
+            }
+            for (&j, &q) in leg.joints.iter().zip(&targets.joint_angles[k]) {
+                let joint = &model.joints[j];
+                per_joint[j] = per_joint[j].min((q - joint.lower).min(joint.upper - q));
+            }
+        }
+    }
+    let worst = per_joint
+        .iter()
+        .copied()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0, f64::INFINITY));
+    Ok(CycleMargins {
+        per_joint,
+        worst,
+        unreached,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn hex18() -> RobotModel {
+        crate::robot::urdf::from_str(
+            include_str!("../../robots/hex18.urdf"),
+            Path::new("robots/hex18.urdf"),
+        )
+        .unwrap()
+    }
+
+    fn tripod() -> GaitSpec {
+        GaitSpec::from_toml(include_str!("../../gaits/tripod.toml"), Path::new("tripod")).unwrap()
+    }
+
+    /// hex18's tripod reaches every target with room in every joint; a longer stride takes room
+    /// from the coxa (its swing about the hip grows), and one past the coxa's limit is unreached.
+    #[test]
+    fn a_longer_stride_leaves_the_coxa_less_room() {
+        let model = hex18();
+        let normal = cycle_margins(&model, &tripod()).unwrap();
+        assert!(normal.unreached.is_none());
+        assert!(normal.worst.1 > 0.0, "{:?}", normal.worst);
+        let coxa = model.legs[0].joints[0];
+        let long = GaitSpec {
+            stride_length: 0.2,
+            ..tripod()
+        };
+        let long = cycle_margins(&model, &long).unwrap();
+        assert!(long.per_joint[coxa] < normal.per_joint[coxa]);
+        let too_long = GaitSpec {
+            stride_length: 0.5,
+            ..tripod()
+        };
+        let too_long = cycle_margins(&model, &too_long).unwrap();
+        assert!(too_long.unreached.is_some() || too_long.worst.1 <= 1e-9);
+    }
+}
