@@ -41,6 +41,16 @@ pub struct GaitController {
     last: [[f64; 3]; 6],
 }
 
+/// Starting guesses for the standing pose's inverse kinematics, tried in turn: knee bent one way,
+/// the other way, straight, and the two with the femur down.
+const STANDING_GUESSES: [[f64; 3]; 5] = [
+    [0.0, -0.3, 1.2],
+    [0.0, 0.3, -1.2],
+    [0.0, 0.0, 0.0],
+    [0.0, -0.3, -1.2],
+    [0.0, 0.3, 1.2],
+];
+
 /// Farther than this from its target (m), an IK answer counts as clamped.
 pub const REACH_TOLERANCE: f64 = 1e-4;
 
@@ -73,8 +83,18 @@ impl GaitController {
                 hip.y + reach * yaw.sin(),
                 hips - spec.stance_height + leg.foot.radius,
             );
-            // a bent-knee guess: femur up, tibia down, so the solver finds the usual stance
-            let guess = chain.solve(neutral[k], [0.0, -0.3, 1.2]);
+            // a bent-knee guess, femur up and tibia down, so the solver finds the usual stance;
+            // URDFs bend their knees either way, so the mirrored and straight guesses next
+            let mut guess = chain.solve(neutral[k], STANDING_GUESSES[0]);
+            for &other in &STANDING_GUESSES[1..] {
+                if guess.error <= REACH_TOLERANCE {
+                    break; // the first guess that reaches is kept (hex18: the first)
+                }
+                let other = chain.solve(neutral[k], other);
+                if other.error < guess.error {
+                    guess = other;
+                }
+            }
             if guess.error > REACH_TOLERANCE {
                 return Err(format!(
                     "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm",

@@ -146,8 +146,9 @@ pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
 
 /// A xacro file is a URDF template, which only xacro (ROS) expands.
 fn refuse_xacro(text: &str, path: &Path) -> Result<(), String> {
+    // xacro's own output keeps the `xmlns:xacro` declaration: only its elements mark a template
     let named = path.extension().is_some_and(|e| e == "xacro");
-    if named || text.contains("xmlns:xacro") || text.contains("<xacro:") {
+    if named || text.contains("<xacro:") {
         return Err(
             "this is a xacro file (a URDF template): expand it first with xacro (from ROS: `xacro FILE > robot.urdf`) and give hexsim the URDF".into(),
         );
@@ -289,6 +290,8 @@ fn color_of(robot: &urdf_rs::Robot, material: &Option<urdf_rs::Material>) -> [f3
 
 /// Marks a visual mesh the recording cannot draw, until `build` folds them into one warning.
 const UNDRAWABLE: &str = "\u{0}undrawable ";
+/// Marks a visual mesh not found, until `build` says the first and counts the others.
+const MISSING: &str = "\u{0}missing ";
 
 /// A visual's shape. `fallback`: the link's collision shape, for a mesh the recording cannot draw.
 fn shape(
@@ -326,7 +329,7 @@ fn shape(
                     let tried: Vec<String> =
                         tried.iter().map(|p| p.display().to_string()).collect();
                     warnings.push(format!(
-                        "link `{link}`: visual mesh {filename} not found (looked in {}); drawn as a small sphere",
+                        "{MISSING}link `{link}`: visual mesh {filename} not found (looked in {}); drawn as a small sphere",
                         tried.join(", ")
                     ));
                     Shape::Sphere { radius: 0.01 }
@@ -511,6 +514,18 @@ fn build(
             if undrawable.len() == 1 { " is" } else { "es are" },
             first.trim_start_matches(UNDRAWABLE)
         ));
+    }
+    let (missing, mut warnings): (Vec<String>, Vec<String>) =
+        warnings.into_iter().partition(|w| w.starts_with(MISSING));
+    if let Some(first) = missing.first() {
+        let mut warning = first.trim_start_matches(MISSING).to_string();
+        if missing.len() > 1 {
+            warning.push_str(&format!(
+                "; {} more visual meshes not found, drawn as small spheres too",
+                missing.len() - 1
+            ));
+        }
+        warnings.push(warning);
     }
     let (legs, forward): (_, Forward) =
         legs::find_legs(&links, &joints, &mesh_collisions, forward)?;
