@@ -227,18 +227,20 @@ impl HexapodRecorder {
     }
 }
 
-/// The robot's horizontal radius: its farthest foot from the body's origin with the legs
-/// stretched (zero joint angles), which sets the follow camera's distance.
+/// The robot's horizontal radius, which sets the follow camera's distance: its farthest foot
+/// with each leg stretched out level from its hip along the leg's heading at rest — hex18's zero
+/// pose; a URDF whose zero pose hangs the tibias down (a PhantomX) is measured the same way.
 fn robot_radius(model: &RobotModel) -> f64 {
-    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
     let radius = model
         .legs
         .iter()
         .map(|leg| {
-            poses[leg.foot_link]
-                .transform_point3(leg.foot.center)
-                .truncate()
-                .length()
+            let chain = crate::robot::kinematics::LegChain::new(model, leg);
+            let length: f64 = crate::robot::statics::segment_lengths(model, leg)
+                .iter()
+                .sum();
+            let (s, c) = chain.rest_yaw().sin_cos();
+            (chain.hip().truncate() + length * glam::DVec2::new(c, s)).length()
         })
         .fold(0.0, f64::max);
     radius.max(0.05)
@@ -543,5 +545,38 @@ impl<W: ?Sized> Observer<WalkSample, W> for HexapodTrajectory {
             }
         }
         self.table.row(&row)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// hex18's zero pose stretches its legs out level: the follow camera's radius is its farthest
+    /// foot in that pose (0.33 m), as it was measured before legs folded otherwise were handled.
+    #[test]
+    fn hex18s_camera_radius_is_its_farthest_stretched_foot() {
+        let model = crate::robot::urdf::from_str(
+            include_str!("../../robots/hex18.urdf"),
+            Path::new("robots/hex18.urdf"),
+        )
+        .unwrap();
+        let poses = model.link_poses(&vec![0.0; model.joints.len()]);
+        let stretched = model
+            .legs
+            .iter()
+            .map(|leg| {
+                poses[leg.foot_link]
+                    .transform_point3(leg.foot.center)
+                    .truncate()
+                    .length()
+            })
+            .fold(0.0, f64::max);
+        let radius = robot_radius(&model);
+        assert!(
+            (radius - stretched).abs() < 1e-9,
+            "{radius} against {stretched}"
+        );
+        assert!((0.3..0.4).contains(&radius), "{radius}");
     }
 }
