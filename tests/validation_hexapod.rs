@@ -462,6 +462,31 @@ fn a_hexapod_of_another_design_loads_and_walks() {
     );
 }
 
+/// Walks `model` on flat ground with the tripod fitted by hand to the round hexapod's size (reach
+/// 0.16 m, stance 0.11 m), 1 s standing then 5 s walking: the nominal speed, and the body's
+/// position when the gait starts and at the end.
+fn walk_round_gait(model: Arc<robot::RobotModel>) -> (f64, glam::DVec3, glam::DVec3) {
+    let gait = GaitSpec {
+        reach: Some(0.16),
+        stance_height: 0.11,
+        ..tripod()
+    };
+    let speed = gait.nominal_speed();
+    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let placement = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    let mut walker = walker(model, ground, placement, gait, 1.0, Articulation::Multibody);
+    let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
+    (
+        speed,
+        samples[999].body.translation,
+        samples.last().unwrap().body.translation,
+    )
+}
+
 /// A round hexapod whose legs sit at 0°, ±45°, 180° and ±135° (two of them on the URDF's x axis):
 /// hexsim walks it along +y, the direction that splits its legs three a side, names the legs by
 /// their angle about that direction, and it walks there with the same gait as the round hexapod.
@@ -488,22 +513,7 @@ fn a_hexapod_whose_legs_straddle_x_walks_along_y() {
     // in hexsim's body frame the walking direction is x: lf ahead of lr, left legs at y > 0
     let hip = |k: usize| model.joints[model.legs[k].joints[0]].origin.translation;
     assert!(hip(0).x > hip(2).x && hip(0).y > 0.0 && hip(3).y < 0.0);
-    let gait = GaitSpec {
-        reach: Some(0.16),
-        stance_height: 0.11,
-        ..tripod()
-    };
-    let speed = gait.nominal_speed();
-    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
-    let placement = Placement {
-        x: 0.0,
-        y: 0.0,
-        yaw: 0.0,
-    };
-    let mut walker = walker(model, ground, placement, gait, 1.0, Articulation::Multibody);
-    let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
-    let start = samples[999].body.translation;
-    let end = samples.last().unwrap().body.translation;
+    let (speed, start, end) = walk_round_gait(model);
     println!(
         "round hexapod along y: {:.3} m in 5 s (nominal {:.3}), {:.3} m sideways",
         end.x - start.x,
@@ -524,22 +534,7 @@ fn a_hexapod_whose_legs_straddle_x_walks_along_y() {
 #[test]
 fn a_hexapod_whose_base_origin_is_below_its_hips_walks() {
     let model = Arc::new(robot::load(&project_file("tests/data/low_base_hexapod.urdf")).unwrap());
-    let gait = GaitSpec {
-        reach: Some(0.16),
-        stance_height: 0.11,
-        ..tripod()
-    };
-    let speed = gait.nominal_speed();
-    let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
-    let placement = Placement {
-        x: 0.0,
-        y: 0.0,
-        yaw: 0.0,
-    };
-    let mut walker = walker(model, ground, placement, gait, 1.0, Articulation::Multibody);
-    let samples: Vec<HexapodSample> = (0..6000).map(|_| walker.step().robot).collect();
-    let start = samples[999].body.translation;
-    let end = samples.last().unwrap().body.translation;
+    let (speed, start, end) = walk_round_gait(model);
     // the hips' plane stands 0.11 m above the ground (the feet's centres a radius above it)
     let hips = end.z + 0.2;
     println!(

@@ -56,7 +56,7 @@ pub const REACH_TOLERANCE: f64 = 1e-4;
 
 /// Height of the hips' plane in the body frame: the mean height of the six first joints (zero for
 /// hex18, whose base link origin is at its hips).
-pub fn hips_plane(chains: &[LegChain]) -> f64 {
+fn hips_plane(chains: &[LegChain]) -> f64 {
     chains.iter().map(|c| c.hip().z).sum::<f64>() / chains.len().max(1) as f64
 }
 

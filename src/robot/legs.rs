@@ -108,9 +108,9 @@ pub(super) fn find_legs(
     };
     // name by angle from the walking direction: left legs (to its left) front to rear, then right
     let (along, across) = axes(forward.yaw);
-    let centre = hips.iter().copied().sum::<DVec2>() / hips.len() as f64;
+    let middle = centre(&hips);
     let angle = |h: DVec2| {
-        let d = h - centre;
+        let d = h - middle;
         d.dot(across).atan2(d.dot(along))
     };
     let mut order: Vec<usize> = (0..chains.len()).collect();
@@ -140,30 +140,36 @@ fn axes(yaw: f64) -> (DVec2, DVec2) {
     (DVec2::new(c, s), DVec2::new(-s, c))
 }
 
-/// How far each hip sits to the left of the walking axis through the hips' centre, if three sit
-/// clearly on each side: the smallest such distance.
-fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
-    let centre = hips.iter().copied().sum::<DVec2>() / hips.len() as f64;
-    let scale = hips.iter().map(|h| (*h - centre).length()).sum::<f64>() / hips.len() as f64;
+/// The hips' centre (the walking axis passes through it).
+fn centre(hips: &[DVec2]) -> DVec2 {
+    hips.iter().copied().sum::<DVec2>() / hips.len().max(1) as f64
+}
+
+/// How far each hip sits to the left of the walking axis `yaw` through the hips' centre, and how
+/// close to the axis a hip may be before it is on neither side.
+fn laterals(hips: &[DVec2], yaw: f64) -> (Vec<f64>, f64) {
+    let c = centre(hips);
+    let scale = hips.iter().map(|h| (*h - c).length()).sum::<f64>() / hips.len().max(1) as f64;
     let (_, across) = axes(yaw);
-    let lateral: Vec<f64> = hips.iter().map(|h| (*h - centre).dot(across)).collect();
+    let lateral = hips.iter().map(|h| (*h - c).dot(across)).collect();
+    (lateral, SIDE_MARGIN * scale)
+}
+
+/// If three hips sit clearly on each side of the walking axis: the smallest distance of a hip
+/// from it.
+fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
+    let (lateral, margin) = laterals(hips, yaw);
     let left = lateral.iter().filter(|&&l| l > 0.0).count();
-    let clear = lateral.iter().all(|l| l.abs() > SIDE_MARGIN * scale);
+    let clear = lateral.iter().all(|l| l.abs() > margin);
     (left == 3 && lateral.len() == 6 && clear)
         .then(|| lateral.iter().fold(f64::INFINITY, |m, l| m.min(l.abs())))
 }
 
 /// Counts of hips left, right and on the axis, for messages.
 fn sides(hips: &[DVec2], yaw: f64) -> String {
-    let centre = hips.iter().copied().sum::<DVec2>() / hips.len().max(1) as f64;
-    let scale = hips.iter().map(|h| (*h - centre).length()).sum::<f64>() / hips.len().max(1) as f64;
-    let (_, across) = axes(yaw);
-    let lateral: Vec<f64> = hips.iter().map(|h| (*h - centre).dot(across)).collect();
-    let on = lateral
-        .iter()
-        .filter(|l| l.abs() <= SIDE_MARGIN * scale)
-        .count();
-    let left = lateral.iter().filter(|&&l| l > SIDE_MARGIN * scale).count();
+    let (lateral, margin) = laterals(hips, yaw);
+    let on = lateral.iter().filter(|l| l.abs() <= margin).count();
+    let left = lateral.iter().filter(|&&l| l > margin).count();
     format!(
         "{left} left, {} right, {on} on the axis",
         lateral.len() - left - on

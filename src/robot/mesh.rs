@@ -13,16 +13,9 @@ const DRAWABLE: [&str; 4] = ["stl", "obj", "gltf", "glb"];
 
 /// Where a mesh URI points: the file, or every place looked in.
 pub fn resolve(uri: &str, base: &Path) -> Result<PathBuf, Vec<PathBuf>> {
-    if let Some(path) = uri.strip_prefix("file://") {
-        let path = base.join(path);
-        return if path.is_file() {
-            Ok(path)
-        } else {
-            Err(vec![path])
-        };
-    }
     let Some(rest) = uri.strip_prefix("package://") else {
-        let path = base.join(uri);
+        // `file://PATH` is PATH; relative paths resolve against the URDF's folder
+        let path = base.join(uri.strip_prefix("file://").unwrap_or(uri));
         return if path.is_file() {
             Ok(path)
         } else {

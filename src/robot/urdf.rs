@@ -288,10 +288,41 @@ fn color_of(robot: &urdf_rs::Robot, material: &Option<urdf_rs::Material>) -> [f3
     rgba.map_or(default, |c| c.rgba.0.map(|v| v as f32))
 }
 
-/// Marks a visual mesh the recording cannot draw, until `build` folds them into one warning.
-const UNDRAWABLE: &str = "\u{0}undrawable ";
-/// Marks a visual mesh not found, until `build` says the first and counts the others.
-const MISSING: &str = "\u{0}missing ";
+/// Visual meshes that could not be used, gathered over the robot so that `build` warns once per
+/// kind of problem rather than once per link.
+#[derive(Default)]
+struct MeshProblems {
+    /// (link, file) of meshes in a format the recording cannot draw.
+    undrawable: Vec<(String, PathBuf)>,
+    /// Per mesh not found: the warning for it (link, URI, where it was looked for).
+    missing: Vec<String>,
+}
+
+impl MeshProblems {
+    /// At most one warning for the undrawable meshes and one for the missing ones.
+    fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if let Some((link, file)) = self.undrawable.first() {
+            let n = self.undrawable.len();
+            warnings.push(format!(
+                "{n} visual mesh{} in a format the recording cannot draw (it draws STL, OBJ, glTF), e.g. link {link}: {}; drawn as the link's collision shape (or a small sphere)",
+                if n == 1 { " is" } else { "es are" },
+                file.display()
+            ));
+        }
+        if let Some(first) = self.missing.first() {
+            let mut warning = first.clone();
+            if self.missing.len() > 1 {
+                warning.push_str(&format!(
+                    "; {} more visual meshes not found, drawn as small spheres too",
+                    self.missing.len() - 1
+                ));
+            }
+            warnings.push(warning);
+        }
+        warnings
+    }
+}
 
 /// A visual's shape. `fallback`: the link's collision shape, for a mesh the recording cannot draw.
 fn shape(
@@ -299,7 +330,7 @@ fn shape(
     base: &Path,
     link: &str,
     fallback: &Option<Shape>,
-    warnings: &mut Vec<String>,
+    problems: &mut MeshProblems,
 ) -> Shape {
     match geometry {
         urdf_rs::Geometry::Box { size } => Shape::Box {
@@ -321,15 +352,14 @@ fn shape(
             match mesh::resolve(filename, base) {
                 Ok(path) if mesh::drawable(&path) => Shape::Mesh { path, scale },
                 Ok(path) => {
-                    // one warning for them all, added by `build`
-                    warnings.push(format!("{UNDRAWABLE}{link}: {}", path.display()));
+                    problems.undrawable.push((link.to_string(), path));
                     fallback.clone().unwrap_or(Shape::Sphere { radius: 0.01 })
                 }
                 Err(tried) => {
                     let tried: Vec<String> =
                         tried.iter().map(|p| p.display().to_string()).collect();
-                    warnings.push(format!(
-                        "{MISSING}link `{link}`: visual mesh {filename} not found (looked in {}); drawn as a small sphere",
+                    problems.missing.push(format!(
+                        "link `{link}`: visual mesh {filename} not found (looked in {}); drawn as a small sphere",
                         tried.join(", ")
                     ));
                     Shape::Sphere { radius: 0.01 }
@@ -348,6 +378,7 @@ fn build(
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
     let mut mesh_collisions = Vec::new();
+    let mut mesh_problems = MeshProblems::default();
     // Walk the tree from the root, parents before children. Each URDF link maps to a body (itself,
     // or the body it is welded to by fixed joints) and its pose in that body's frame.
     let mut body_of = vec![usize::MAX; robot.links.len()];
@@ -439,7 +470,10 @@ fn build(
             .collision
             .iter()
             .find(|c| !matches!(c.geometry, urdf_rs::Geometry::Mesh { .. }))
-            .map(|c| shape(&c.geometry, base, &urdf_link.name, &None, &mut Vec::new()));
+            .map(|c| {
+                let ignored = &mut MeshProblems::default();
+                shape(&c.geometry, base, &urdf_link.name, &None, ignored)
+            });
         for visual in &urdf_link.visual {
             body.visuals.push(Visual {
                 origin: frame * pose(&visual.origin),
@@ -448,7 +482,7 @@ fn build(
                     base,
                     &urdf_link.name,
                     &collision_shape,
-                    &mut warnings,
+                    &mut mesh_problems,
                 ),
                 color: color_of(robot, &visual.material),
             });
@@ -504,29 +538,7 @@ fn build(
             ));
         }
     }
-    let (undrawable, mut warnings): (Vec<String>, Vec<String>) = warnings
-        .into_iter()
-        .partition(|w| w.starts_with(UNDRAWABLE));
-    if let Some(first) = undrawable.first() {
-        warnings.push(format!(
-            "{} visual mesh{} in a format the recording cannot draw (it draws STL, OBJ, glTF), e.g. link {}; drawn as the link's collision shape (or a small sphere)",
-            undrawable.len(),
-            if undrawable.len() == 1 { " is" } else { "es are" },
-            first.trim_start_matches(UNDRAWABLE)
-        ));
-    }
-    let (missing, mut warnings): (Vec<String>, Vec<String>) =
-        warnings.into_iter().partition(|w| w.starts_with(MISSING));
-    if let Some(first) = missing.first() {
-        let mut warning = first.trim_start_matches(MISSING).to_string();
-        if missing.len() > 1 {
-            warning.push_str(&format!(
-                "; {} more visual meshes not found, drawn as small spheres too",
-                missing.len() - 1
-            ));
-        }
-        warnings.push(warning);
-    }
+    warnings.extend(mesh_problems.warnings());
     let (legs, forward): (_, Forward) =
         legs::find_legs(&links, &joints, &mesh_collisions, forward)?;
     legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
