@@ -282,7 +282,10 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
         "mass 2.520 kg: body 1.500 kg",
         "lf  hip (+0.120, +0.060, +0.000) m; joints lf_coxa_joint lf_femur_joint lf_tibia_joint; segments 0.050 0.080 0.120 m",
         "rr  hip (-0.120, -0.060, +0.000) m",
-        "standing in tripod's pose (hips 0.1 m above the ground)",
+        "stance height 0.100 m (robot file), reach 0.150 m (robot file), step height 0.030 m (robot file), stride 0.060 m (robot file)",
+        "fitted to the legs alone (without the robot file's [gait]):",
+        "m (fitted), reach ",
+        "standing on six feet (hips 0.100 m above the ground)",
         "the most loaded servo: ",
         "walking tripod's cycle at 0.120 m/s on level ground: every foot target reached; least room: ",
     ] {
@@ -316,12 +319,12 @@ fn a_robot_file_sets_the_walking_direction() {
         dir.join("round.urdf"),
     )
     .unwrap();
-    std::fs::write(dir.join("round.toml"), "forward = \"-y\"\n").unwrap();
-    let gait = std::fs::read_to_string(project_file("gaits/tripod.toml"))
-        .unwrap()
-        .replace("stance_height = 0.10", "stance_height = 0.11")
-        .replace("reach = 0.15", "reach = 0.16");
-    std::fs::write(dir.join("gait.toml"), gait).unwrap();
+    // the robot file's stance too: hex18's stride and step, a stance for the round robot's size
+    std::fs::write(
+        dir.join("round.toml"),
+        "forward = \"-y\"\n[gait]\nstance_height = 0.11\nreach = 0.16\nstride_length = 0.06\nstep_height = 0.03\n",
+    )
+    .unwrap();
     let json = dir.join("m.json");
     let out = hexsim()
         .args([
@@ -334,8 +337,6 @@ fn a_robot_file_sets_the_walking_direction() {
         ])
         .arg("--robot")
         .arg(dir.join("round.urdf"))
-        .arg("--gait")
-        .arg(dir.join("gait.toml"))
         .arg("--metrics")
         .arg(&json)
         .output()
@@ -352,6 +353,8 @@ fn a_robot_file_sets_the_walking_direction() {
     );
     let metrics: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["stance"]["stance_height"], 0.11);
+    assert_eq!(metrics["stance"]["origins"]["reach"], "robot file");
     let forward = metrics["forward_distance"].as_f64().unwrap();
     let sideways = metrics["sideways_distance"].as_f64().unwrap();
     // nominal 0.06 m / 0.5 s = 0.12 m/s for 3 s, the first cycle ramping up

@@ -3,8 +3,8 @@
 
 use anyhow::Result;
 use clap::Args;
-use hexsim::gait::{GaitController, GaitSpec};
-use hexsim::robot::{self, RobotModel, statics};
+use hexsim::gait::{Fitted, GaitController, GaitSpec, fit};
+use hexsim::robot::{self, GaitHints, RobotModel, statics};
 use hexsim::scenario::builtin;
 use hexsim::sim::STANDARD_GRAVITY;
 use std::path::{Path, PathBuf};
@@ -36,6 +36,67 @@ fn deg(r: f64) -> String {
 /// A signed number to the thousandth (a torque in N·m, a position in m), without a "-0.000".
 fn thousandths(t: f64) -> String {
     format!("{:+.3}", (t * 1e3).round() / 1e3 + 0.0)
+}
+
+/// The robot with no stance from its robot file: what the fit makes of its legs alone.
+fn without_hints(model: &RobotModel) -> RobotModel {
+    RobotModel {
+        gait_hints: GaitHints::default(),
+        ..model.clone()
+    }
+}
+
+/// The standing pose's joint angles and the torque each servo holds in it, on six feet.
+fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
+    use std::fmt::Write;
+    let Ok(controller) = GaitController::new(model, fitted.gait.clone()) else {
+        return; // fitted gaits stand (fit checked it)
+    };
+    let mut pose = vec![0.0; model.joints.len()];
+    for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
+        for (j, a) in leg.joints.iter().zip(angles) {
+            pose[*j] = a;
+        }
+    }
+    let torques = statics::standing_torques(model, &pose, STANDARD_GRAVITY, 6);
+    let _ = writeln!(
+        out,
+        "  standing on six feet (hips {:.3} m above the ground): joint angles, and the torque each servo holds (share of its effort):",
+        fitted.gait.stance_height
+    );
+    let mut worst: Option<(f64, String)> = None;
+    for leg in &model.legs {
+        let cells: Vec<String> = leg
+            .joints
+            .iter()
+            .map(|&j| {
+                let joint = &model.joints[j];
+                let share = torques[j].abs() / joint.effort;
+                if worst.as_ref().is_none_or(|(w, _)| share > *w) {
+                    worst = Some((share, joint.name.clone()));
+                }
+                format!(
+                    "{} {} N·m ({:.0} %)",
+                    deg(pose[j]),
+                    thousandths(torques[j]),
+                    100.0 * share
+                )
+            })
+            .collect();
+        let _ = writeln!(out, "    {}  {}", leg.name, cells.join(", "));
+    }
+    if let Some((share, joint)) = worst {
+        let _ = writeln!(
+            out,
+            "  the most loaded servo: {joint} at {:.0} % of its effort{}",
+            100.0 * share,
+            if share > 1.0 {
+                ": it cannot hold the robot up"
+            } else {
+                ""
+            }
+        );
+    }
 }
 
 /// The report, as printed.
@@ -101,72 +162,44 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             efforts.join(" ")
         );
     }
-    match GaitController::new(model, gait.clone()) {
+    match fit(model, gait) {
         Err(e) => {
-            let _ = writeln!(out, "  standing in {}'s pose: does not fit: {e}", gait.name);
+            let _ = writeln!(out, "  gait {}: does not fit: {e}", gait.name);
         }
-        Ok(controller) => {
-            let mut pose = vec![0.0; model.joints.len()];
-            for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
-                for (j, a) in leg.joints.iter().zip(angles) {
-                    pose[*j] = a;
-                }
+        Ok(fitted) => {
+            let _ = writeln!(out, "  gait {} on this robot:", gait.name);
+            for line in fitted.describe(model) {
+                let _ = writeln!(out, "    {line}");
             }
-            let torques = statics::standing_torques(model, &pose, STANDARD_GRAVITY);
-            let _ = writeln!(
-                out,
-                "  standing in {}'s pose (hips {} m above the ground): joint angles, and the torque each servo holds (share of its effort):",
-                gait.name, gait.stance_height
-            );
-            let mut worst: Option<(f64, String)> = None;
-            for leg in &model.legs {
-                let cells: Vec<String> = leg
-                    .joints
-                    .iter()
-                    .map(|&j| {
-                        let joint = &model.joints[j];
-                        let share = torques[j].abs() / joint.effort;
-                        if worst.as_ref().is_none_or(|(w, _)| share > *w) {
-                            worst = Some((share, joint.name.clone()));
-                        }
-                        format!(
-                            "{} {} N·m ({:.0} %)",
-                            deg(pose[j]),
-                            thousandths(torques[j]),
-                            100.0 * share
-                        )
-                    })
-                    .collect();
-                let _ = writeln!(out, "    {}  {}", leg.name, cells.join(", "));
-            }
-            if let Some((share, joint)) = worst {
+            let given = model.gait_hints != GaitHints::default();
+            if given && let Ok(bare) = fit(&without_hints(model), gait) {
                 let _ = writeln!(
                     out,
-                    "  the most loaded servo: {joint} at {:.0} % of its effort{}",
-                    100.0 * share,
-                    if share > 1.0 {
-                        ": it cannot hold the robot up"
-                    } else {
-                        ""
-                    }
+                    "    fitted to the legs alone (without the robot file's [gait]):"
                 );
+                for line in bare.describe(model) {
+                    let _ = writeln!(out, "      {line}");
+                }
             }
+            standing(&mut out, model, &fitted);
+            let margins = &fitted.margins;
+            let (joint, room) = margins.worst;
+            let reached = match margins.unreached {
+                None => "every foot target reached".to_string(),
+                Some(u) => format!(
+                    "leg {}'s target out of reach at {:.2} s",
+                    model.legs[u.leg].name, u.time
+                ),
+            };
+            let _ = writeln!(
+                out,
+                "  walking {}'s cycle at {:.3} m/s on level ground: {reached}; least room: {} {} from a limit",
+                gait.name,
+                fitted.gait.nominal_speed(),
+                model.joints[joint].name,
+                deg(room)
+            );
         }
-    }
-    if let Ok(margins) = hexsim::gait::cycle_margins(model, gait) {
-        let (joint, room) = margins.worst;
-        let reached = match margins.unreached {
-            None => "every foot target reached".to_string(),
-            Some((leg, t)) => format!("leg {leg}'s target out of reach at {t:.2} s"),
-        };
-        let _ = writeln!(
-            out,
-            "  walking {}'s cycle at {:.3} m/s on level ground: {reached}; least room: {} {} from a limit",
-            gait.name,
-            gait.nominal_speed(),
-            model.joints[joint].name,
-            deg(room)
-        );
     }
     for warning in &model.warnings {
         let _ = writeln!(out, "  warning: {warning}");

@@ -57,12 +57,12 @@ pub struct RunArgs {
     seed: Option<u32>,
     #[command(flatten)]
     contact: ContactArgs,
-    /// Servo stiffness (N·m/rad).
-    #[arg(long, default_value_t = ServoSpec::default().stiffness)]
-    servo_stiffness: f64,
-    /// Servo damping (N·m·s/rad).
-    #[arg(long, default_value_t = ServoSpec::default().damping)]
-    servo_damping: f64,
+    /// Servo stiffness (N·m/rad). Default: fitted to the robot's legs (hex18: the reference's 20).
+    #[arg(long)]
+    servo_stiffness: Option<f64>,
+    /// Servo damping (N·m·s/rad). Default: 2.5 ms of the stiffness (hex18: the reference's 0.05).
+    #[arg(long)]
+    servo_damping: Option<f64>,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
     /// impulse joints (about 4× faster; the joints drift apart by up to ~0.4 mm)
     #[arg(long, value_enum, default_value_t = Articulation::default())]

@@ -6,7 +6,7 @@
 //! N − D/2 to N + D/2 and swings back through the air.
 
 use super::schedule::{LegPhase, leg_phase};
-use super::spec::{GaitSpec, SwingShape};
+use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
 use crate::robot::kinematics::LegChain;
 use glam::DVec3;
@@ -33,8 +33,24 @@ pub struct GaitTargets {
     pub clamped: [bool; 6],
 }
 
+/// A leg that cannot take a gait's stance: the standing foot position or the swing apex above it
+/// is out of its reach.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct StanceError {
+    /// Index of the leg (in [`crate::robot::LEG_NAMES`] order).
+    pub leg: usize,
+    /// Whether the swing apex failed (the standing position was reached).
+    pub lift: bool,
+    /// Distance from the closest reachable foot position to the target (m).
+    pub miss: f64,
+    /// The leg's joint angles at that closest position (at a limit where one binds).
+    pub angles: [f64; 3],
+    message: String,
+}
+
 pub struct GaitController {
-    spec: GaitSpec,
+    spec: Gait,
     offsets: [f64; 6],
     chains: Vec<LegChain>,
     neutral: [DVec3; 6],
@@ -51,6 +67,27 @@ const STANDING_GUESSES: [[f64; 3]; 5] = [
     [0.0, 0.3, 1.2],
 ];
 
+/// A centring shift smaller than this (m) is not applied (a symmetric robot's rounding).
+const CENTRING_TOLERANCE: f64 = 1e-6;
+
+/// The robot's centre of mass in the body frame with its legs at `angles`.
+fn centre_of_mass(model: &RobotModel, angles: &[[f64; 3]; 6]) -> DVec3 {
+    let mut pose = vec![0.0; model.joints.len()];
+    for (leg, a) in model.legs.iter().zip(angles) {
+        for (&j, &q) in leg.joints.iter().zip(a) {
+            pose[j] = q;
+        }
+    }
+    let poses = model.link_poses(&pose);
+    let weighted: DVec3 = model
+        .links
+        .iter()
+        .zip(&poses)
+        .map(|(link, p)| p.transform_point3(link.com) * link.mass)
+        .sum();
+    weighted / model.total_mass()
+}
+
 /// Farther than this from its target (m), an IK answer counts as clamped.
 pub const REACH_TOLERANCE: f64 = 1e-4;
 
@@ -62,7 +99,7 @@ fn hips_plane(chains: &[LegChain]) -> f64 {
 
 impl GaitController {
     /// Builds the controller and checks that the legs reach the standing pose and the swing apex.
-    pub fn new(model: &RobotModel, spec: GaitSpec) -> Result<Self, String> {
+    pub fn new(model: &RobotModel, spec: Gait) -> Result<Self, StanceError> {
         let chains: Vec<LegChain> = model
             .legs
             .iter()
@@ -75,7 +112,7 @@ impl GaitController {
         let hips = hips_plane(&chains);
         for (k, chain) in chains.iter().enumerate() {
             let leg = &model.legs[k];
-            let reach = spec.reach.unwrap_or(0.6 * chain.length());
+            let reach = spec.reach;
             let yaw = chain.rest_yaw();
             let hip = chain.hip();
             neutral[k] = DVec3::new(
@@ -96,28 +133,71 @@ impl GaitController {
                 }
             }
             if guess.error > REACH_TOLERANCE {
-                return Err(format!(
-                    "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm",
-                    leg.name,
-                    neutral[k].to_array(),
-                    spec.stance_height,
-                    guess.error * 1e3
-                ));
+                return Err(StanceError {
+                    leg: k,
+                    lift: false,
+                    miss: guess.error,
+                    angles: guess.angles,
+                    message: format!(
+                        "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm",
+                        leg.name,
+                        neutral[k].to_array(),
+                        spec.stance_height,
+                        guess.error * 1e3
+                    ),
+                });
             }
             last[k] = guess.angles;
+        }
+        // the feet's centroid under the centre of mass, so that every support polygon of the
+        // gait holds the centre of mass as deep inside as the stance allows (a leg mounted ahead
+        // of its hip, e.g. with an offset femur, would otherwise leave it at a tripod's edge)
+        let shift = centre_of_mass(model, &last).truncate()
+            - neutral.iter().map(|n| n.truncate()).sum::<glam::DVec2>() / 6.0;
+        if shift.length() > CENTRING_TOLERANCE {
+            for (k, chain) in chains.iter().enumerate() {
+                neutral[k] += shift.extend(0.0);
+                let moved = chain.solve(neutral[k], last[k]);
+                if moved.error > REACH_TOLERANCE {
+                    return Err(StanceError {
+                        leg: k,
+                        lift: false,
+                        miss: moved.error,
+                        angles: moved.angles,
+                        message: format!(
+                            "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {:.3} m, centred under the centre of mass): missed by {:.1} mm",
+                            model.legs[k].name,
+                            neutral[k].to_array(),
+                            spec.stance_height,
+                            spec.reach,
+                            moved.error * 1e3
+                        ),
+                    });
+                }
+                last[k] = moved.angles;
+            }
+        }
+        for (k, chain) in chains.iter().enumerate() {
+            let leg = &model.legs[k];
             let apex = neutral[k] + DVec3::new(0.0, 0.0, spec.step_height);
             let lifted = chain.solve(apex, last[k]);
             if lifted.error > REACH_TOLERANCE {
-                return Err(format!(
-                    "leg {} cannot lift its foot {} m (step_height) above the stance: missed by {:.1} mm",
-                    leg.name,
-                    spec.step_height,
-                    lifted.error * 1e3
-                ));
+                return Err(StanceError {
+                    leg: k,
+                    lift: true,
+                    miss: lifted.error,
+                    angles: lifted.angles,
+                    message: format!(
+                        "leg {} cannot lift its foot {} m (step_height) above the stance: missed by {:.1} mm",
+                        leg.name,
+                        spec.step_height,
+                        lifted.error * 1e3
+                    ),
+                });
             }
         }
         Ok(GaitController {
-            offsets: spec.offsets(),
+            offsets: spec.offsets,
             spec,
             chains,
             neutral,
@@ -125,7 +205,7 @@ impl GaitController {
         })
     }
 
-    pub fn spec(&self) -> &GaitSpec {
+    pub fn gait(&self) -> &Gait {
         &self.spec
     }
 

@@ -2,8 +2,8 @@
 //! level ground, each joint's smallest distance to a limit, and whether every foot target is
 //! reached. What fitting a gait to a robot maximises, and what `hexsim robot` reports.
 
-use super::controller::{GaitController, VelocityCommand};
-use super::spec::GaitSpec;
+use super::controller::{GaitController, StanceError, VelocityCommand};
+use super::spec::Gait;
 use crate::robot::RobotModel;
 
 /// Instants sampled per cycle.
@@ -16,26 +16,50 @@ pub struct CycleMargins {
     pub per_joint: Vec<f64>,
     /// The joint with the least room, and that room (rad).
     pub worst: (usize, f64),
-    /// A leg whose foot target is out of reach, and when (s into the cycle).
-    pub unreached: Option<(&'static str, f64)>,
+    /// A leg whose foot target is out of reach, when (s into the cycle), and the leg's joint
+    /// angles then (the closest reachable pose).
+    pub unreached: Option<Unreached>,
 }
 
-/// The margins of `spec` on `model` (an error when the standing pose or the swing apex cannot
+/// A foot target out of a leg's reach during the cycle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unreached {
+    /// Index of the leg (in [`crate::robot::LEG_NAMES`] order).
+    pub leg: usize,
+    /// Seconds into the cycle.
+    pub time: f64,
+    pub angles: [f64; 3],
+}
+
+/// The margins of `gait` on `model` (an error when the standing pose or the swing apex cannot
 /// be reached at all: [`GaitController::new`]'s).
-pub fn cycle_margins(model: &RobotModel, spec: &GaitSpec) -> Result<CycleMargins, String> {
-    let mut controller = GaitController::new(model, spec.clone())?;
+pub fn cycle_margins(model: &RobotModel, gait: &Gait) -> Result<CycleMargins, StanceError> {
+    sampled_margins(model, gait, SAMPLES)
+}
+
+/// [`cycle_margins`] from `samples` instants per cycle.
+pub(super) fn sampled_margins(
+    model: &RobotModel,
+    gait: &Gait,
+    samples: usize,
+) -> Result<CycleMargins, StanceError> {
+    let mut controller = GaitController::new(model, gait.clone())?;
     let command = VelocityCommand {
-        forward: spec.nominal_speed(),
+        forward: gait.nominal_speed(),
         ..Default::default()
     };
     let mut per_joint = vec![f64::INFINITY; model.joints.len()];
     let mut unreached = None;
-    for i in 0..SAMPLES {
-        let t = spec.period * i as f64 / SAMPLES as f64;
+    for i in 0..samples {
+        let t = gait.period * i as f64 / samples as f64;
         let targets = controller.targets(t, command, 1.0, |_| 0.0);
         for (k, leg) in model.legs.iter().enumerate() {
             if targets.clamped[k] && unreached.is_none() {
-                unreached = Some((leg.name, t));
+                unreached = Some(Unreached {
+                    leg: k,
+                    time: t,
+                    angles: targets.joint_angles[k],
+                });
             }
             for (&j, &q) in leg.joints.iter().zip(&targets.joint_angles[k]) {
                 let joint = &model.joints[j];
@@ -62,15 +86,16 @@ mod tests {
     use std::path::Path;
 
     fn hex18() -> RobotModel {
-        crate::robot::urdf::from_str(
-            include_str!("../../robots/hex18.urdf"),
-            Path::new("robots/hex18.urdf"),
-        )
-        .unwrap()
+        crate::scenario::builtin::hex18()
     }
 
-    fn tripod() -> GaitSpec {
-        GaitSpec::from_toml(include_str!("../../gaits/tripod.toml"), Path::new("tripod")).unwrap()
+    fn tripod() -> Gait {
+        let spec = crate::gait::GaitSpec::from_toml(
+            include_str!("../../gaits/tripod.toml"),
+            Path::new("tripod"),
+        )
+        .unwrap();
+        crate::gait::fit(&hex18(), &spec).unwrap().gait
     }
 
     /// hex18's tripod reaches every target with room in every joint; a longer stride takes room
@@ -82,13 +107,13 @@ mod tests {
         assert!(normal.unreached.is_none());
         assert!(normal.worst.1 > 0.0, "{:?}", normal.worst);
         let coxa = model.legs[0].joints[0];
-        let long = GaitSpec {
+        let long = Gait {
             stride_length: 0.2,
             ..tripod()
         };
         let long = cycle_margins(&model, &long).unwrap();
         assert!(long.per_joint[coxa] < normal.per_joint[coxa]);
-        let too_long = GaitSpec {
+        let too_long = Gait {
             stride_length: 0.5,
             ..tripod()
         };

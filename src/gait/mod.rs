@@ -1,14 +1,16 @@
-//! Gaits: the gait file, the phase schedule (which legs stand when), and the controller that turns a
-//! velocity command into joint targets.
+//! Gaits: the gait file, its lengths fitted to a robot, the phase schedule (which legs stand when),
+//! and the controller that turns a velocity command into joint targets.
 
 mod command;
 mod controller;
+mod fit;
 mod margins;
 mod schedule;
 mod spec;
 
 pub use command::{CommandChange, CommandSchedule};
-pub use controller::{GaitController, GaitTargets, REACH_TOLERANCE, VelocityCommand};
-pub use margins::{CycleMargins, cycle_margins};
+pub use controller::{GaitController, GaitTargets, REACH_TOLERANCE, StanceError, VelocityCommand};
+pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
+pub use margins::{CycleMargins, Unreached, cycle_margins};
 pub use schedule::{LegPhase, leg_phase, minimum_support};
-pub use spec::{GaitError, GaitSpec, SwingShape};
+pub use spec::{Gait, GaitError, GaitSpec, SwingShape};

@@ -1,14 +1,17 @@
-//! Gait files (TOML): timing, per-leg phase offsets, foot trajectory shape and stance geometry.
+//! Gait files (TOML): timing, per-leg phase offsets, foot trajectory shape and, optionally, the
+//! stance geometry. A [`GaitSpec`] is the file; a [`Gait`] is the spec on one robot, every length
+//! known (given, from the robot file, or fitted: see `fit`).
 //!
 //! ```toml
 //! name = "tripod"
 //! period = 1.0          # s, one full cycle
 //! duty_factor = 0.5     # fraction of the cycle a foot is on the ground
-//! stride_length = 0.06  # m, foot travel over a stance at the nominal speed
-//! step_height = 0.03    # m, swing apex above the stance
-//! stance_height = 0.10  # m, the hips' plane above the ground
-//! reach = 0.15          # m, horizontal foot distance from the hip (default: 60 % of the leg)
 //! swing = "sine"        # sine | cycloid | rectangle
+//! # optional, fitted to the robot when left out (m):
+//! stride_length = 0.06  # foot travel over a stance at the nominal speed
+//! step_height = 0.03    # swing apex above the stance
+//! stance_height = 0.10  # the hips' plane above the ground
+//! reach = 0.15          # horizontal foot distance from its hip
 //! [phase_offsets]       # cycle fraction at which each leg's stance starts
 //! lf = 0.0
 //! lm = 0.5
@@ -39,16 +42,63 @@ pub struct GaitSpec {
     pub name: String,
     pub period: f64,
     pub duty_factor: f64,
-    pub stride_length: f64,
-    pub step_height: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stride_length: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub step_height: Option<f64>,
     /// Height of the hips' plane (the mean height of the legs' first joints) above the feet's
     /// ground, standing (m).
-    pub stance_height: f64,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stance_height: Option<f64>,
+    /// Horizontal distance of each standing foot from its hip (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reach: Option<f64>,
     #[serde(default)]
     pub swing: SwingShape,
     pub phase_offsets: BTreeMap<String, f64>,
+}
+
+/// A gait on one robot: the spec's timing and shape with every length known.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gait {
+    pub name: String,
+    pub period: f64,
+    pub duty_factor: f64,
+    pub stride_length: f64,
+    pub step_height: f64,
+    /// The hips' plane above the ground, standing (m).
+    pub stance_height: f64,
+    /// Each standing foot's horizontal distance from its hip (m).
+    pub reach: f64,
+    pub swing: SwingShape,
+    /// Cycle fraction at which each leg's stance starts, in [`LEG_NAMES`] order.
+    pub offsets: [f64; 6],
+}
+
+impl Gait {
+    /// Nominal forward speed: stride over the stance time, stride / (duty · period).
+    pub fn nominal_speed(&self) -> f64 {
+        self.stride_length / (self.duty_factor * self.period)
+    }
+
+    /// The gait as a file that gives every length (what `fit` chose, written out).
+    pub fn to_spec(&self) -> GaitSpec {
+        GaitSpec {
+            name: self.name.clone(),
+            period: self.period,
+            duty_factor: self.duty_factor,
+            stride_length: Some(self.stride_length),
+            step_height: Some(self.step_height),
+            stance_height: Some(self.stance_height),
+            reach: Some(self.reach),
+            swing: self.swing,
+            phase_offsets: LEG_NAMES
+                .iter()
+                .zip(self.offsets)
+                .map(|(name, o)| (name.to_string(), o))
+                .collect(),
+        }
+    }
 }
 
 /// A gait file that makes no sense; names the file and field.
@@ -84,11 +134,6 @@ impl GaitSpec {
         LEG_NAMES.map(|name| self.phase_offsets[name])
     }
 
-    /// Nominal forward speed: stride over the stance time, stride / (duty · period).
-    pub fn nominal_speed(&self) -> f64 {
-        self.stride_length / (self.duty_factor * self.period)
-    }
-
     /// Checks every field; the error names the field and what was expected.
     pub fn validate(&self) -> Result<(), String> {
         let positive = |field: &str, v: f64| {
@@ -107,19 +152,21 @@ impl GaitSpec {
                 self.duty_factor
             ));
         }
-        if !(self.stride_length.is_finite() && self.stride_length >= 0.0) {
-            return Err(format!(
-                "field `stride_length`: expected a finite number ≥ 0, got {}",
-                self.stride_length
-            ));
+        for (field, value) in [
+            ("stride_length", self.stride_length),
+            ("step_height", self.step_height),
+        ] {
+            if let Some(v) = value
+                && !(v.is_finite() && v >= 0.0)
+            {
+                return Err(format!(
+                    "field `{field}`: expected a finite number ≥ 0, got {v}"
+                ));
+            }
         }
-        if !(self.step_height.is_finite() && self.step_height >= 0.0) {
-            return Err(format!(
-                "field `step_height`: expected a finite number ≥ 0, got {}",
-                self.step_height
-            ));
+        if let Some(stance_height) = self.stance_height {
+            positive("stance_height", stance_height)?;
         }
-        positive("stance_height", self.stance_height)?;
         if let Some(reach) = self.reach {
             positive("reach", reach)?;
         }

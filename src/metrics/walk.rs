@@ -47,11 +47,65 @@ pub struct HexapodMetrics {
     /// a locked axis (deg) over the run; zero for the multibody.
     pub max_joint_drift: f64,
     pub max_joint_drift_deg: f64,
+    /// The gait's stance on this robot: its lengths, where each came from, and its room.
+    pub stance: StanceMetrics,
     #[serde(skip)]
     acc: Accumulators,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
     #[serde(skip)]
     output: Option<PathBuf>,
+}
+
+/// The stance the robot walked in (see `gait::fit`), as the metrics JSON's `stance` object.
+#[derive(Debug, Clone, Serialize, Deserialize, Default, PartialEq)]
+#[serde(default)]
+pub struct StanceMetrics {
+    /// The hips' plane above level ground, standing (m).
+    pub stance_height: f64,
+    /// Standing feet from their hips, horizontally (m).
+    pub reach: f64,
+    pub step_height: f64,
+    pub stride_length: f64,
+    /// Where each length came from: "gait file", "robot file" or "fitted".
+    pub origins: std::collections::BTreeMap<String, String>,
+    /// The least distance of any joint to a limit over a cycle at the nominal speed on level
+    /// ground (deg), and that joint.
+    pub least_joint_room_deg: f64,
+    pub least_room_joint: String,
+    /// The most loaded servo standing on the gait's fewest feet: |torque| / effort.
+    pub max_servo_share: f64,
+    pub max_servo_joint: String,
+    /// The body's lowest point above level ground, standing (m), when its shape is known.
+    pub body_clearance: Option<f64>,
+}
+
+impl StanceMetrics {
+    pub fn of(fitted: &crate::gait::Fitted, model: &crate::robot::RobotModel) -> Self {
+        let g = &fitted.gait;
+        let o = &fitted.origins;
+        let origins = [
+            ("stance_height", o.stance_height),
+            ("reach", o.reach),
+            ("step_height", o.step_height),
+            ("stride_length", o.stride_length),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.describe().to_string()))
+        .collect();
+        let (joint, room) = fitted.margins.worst;
+        StanceMetrics {
+            stance_height: g.stance_height,
+            reach: g.reach,
+            step_height: g.step_height,
+            stride_length: g.stride_length,
+            origins,
+            least_joint_room_deg: room.to_degrees(),
+            least_room_joint: model.joints[joint].name.clone(),
+            max_servo_share: fitted.load.share,
+            max_servo_joint: model.joints[fitted.load.joint].name.clone(),
+            body_clearance: fitted.clearance,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Default)]

@@ -52,6 +52,25 @@ pub fn drawable(path: &Path) -> bool {
         .is_some_and(|e| DRAWABLE.contains(&e.to_ascii_lowercase().as_str()))
 }
 
+/// The vertices of an STL mesh file (in its own units), or None if it cannot be read (the
+/// caller falls back to what it knows without the mesh).
+pub fn stl_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
+    let is_stl = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+    if !is_stl {
+        return None;
+    }
+    let mut file = std::fs::File::open(path).ok()?;
+    let mesh = stl_io::read_stl(&mut file).ok()?;
+    Some(
+        mesh.vertices
+            .iter()
+            .map(|v| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

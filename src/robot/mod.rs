@@ -4,10 +4,11 @@ pub mod kinematics;
 pub mod legs;
 pub mod mesh;
 mod model;
+pub mod servo;
 pub mod statics;
 pub mod urdf;
 
-pub use model::{Foot, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual};
+pub use model::{Foot, GaitHints, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual};
 
 /// Loads a URDF robot file.
 pub fn load(path: &std::path::Path) -> Result<RobotModel, urdf::RobotError> {

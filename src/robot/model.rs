@@ -105,13 +105,93 @@ pub struct RobotModel {
     /// The walking direction in the URDF's base link frame; the model's body frame is that frame
     /// turned about z so that its x points this way (see `legs`).
     pub forward: super::legs::Forward,
+    /// The gait geometry the robot file states for this robot, if any.
+    pub gait_hints: GaitHints,
     /// Things that were accepted with a fallback (e.g. a missing visual mesh).
     pub warnings: Vec<String>,
+}
+
+/// Gait lengths a robot's file states (its designer's stance): a gait file's own values take
+/// precedence, and what neither gives is fitted to the robot (see `gait::fit`). All in metres.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaitHints {
+    /// The hips' plane above the ground, standing.
+    pub stance_height: Option<f64>,
+    /// Horizontal distance of the standing foot from its hip.
+    pub reach: Option<f64>,
+    /// Swing apex above the stance.
+    pub step_height: Option<f64>,
+    /// Foot travel over a stance at the nominal speed.
+    pub stride_length: Option<f64>,
+}
+
+impl GaitHints {
+    /// Each given length must be finite and positive (a stride or step may be 0).
+    pub fn validate(&self) -> Result<(), String> {
+        let fields = [
+            ("stance_height", self.stance_height, false),
+            ("reach", self.reach, false),
+            ("step_height", self.step_height, true),
+            ("stride_length", self.stride_length, true),
+        ];
+        for (field, value, zero_ok) in fields {
+            if let Some(v) = value
+                && !(v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0)))
+            {
+                let bound = if zero_ok { "≥ 0" } else { "> 0" };
+                return Err(format!(
+                    "field `gait.{field}`: expected a finite number {bound} (m), got {v}"
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl RobotModel {
     pub fn total_mass(&self) -> f64 {
         self.links.iter().map(|l| l.mass).sum()
+    }
+
+    /// The lowest point of the body (the root link's visuals) below its frame's origin, in the body
+    /// frame (m); None when the body has no shape hexsim can measure (a mesh other than STL).
+    pub fn body_bottom(&self) -> Option<f64> {
+        let lowest = |visual: &Visual| -> Option<f64> {
+            let frame = visual.origin;
+            let z_axis = frame.matrix3.z_axis;
+            // how far a disc of radius r about the frame's z reaches down
+            let disc = |r: f64| r * (1.0 - (z_axis.z * z_axis.z).min(1.0)).sqrt();
+            let ends = |length: f64| {
+                let c = frame.translation;
+                let half = frame.matrix3 * DVec3::new(0.0, 0.0, length / 2.0);
+                (c + half).z.min((c - half).z)
+            };
+            match &visual.shape {
+                Shape::Box { half_extents } => (0..8)
+                    .map(|k| {
+                        let sign = DVec3::new(
+                            if k & 1 == 0 { -1.0 } else { 1.0 },
+                            if k & 2 == 0 { -1.0 } else { 1.0 },
+                            if k & 4 == 0 { -1.0 } else { 1.0 },
+                        );
+                        frame.transform_point3(*half_extents * sign).z
+                    })
+                    .reduce(f64::min),
+                Shape::Sphere { radius } => Some(frame.translation.z - radius),
+                Shape::Cylinder { radius, length } => Some(ends(*length) - disc(*radius)),
+                Shape::Capsule { radius, length } => Some(ends(*length) - radius),
+                Shape::Mesh { path, scale } => super::mesh::stl_vertices(path)?
+                    .into_iter()
+                    .map(|v| frame.transform_point3(v * *scale).z)
+                    .reduce(f64::min),
+            }
+        };
+        self.links[0]
+            .visuals
+            .iter()
+            .filter_map(lowest)
+            .reduce(f64::min)
     }
 
     /// The pose of every link relative to the root for joint angles `q` (indexed like `joints`).

@@ -6,13 +6,23 @@ use super::model::{Leg, RobotModel};
 use glam::DVec3;
 
 /// Per model joint, the servo torque (N·m, about the joint axis, on the child) that holds `pose`
-/// (joint angles per model joint) standing level under `gravity` (m/s²), each foot carrying a
-/// sixth of the weight: τ_j = −a_j·[Σ_k (c_k − o_j) × m_k·g + (f − o_j) × F], the sum over the
-/// leg's links outboard of joint j.
-pub fn standing_torques(model: &RobotModel, pose: &[f64], gravity: f64) -> Vec<f64> {
+/// (joint angles per model joint) standing level under `gravity` (m/s²), the weight shared
+/// equally by `feet_down` feet (6 standing; 3 in a tripod's stance): τ_j = −a_j·[Σ_k (c_k − o_j)
+/// × m_k·g + (f − o_j) × F], the sum over the leg's links outboard of joint j, F = m·g/feet_down
+/// (every leg is given the ground force: the loaded legs' torques, whichever they are).
+pub fn standing_torques(
+    model: &RobotModel,
+    pose: &[f64],
+    gravity: f64,
+    feet_down: usize,
+) -> Vec<f64> {
     let poses = model.link_poses(pose);
     let g = DVec3::new(0.0, 0.0, -gravity);
-    let ground_force = DVec3::new(0.0, 0.0, model.total_mass() * gravity / 6.0);
+    let ground_force = DVec3::new(
+        0.0,
+        0.0,
+        model.total_mass() * gravity / feet_down.max(1) as f64,
+    );
     let mut torques = vec![0.0; model.joints.len()];
     for leg in &model.legs {
         let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
@@ -68,7 +78,7 @@ mod tests {
         let pose: Vec<f64> = (0..model.joints.len())
             .map(|j| [0.3, -0.5, 0.8][j % 3])
             .collect();
-        let torques = standing_torques(&model, &pose, g);
+        let torques = standing_torques(&model, &pose, g, 6);
         let force = model.total_mass() * g / 6.0;
         for leg in &model.legs {
             let energy = |q: &[f64]| {
@@ -105,7 +115,7 @@ mod tests {
     fn the_last_joint_holds_the_foot_force_times_its_lever() {
         let model = hex18();
         let zero = vec![0.0; model.joints.len()];
-        let torques = standing_torques(&model, &zero, 9.81);
+        let torques = standing_torques(&model, &zero, 9.81, 6);
         let poses = model.link_poses(&zero);
         for leg in &model.legs {
             let j = leg.joints[2];

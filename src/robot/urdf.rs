@@ -5,7 +5,7 @@
 
 use super::legs::{self, Forward};
 use super::mesh;
-use super::model::{Foot, Joint, Link, RobotModel, Shape, Visual};
+use super::model::{Foot, GaitHints, Joint, Link, RobotModel, Shape, Visual};
 use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -31,6 +31,9 @@ fn pose(p: &urdf_rs::Pose) -> DAffine3 {
 /// links = ["lf_tibia", "lm_tibia", "lr_tibia", "rf_tibia", "rm_tibia", "rr_tibia"]
 /// offset = [0.12, 0.0, 0.0]   # foot centre in each link's frame (m)
 /// radius = 0.01               # m
+/// [gait]                      # the stance this robot was designed for (m); any may be left out
+/// stance_height = 0.10        # and is then fitted, and a gait file's own values win
+/// reach = 0.15
 /// ```
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -47,6 +50,8 @@ struct RobotFile {
     feet: Option<FeetConfig>,
     #[serde(default)]
     forward: Option<toml::Value>,
+    #[serde(default)]
+    gait: Option<GaitHints>,
 }
 
 /// The robot file's `forward` as an angle about z (rad).
@@ -87,61 +92,87 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
         urdf_rs::read_from_string(&text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let robot_file = path.with_extension("toml");
-    let (feet, forward) = if robot_file.is_file() {
+    let settings = if robot_file.is_file() {
         let fail = |message: String| RobotError {
             file: robot_file.clone(),
             message,
         };
         let text = std::fs::read_to_string(&robot_file)
             .map_err(|e| fail(format!("cannot read the robot file: {e}")))?;
-        let file: RobotFile =
-            toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
-        if let Some(feet) = &file.feet {
-            if !(feet.radius.is_finite() && feet.radius > 0.0) {
-                return Err(fail(format!(
-                    "field `feet.radius`: expected a finite number > 0, got {}",
-                    feet.radius
-                )));
-            }
-            if let Some(missing) = feet
-                .links
-                .iter()
-                .find(|name| !robot.links.iter().any(|l| &l.name == *name))
-            {
-                return Err(fail(format!(
-                    "field `feet.links`: `{missing}` is not a link of {}",
-                    path.display()
-                )));
-            }
-        }
-        let forward = file
-            .forward
-            .as_ref()
-            .map(forward_yaw)
-            .transpose()
-            .map_err(fail)?;
-        (file.feet, forward)
+        read_robot_file(&text, &robot, path).map_err(fail)?
     } else {
-        (None, None)
+        RobotFileSettings::default()
     };
-    build(&robot, base, feet.as_ref(), forward).map_err(fail)
+    build(&robot, base, settings).map_err(fail)
 }
 
-/// Parses URDF text (for tests); `base` resolves mesh paths.
-pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
+/// What a robot file says, checked against the URDF it goes with.
+#[derive(Debug, Default)]
+struct RobotFileSettings {
+    feet: Option<FeetConfig>,
+    forward: Option<f64>,
+    gait: GaitHints,
+}
+
+fn read_robot_file(
+    text: &str,
+    robot: &urdf_rs::Robot,
+    urdf: &Path,
+) -> Result<RobotFileSettings, String> {
+    let file: RobotFile = toml::from_str(text).map_err(|e| e.to_string().trim_end().to_string())?;
+    if let Some(feet) = &file.feet {
+        if !(feet.radius.is_finite() && feet.radius > 0.0) {
+            return Err(format!(
+                "field `feet.radius`: expected a finite number > 0, got {}",
+                feet.radius
+            ));
+        }
+        if let Some(missing) = feet
+            .links
+            .iter()
+            .find(|name| !robot.links.iter().any(|l| &l.name == *name))
+        {
+            return Err(format!(
+                "field `feet.links`: `{missing}` is not a link of {}",
+                urdf.display()
+            ));
+        }
+    }
+    let gait = file.gait.unwrap_or_default();
+    gait.validate()?;
+    Ok(RobotFileSettings {
+        forward: file.forward.as_ref().map(forward_yaw).transpose()?,
+        feet: file.feet,
+        gait,
+    })
+}
+
+/// Parses URDF text, with the text of its robot file if it has one (the built-in hex18; tests);
+/// `origin` names the URDF in messages and resolves mesh paths.
+pub fn from_str_with(
+    text: &str,
+    robot_file: Option<&str>,
+    origin: &Path,
+) -> Result<RobotModel, RobotError> {
     let fail = |message: String| RobotError {
         file: origin.to_path_buf(),
         message,
     };
     let robot =
         urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
-    build(
-        &robot,
-        origin.parent().unwrap_or(Path::new(".")),
-        None,
-        None,
-    )
-    .map_err(fail)
+    let settings = match robot_file {
+        None => RobotFileSettings::default(),
+        Some(file) => read_robot_file(file, &robot, origin).map_err(|message| RobotError {
+            file: origin.with_extension("toml"),
+            message,
+        })?,
+    };
+    build(&robot, origin.parent().unwrap_or(Path::new(".")), settings).map_err(fail)
+}
+
+/// Parses URDF text alone (for tests); `origin` resolves mesh paths.
+pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
+    from_str_with(text, None, origin)
 }
 
 /// A xacro file is a URDF template, which only xacro (ROS) expands.
@@ -372,9 +403,14 @@ fn shape(
 fn build(
     robot: &urdf_rs::Robot,
     base: &Path,
-    feet: Option<&FeetConfig>,
-    forward: Option<f64>,
+    settings: RobotFileSettings,
 ) -> Result<RobotModel, String> {
+    let RobotFileSettings {
+        feet,
+        forward,
+        gait: gait_hints,
+    } = settings;
+    let feet = feet.as_ref();
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
     let mut mesh_collisions = Vec::new();
@@ -549,6 +585,7 @@ fn build(
         joints,
         legs,
         forward,
+        gait_hints,
         warnings,
     })
 }

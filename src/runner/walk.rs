@@ -5,8 +5,8 @@ use super::Outputs;
 use super::step_loop::{self, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
-use crate::gait::{CommandSchedule, GaitController, GaitSpec};
-use crate::metrics::HexapodMetrics;
+use crate::gait::{CommandSchedule, Fitted, GaitController};
+use crate::metrics::{HexapodMetrics, StanceMetrics};
 use crate::record::hexapod::{HexapodRecorder, HexapodTrajectory};
 use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};
@@ -22,7 +22,8 @@ pub struct WalkRun {
     pub robot: Arc<RobotModel>,
     pub terrain: Arc<HeightGrid>,
     pub terrain_name: String,
-    pub gait: GaitSpec,
+    /// The gait on the robot, with how it fits (reported in the metrics).
+    pub gait: Fitted,
     /// The velocity commands over the walk.
     pub commands: CommandSchedule,
     pub contact: ContactModel,
@@ -80,8 +81,8 @@ impl WalkRun {
     /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<WalkOutcome> {
         self.outputs.check_writable()?;
-        let controller = GaitController::new(&self.robot, self.gait.clone())
-            .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.name))?;
+        let controller = GaitController::new(&self.robot, self.gait.gait.clone())
+            .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?;
         let mut pose = vec![0.0; self.robot.joints.len()];
         for (leg, angles) in self.robot.legs.iter().zip(controller.standing_angles()) {
             for (j, a) in leg.joints.iter().zip(angles) {
@@ -104,10 +105,12 @@ impl WalkRun {
         let mut observers: Vec<Box<dyn Observer<WalkSample, Walker>>> = Vec::new();
         if let Some(path) = &self.outputs.record {
             let name = match self.settings.articulation {
-                Articulation::Multibody => format!("{} on {}", self.gait.name, self.terrain_name),
+                Articulation::Multibody => {
+                    format!("{} on {}", self.gait.gait.name, self.terrain_name)
+                }
                 Articulation::Impulse => format!(
                     "{} on {} (impulse joints)",
-                    self.gait.name, self.terrain_name
+                    self.gait.gait.name, self.terrain_name
                 ),
             };
             let recorder = HexapodRecorder::create(
@@ -134,6 +137,7 @@ impl WalkRun {
         // last: its file is written once the others are complete
         let mut metrics =
             HexapodMetrics::new(dt, self.robot.total_mass(), self.outputs.metrics.clone());
+        metrics.stance = StanceMetrics::of(&self.gait, &self.robot);
 
         let steps = ((self.settle_time + self.duration) / dt).round() as u64;
         let mut walking = Walking {

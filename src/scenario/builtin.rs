@@ -13,6 +13,18 @@ pub const HEX18: Builtin = Builtin {
     text: include_str!("../../robots/hex18.urdf"),
 };
 
+/// The reference robot's robot file (its stance).
+pub const HEX18_FILE: Builtin = Builtin {
+    path: "robots/hex18.toml",
+    text: include_str!("../../robots/hex18.toml"),
+};
+
+/// The reference robot, loaded with its robot file.
+pub fn hex18() -> crate::robot::RobotModel {
+    crate::robot::urdf::from_str_with(HEX18.text, Some(HEX18_FILE.text), HEX18.path.as_ref())
+        .expect("the built-in hex18 loads (tested)")
+}
+
 /// The tripod gait.
 pub const TRIPOD: Builtin = Builtin {
     path: "gaits/tripod.toml",

@@ -14,7 +14,7 @@ pub use expect::Check;
 pub use spec::{FileOr, Kind, ScenarioSpec};
 
 use crate::contact::ContactModel;
-use crate::gait::{CommandSchedule, GaitSpec};
+use crate::gait::{CommandSchedule, Fitted, Gait};
 use crate::robot::RobotModel;
 use crate::runner::ball::BallRun;
 use crate::runner::walk::WalkRun;
@@ -77,7 +77,8 @@ enum Setup {
 
 struct WalkSetup {
     robot: Arc<RobotModel>,
-    gait: GaitSpec,
+    /// The gait on this robot, its lengths given or fitted.
+    gait: Fitted,
     commands: CommandSchedule,
     settings: HexapodSettings,
     settle: f64,
@@ -176,7 +177,13 @@ impl Scenario {
     }
 
     /// The gait, for walk scenarios.
-    pub fn gait(&self) -> Option<&GaitSpec> {
+    pub fn gait(&self) -> Option<&Gait> {
+        self.fitted().map(|f| &f.gait)
+    }
+
+    /// The gait and how it fits the robot (where its lengths came from, its joint room), for
+    /// walk scenarios.
+    pub fn fitted(&self) -> Option<&Fitted> {
         match &self.setup {
             Setup::Walk(w) => Some(&w.gait),
             Setup::Ball(_) => None,

@@ -2,10 +2,12 @@
 //! every default applied, once — what [`Scenario::run`] gets is fully typed. The scenario's hash
 //! covers its fields and the content of every file it uses.
 
-use super::spec::{BALL_LOG_RATE, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, WALK_LOG_RATE};
+use super::spec::{
+    BALL_LOG_RATE, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, ServoSpec, WALK_LOG_RATE,
+};
 use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
 use crate::contact::ContactModel;
-use crate::gait::{CommandChange, CommandSchedule, GaitSpec, VelocityCommand};
+use crate::gait::{CommandChange, CommandSchedule, Gait, GaitSpec, VelocityCommand};
 use crate::robot::RobotModel;
 use crate::sim::{
     BallConfig, DEFAULT_SOLVER_ITERATIONS, HexapodSettings, STANDARD_GRAVITY, ServoGains,
@@ -228,9 +230,8 @@ fn resolve_walk(
     let robot = resolve_robot(spec, base, hasher)?;
     let (gait, gait_name) = resolve_gait(spec, base)?;
     hasher.update(serde_json::to_vec(&gait).expect("a spec is plain data"));
-    crate::gait::GaitController::new(&robot, gait.clone())
-        .map_err(|e| format!("{gait_name}: {e}"))?;
     let support = crate::gait::minimum_support(&gait.offsets(), gait.duty_factor);
+    let gait = crate::gait::fit(&robot, &gait).map_err(|e| format!("{gait_name}: {e}"))?;
     if support < 3 {
         warnings.push(format!(
             "{gait_name}: at times only {support} feet are on the ground (a hexapod needs 3 to stand statically); check its duty_factor and phase_offsets"
@@ -262,18 +263,8 @@ fn resolve_walk(
     if spec.pgs_iterations == Some(0) {
         return Err("pgs_iterations: expected at least 1".into());
     }
-    let servo = spec.servo.unwrap_or_default();
-    if !(servo.stiffness.is_finite()
-        && servo.stiffness > 0.0
-        && servo.damping.is_finite()
-        && servo.damping >= 0.0)
-    {
-        return Err(format!(
-            "servo: expected stiffness > 0 and damping ≥ 0, got {} and {}",
-            servo.stiffness, servo.damping
-        ));
-    }
-    let commands = resolve_commands(spec, &gait)?;
+    let gains = resolve_servo(spec.servo.unwrap_or_default(), &robot, &gait.gait)?;
+    let commands = resolve_commands(spec, &gait.gait)?;
     if let Some(start) = spec.start
         && ![start.x, start.y, Some(start.heading_deg)]
             .into_iter()
@@ -291,15 +282,40 @@ fn resolve_walk(
             dt: spec.dt,
             solver_iterations: spec.solver_iterations.unwrap_or(DEFAULT_SOLVER_ITERATIONS),
             pgs_iterations: spec.pgs_iterations,
-            gains: ServoGains {
-                stiffness: servo.stiffness,
-                damping: servo.damping,
-            },
+            gains,
         },
         settle,
         follow_terrain: spec.follow_terrain.unwrap_or(false),
         start: spec.start.unwrap_or_default(),
     })
+}
+
+/// The servo gains: as given, else fitted to the robot standing in the gait's pose.
+fn resolve_servo(servo: ServoSpec, robot: &RobotModel, gait: &Gait) -> Result<ServoGains, String> {
+    use crate::robot::servo::{REFERENCE_DAMPING, REFERENCE_STIFFNESS, fitted_gains};
+    let fitted = || {
+        let controller = crate::gait::GaitController::new(robot, gait.clone())
+            .expect("a fitted gait stands (fit checked it)");
+        let mut pose = vec![0.0; robot.joints.len()];
+        for (leg, angles) in robot.legs.iter().zip(controller.standing_angles()) {
+            for (&j, a) in leg.joints.iter().zip(angles) {
+                pose[j] = a;
+            }
+        }
+        fitted_gains(robot, &pose)
+    };
+    let (stiffness, damping) = match (servo.stiffness, servo.damping) {
+        (Some(k), Some(d)) => (k, d),
+        (Some(k), None) => (k, k * REFERENCE_DAMPING / REFERENCE_STIFFNESS),
+        (None, Some(d)) => (fitted().0, d),
+        (None, None) => fitted(),
+    };
+    if !(stiffness.is_finite() && stiffness > 0.0 && damping.is_finite() && damping >= 0.0) {
+        return Err(format!(
+            "servo: expected stiffness > 0 and damping ≥ 0, got {stiffness} and {damping}"
+        ));
+    }
+    Ok(ServoGains { stiffness, damping })
 }
 
 /// The robot: hex18 built in, or a URDF (and its robot file beside it).
@@ -311,7 +327,12 @@ fn resolve_robot(
     match &spec.robot {
         None => {
             hasher.update(builtin::HEX18.text);
-            crate::robot::urdf::from_str(builtin::HEX18.text, Path::new(builtin::HEX18.path))
+            hasher.update(builtin::HEX18_FILE.text);
+            crate::robot::urdf::from_str_with(
+                builtin::HEX18.text,
+                Some(builtin::HEX18_FILE.text),
+                Path::new(builtin::HEX18.path),
+            )
         }
         Some(file) => {
             let path = base.join(file);
@@ -343,7 +364,7 @@ fn resolve_gait(spec: &ScenarioSpec, base: &Path) -> Result<(GaitSpec, String), 
 }
 
 /// The velocity commands over the walk: the gait's nominal speed straight ahead unless given.
-fn resolve_commands(spec: &ScenarioSpec, gait: &GaitSpec) -> Result<CommandSchedule, String> {
+fn resolve_commands(spec: &ScenarioSpec, gait: &Gait) -> Result<CommandSchedule, String> {
     let changes = match &spec.command {
         None => vec![CommandChange {
             at: 0.0,

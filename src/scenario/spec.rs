@@ -285,23 +285,19 @@ impl ContactSpec {
     }
 }
 
-/// Joint servos: τ = k·(q* − q) − c·q̇, limited to the URDF's effort.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// Joint servos: τ = k·(q* − q) − c·q̇, limited to the URDF's effort. What is left out is fitted
+/// to the robot (`robot::servo`: the reference's 20 N·m/rad and 0.05 N·m·s/rad on hex18, stiffer
+/// for heavier legs); damping given alone keeps the fitted stiffness, stiffness given alone gets
+/// the reference's damping time d/k = 2.5 ms.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ServoSpec {
-    pub stiffness: f64,
-    pub damping: f64,
-}
-
-impl Default for ServoSpec {
-    /// The simulator's servo (`ServoGains::default`).
-    fn default() -> Self {
-        let gains = crate::sim::ServoGains::default();
-        ServoSpec {
-            stiffness: gains.stiffness,
-            damping: gains.damping,
-        }
-    }
+    /// N·m/rad.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// N·m·s/rad.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
 }
 
 /// Where the body starts; unset x/y: [`START_INSET`] inside the terrain's −x edge, centred in y.

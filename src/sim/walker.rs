@@ -89,7 +89,7 @@ impl Walker {
     pub fn step(&mut self) -> WalkSample {
         let t = self.gait_time();
         if t >= 0.0 {
-            let period = self.controller.spec().period;
+            let period = self.controller.gait().period;
             // ramp the stride up over the first cycle so the feet leave the standing pose smoothly
             let blend = (t / period).min(1.0);
             let targets = if self.terrain_following {

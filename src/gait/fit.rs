@@ -1,0 +1,640 @@
+//! A gait fitted to a robot: the lengths a gait file leaves out (stance height, reach, step
+//! height, stride length) chosen from the robot's legs, so that any hexapod walks with the
+//! built-in gaits.
+//!
+//! Each length comes from the first of: the gait file, the robot file's `[gait]` section, the fit.
+//! The fit, with L the legs' mean length (hip to foot centre along the segments):
+//! - stride L/4 and step height L/8 (hex18, L = 0.25 m, was designed with 0.06 and 0.03 m);
+//! - stance height and reach: the pair that leaves the joints the most room over a whole cycle at
+//!   the nominal speed on level ground — the largest least distance of any joint to a limit, plus
+//!   a tenth of the mean over the joints to choose among stances whose tightest joint is the same
+//!   — among the stances where every foot target is reached, the servos hold the robot standing on
+//!   the gait's fewest feet with half their effort to spare ([`TORQUE_SHARE`]), and the body's
+//!   lowest point clears the ground by a step height (what a foot steps over the body passes).
+//!   A grid over h ∈ [0.05, 0.95]·L, r ∈ [0.05, 1]·L, refined twice around the best cell.
+//! - When no stance passes, the fitted stride and step height are halved (twice at most); when
+//!   still none passes, the error names what binds at the stance that came closest: a joint at
+//!   its limit, a servo short of torque, or the body too low.
+
+use super::controller::{GaitController, StanceError};
+use super::margins::{CycleMargins, cycle_margins, sampled_margins};
+use super::schedule::minimum_support;
+use super::spec::{Gait, GaitSpec};
+use crate::robot::{RobotModel, statics};
+
+/// The most of a servo's effort the fitted stance may need standing on the gait's fewest feet:
+/// the rest is for accelerating the legs and absorbing touch-downs.
+pub const TORQUE_SHARE: f64 = 0.5;
+/// Fitted stride and step height per unit of leg length.
+const STRIDE_PER_LEG: f64 = 0.25;
+const STEP_PER_LEG: f64 = 0.125;
+/// Weight of the mean joint room against the least in the fit's score.
+const MEAN_WEIGHT: f64 = 0.1;
+/// Grid cells per free length in the coarse search, and cycle instants sampled per candidate.
+const GRID: usize = 16;
+const SEARCH_SAMPLES: usize = 24;
+/// Standard gravity for the torque check (m/s²).
+const GRAVITY: f64 = 9.80665;
+
+/// Where a gait length came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Origin {
+    GaitFile,
+    RobotFile,
+    Fitted,
+}
+
+impl Origin {
+    pub fn describe(self) -> &'static str {
+        match self {
+            Origin::GaitFile => "gait file",
+            Origin::RobotFile => "robot file",
+            Origin::Fitted => "fitted",
+        }
+    }
+}
+
+/// Where each of the four lengths came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Origins {
+    pub stance_height: Origin,
+    pub reach: Origin,
+    pub step_height: Origin,
+    pub stride_length: Origin,
+}
+
+impl Origins {
+    pub fn any_fitted(&self) -> bool {
+        [
+            self.stance_height,
+            self.reach,
+            self.step_height,
+            self.stride_length,
+        ]
+        .contains(&Origin::Fitted)
+    }
+}
+
+/// The most loaded servo standing on the gait's fewest feet.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServoLoad {
+    /// Model joint index.
+    pub joint: usize,
+    /// N·m.
+    pub torque: f64,
+    /// |torque| / effort.
+    pub share: f64,
+    /// Feet carrying the weight.
+    pub feet_down: usize,
+}
+
+/// A gait on a robot, and how it fits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fitted {
+    pub gait: Gait,
+    pub origins: Origins,
+    /// Joint room over a cycle at the nominal speed.
+    pub margins: CycleMargins,
+    pub load: ServoLoad,
+    /// The body's lowest point above level ground, standing (m); None when the body's shape is
+    /// unknown (a mesh hexsim cannot read).
+    pub clearance: Option<f64>,
+    /// 1, or the factor the fitted stride and step height were reduced by to find a stance.
+    pub scale: f64,
+}
+
+impl Fitted {
+    /// One line per length, saying where it came from, and the stance's margins.
+    pub fn describe(&self, model: &RobotModel) -> Vec<String> {
+        let g = &self.gait;
+        let o = &self.origins;
+        let mut lines = vec![format!(
+            "stance height {:.3} m ({}), reach {:.3} m ({}), step height {:.3} m ({}), stride {:.3} m ({}); nominal speed {:.3} m/s",
+            g.stance_height,
+            o.stance_height.describe(),
+            g.reach,
+            o.reach.describe(),
+            g.step_height,
+            o.step_height.describe(),
+            g.stride_length,
+            o.stride_length.describe(),
+            g.nominal_speed()
+        )];
+        if self.scale < 1.0 {
+            lines.push(format!(
+                "the fitted stride and step height were scaled by {} to find a stance that fits",
+                self.scale
+            ));
+        }
+        let (joint, room) = self.margins.worst;
+        let clearance = self.clearance.map_or(String::new(), |c| {
+            format!("; body {c:.3} m above the ground")
+        });
+        lines.push(format!(
+            "least joint room over a cycle {:.0}° ({}); most loaded servo {} at {:.0} % of its effort on {} feet{clearance}",
+            room.to_degrees(),
+            model.joints[joint].name,
+            model.joints[self.load.joint].name,
+            100.0 * self.load.share,
+            self.load.feet_down
+        ));
+        lines
+    }
+}
+
+/// Why a gait cannot be fitted to a robot.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct FitError(pub String);
+
+/// The gait `spec` on `model`: the lengths it leaves out taken from the robot file or fitted
+/// (see the module's doc), then checked as a whole. Given lengths are kept, and an error says
+/// why they do not fit (the miss).
+pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
+    let hints = &model.gait_hints;
+    let pick = |file: Option<f64>, robot: Option<f64>| match (file, robot) {
+        (Some(v), _) => (Some(v), Origin::GaitFile),
+        (None, Some(v)) => (Some(v), Origin::RobotFile),
+        (None, None) => (None, Origin::Fitted),
+    };
+    let (stance_height, o_stance) = pick(spec.stance_height, hints.stance_height);
+    let (reach, o_reach) = pick(spec.reach, hints.reach);
+    let (step_height, o_step) = pick(spec.step_height, hints.step_height);
+    let (stride_length, o_stride) = pick(spec.stride_length, hints.stride_length);
+    let origins = Origins {
+        stance_height: o_stance,
+        reach: o_reach,
+        step_height: o_step,
+        stride_length: o_stride,
+    };
+    let leg = leg_length(model);
+    let feet_down = minimum_support(&spec.offsets(), spec.duty_factor).max(1);
+    let gait = |scale: f64, h: f64, r: f64| Gait {
+        name: spec.name.clone(),
+        period: spec.period,
+        duty_factor: spec.duty_factor,
+        stride_length: stride_length.unwrap_or(STRIDE_PER_LEG * leg * scale),
+        step_height: step_height.unwrap_or(STEP_PER_LEG * leg * scale),
+        stance_height: h,
+        reach: r,
+        swing: spec.swing,
+        offsets: spec.offsets(),
+    };
+    if let (Some(h), Some(r)) = (stance_height, reach) {
+        // nothing to search: the stance is given; check it
+        let gait = gait(1.0, h, r);
+        let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
+        let (load, clearance) = (
+            servo_load(model, &gait, feet_down)?,
+            clearance(model, &gait),
+        );
+        return Ok(Fitted {
+            gait,
+            origins,
+            margins,
+            load,
+            clearance,
+            scale: 1.0,
+        });
+    }
+    let scalable = stride_length.is_none() || step_height.is_none();
+    let scales: &[f64] = if scalable { &[1.0, 0.5, 0.25] } else { &[1.0] };
+    let mut closest: Vec<Assessment> = Vec::new();
+    let depth = body_depth(model);
+    for &scale in scales {
+        let search = Search {
+            model,
+            leg,
+            body_depth: depth,
+            feet_down,
+            gait: &|h, r| gait(scale, h, r),
+        };
+        let (best, near) = search.run(stance_height, reach);
+        if let Some((h, r)) = best {
+            let gait = gait(scale, h, r);
+            let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
+            return Ok(Fitted {
+                load: servo_load(model, &gait, feet_down)?,
+                clearance: clearance(model, &gait),
+                gait,
+                origins,
+                margins,
+                scale,
+            });
+        }
+        closest = near;
+    }
+    let reasons: Vec<String> = closest.iter().map(|a| a.explain(model)).collect();
+    Err(FitError(format!(
+        "no feasible stance for gait `{}` on this robot (searched stance heights {:.3}–{:.3} m and reaches {:.3}–{:.3} m{}); what binds, at the stance closest to fitting for each reason: {}",
+        spec.name,
+        0.05 * leg,
+        0.95 * leg,
+        0.05 * leg,
+        leg,
+        if scalable {
+            ", with the stride and step height down to a quarter"
+        } else {
+            ""
+        },
+        reasons.join("; ")
+    )))
+}
+
+/// The legs' mean length: hip to foot centre along the segments (m).
+fn leg_length(model: &RobotModel) -> f64 {
+    let total: f64 = model
+        .legs
+        .iter()
+        .map(|leg| statics::segment_lengths(model, leg).iter().sum::<f64>())
+        .sum();
+    total / model.legs.len().max(1) as f64
+}
+
+/// How far the body's lowest point hangs below the hips' plane (m), when the body's shape is known.
+fn body_depth(model: &RobotModel) -> Option<f64> {
+    model.body_bottom().map(|bottom| hips_plane(model) - bottom)
+}
+
+/// The body's lowest point above level ground, standing at the gait's stance (m).
+fn clearance(model: &RobotModel, gait: &Gait) -> Option<f64> {
+    body_depth(model).map(|depth| gait.stance_height - depth)
+}
+
+/// Mean height of the legs' first joints in the body frame (the plane stance height is measured
+/// from).
+fn hips_plane(model: &RobotModel) -> f64 {
+    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
+    let total: f64 = model
+        .legs
+        .iter()
+        .map(|leg| {
+            let joint = &model.joints[leg.joints[0]];
+            (poses[joint.parent] * joint.origin).translation.z
+        })
+        .sum();
+    total / model.legs.len().max(1) as f64
+}
+
+/// The most loaded servo standing in the gait's pose on `feet_down` feet.
+fn servo_load(model: &RobotModel, gait: &Gait, feet_down: usize) -> Result<ServoLoad, FitError> {
+    let controller =
+        GaitController::new(model, gait.clone()).map_err(|e| FitError(e.to_string()))?;
+    Ok(load_of(model, &controller, feet_down))
+}
+
+fn load_of(model: &RobotModel, controller: &GaitController, feet_down: usize) -> ServoLoad {
+    let mut pose = vec![0.0; model.joints.len()];
+    for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
+        for (&j, a) in leg.joints.iter().zip(angles) {
+            pose[j] = a;
+        }
+    }
+    let torques = statics::standing_torques(model, &pose, GRAVITY, feet_down);
+    let (joint, share) = torques
+        .iter()
+        .enumerate()
+        .map(|(j, t)| (j, t.abs() / model.joints[j].effort))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0, 0.0));
+    ServoLoad {
+        joint,
+        torque: torques.get(joint).copied().unwrap_or(0.0),
+        share,
+        feet_down,
+    }
+}
+
+/// What keeps a candidate stance from fitting.
+#[derive(Debug, Clone, PartialEq)]
+enum Problem {
+    /// The standing position or swing apex is out of a leg's reach.
+    Stance(StanceError),
+    /// A foot target during the cycle is out of reach.
+    Cycle {
+        leg: usize,
+        time: f64,
+        angles: [f64; 3],
+    },
+    Torque(ServoLoad),
+    /// The body's lowest point is this far above the ground, less than a step height.
+    Clearance(f64),
+}
+
+/// A candidate stance judged.
+#[derive(Debug, Clone, PartialEq)]
+struct Assessment {
+    stance_height: f64,
+    reach: f64,
+    step_height: f64,
+    /// The score to maximise, or what is wrong with the stance.
+    outcome: Result<f64, Problem>,
+    /// How far from fitting (0 when it fits): the miss over the leg length, the torque excess
+    /// as a share of the effort, the clearance shortfall over the leg length.
+    penalty: f64,
+}
+
+impl Assessment {
+    /// What binds, in words: which joint at which limit, which servo, or the body's height.
+    fn explain(&self, model: &RobotModel) -> String {
+        let at = format!(
+            "stance height {:.3} m, reach {:.3} m",
+            self.stance_height, self.reach
+        );
+        let limits = |leg: usize, angles: [f64; 3]| {
+            let leg = &model.legs[leg];
+            let bound: Vec<String> = leg
+                .joints
+                .iter()
+                .zip(angles)
+                .filter_map(|(&j, q)| {
+                    let joint = &model.joints[j];
+                    let (which, limit) = if (q - joint.lower).abs() < 1e-6 {
+                        ("lower", joint.lower)
+                    } else if (q - joint.upper).abs() < 1e-6 {
+                        ("upper", joint.upper)
+                    } else {
+                        return None;
+                    };
+                    Some(format!(
+                        "joint `{}` at its {which} limit {:.0}°",
+                        joint.name,
+                        limit.to_degrees()
+                    ))
+                })
+                .collect();
+            if bound.is_empty() {
+                format!("leg {} is stretched out (no joint at a limit)", leg.name)
+            } else {
+                format!("leg {}: {}", leg.name, bound.join(", "))
+            }
+        };
+        match &self.outcome {
+            Ok(_) => format!("{at}: it fits"),
+            Err(Problem::Stance(e)) => format!(
+                "{at}: {} ({})",
+                limits(e.leg, e.angles),
+                if e.lift {
+                    format!(
+                        "lifting the foot {:.3} m misses by {:.1} mm",
+                        self.step_height,
+                        e.miss * 1e3
+                    )
+                } else {
+                    format!(
+                        "the standing foot position misses by {:.1} mm",
+                        e.miss * 1e3
+                    )
+                }
+            ),
+            Err(Problem::Cycle { leg, time, angles }) => format!(
+                "{at}: {} ({:.2} s into the cycle, the foot target is out of reach)",
+                limits(*leg, *angles),
+                time
+            ),
+            Err(Problem::Torque(load)) => {
+                let joint = &model.joints[load.joint];
+                format!(
+                    "{at}: joint `{}` must hold {:.3} N·m standing on {} feet, {:.0} % of its effort {} N·m (at most {:.0} % leaves room to move)",
+                    joint.name,
+                    load.torque.abs(),
+                    load.feet_down,
+                    100.0 * load.share,
+                    joint.effort,
+                    100.0 * TORQUE_SHARE
+                )
+            }
+            Err(Problem::Clearance(c)) => format!(
+                "{at}: the body's lowest point is {:.3} m above the ground, less than the step height {:.3} m",
+                c, self.step_height
+            ),
+        }
+    }
+}
+
+/// The grid search over the free stance lengths.
+struct Search<'a> {
+    model: &'a RobotModel,
+    leg: f64,
+    /// [`body_depth`], read once (it may read a mesh file).
+    body_depth: Option<f64>,
+    feet_down: usize,
+    gait: &'a dyn Fn(f64, f64) -> Gait,
+}
+
+impl Search<'_> {
+    fn assess(&self, h: f64, r: f64) -> Assessment {
+        let gait = (self.gait)(h, r);
+        let judged = |outcome: Result<f64, Problem>, penalty: f64| Assessment {
+            stance_height: h,
+            reach: r,
+            step_height: gait.step_height,
+            outcome,
+            penalty,
+        };
+        let controller = match GaitController::new(self.model, gait.clone()) {
+            Ok(c) => c,
+            Err(e) => {
+                let penalty = 1.0 + e.miss / self.leg;
+                return judged(Err(Problem::Stance(e)), penalty);
+            }
+        };
+        if let Some(c) = self.body_depth.map(|depth| h - depth)
+            && c < gait.step_height
+        {
+            let penalty = (gait.step_height - c) / self.leg;
+            return judged(Err(Problem::Clearance(c)), penalty);
+        }
+        let load = load_of(self.model, &controller, self.feet_down);
+        if load.share > TORQUE_SHARE {
+            return judged(Err(Problem::Torque(load)), load.share - TORQUE_SHARE);
+        }
+        let margins = match sampled_margins(self.model, &gait, SEARCH_SAMPLES) {
+            Ok(m) => m,
+            Err(e) => {
+                let penalty = 1.0 + e.miss / self.leg;
+                return judged(Err(Problem::Stance(e)), penalty);
+            }
+        };
+        if let Some(u) = margins.unreached {
+            return judged(
+                Err(Problem::Cycle {
+                    leg: u.leg,
+                    time: u.time,
+                    angles: u.angles,
+                }),
+                0.5,
+            );
+        }
+        let mean = margins.per_joint.iter().sum::<f64>() / margins.per_joint.len().max(1) as f64;
+        judged(Ok(margins.worst.1 + MEAN_WEIGHT * mean), 0.0)
+    }
+
+    /// The best (stance height, reach) with the given ones held, and the failure closest to
+    /// fitting of each kind (reach, torque, clearance).
+    fn run(&self, h: Option<f64>, r: Option<f64>) -> (Option<(f64, f64)>, Vec<Assessment>) {
+        let axis = |given: Option<f64>, from: f64, to: f64| match given {
+            Some(v) => (v, v, 0.0),
+            None => {
+                let step = (to - from) * self.leg / (GRID - 1) as f64;
+                (from * self.leg, to * self.leg, step)
+            }
+        };
+        let (h_lo, h_hi, mut h_step) = axis(h, 0.05, 0.95);
+        let (r_lo, r_hi, mut r_step) = axis(r, 0.05, 1.0);
+        let points = |lo: f64, hi: f64, step: f64| -> Vec<f64> {
+            if step == 0.0 {
+                vec![lo]
+            } else {
+                (0..)
+                    .map(|k| lo + step * k as f64)
+                    .take_while(|v| *v <= hi + 1e-12)
+                    .collect()
+            }
+        };
+        let mut best: Option<Assessment> = None;
+        let mut closest: [Option<Assessment>; 3] = [None, None, None];
+        let consider = |a: Assessment,
+                        best: &mut Option<Assessment>,
+                        closest: &mut [Option<Assessment>; 3]| {
+            match a.outcome {
+                Ok(score) => {
+                    if best
+                        .as_ref()
+                        .is_none_or(|b| b.outcome.as_ref().is_ok_and(|&s| score > s))
+                    {
+                        *best = Some(a);
+                    }
+                }
+                Err(ref problem) => {
+                    let kind = match problem {
+                        Problem::Stance(_) | Problem::Cycle { .. } => 0,
+                        Problem::Torque(_) => 1,
+                        Problem::Clearance(_) => 2,
+                    };
+                    if closest[kind].as_ref().is_none_or(|c| a.penalty < c.penalty) {
+                        closest[kind] = Some(a);
+                    }
+                }
+            }
+        };
+        for &hv in &points(h_lo, h_hi, h_step) {
+            for &rv in &points(r_lo, r_hi, r_step) {
+                consider(self.assess(hv, rv), &mut best, &mut closest);
+            }
+        }
+        // refine twice: a 5 × 5 grid at half the spacing around the best
+        for _ in 0..2 {
+            let Some(centre) = best.clone() else { break };
+            h_step /= 2.0;
+            r_step /= 2.0;
+            let around = |c: f64, step: f64, lo: f64, hi: f64| -> Vec<f64> {
+                if step == 0.0 {
+                    return vec![c];
+                }
+                (-2..=2)
+                    .map(|k| c + step * k as f64)
+                    .filter(|v| *v >= lo - 1e-12 && *v <= hi + 1e-12)
+                    .collect()
+            };
+            for &hv in &around(centre.stance_height, h_step, h_lo, h_hi) {
+                for &rv in &around(centre.reach, r_step, r_lo, r_hi) {
+                    if (hv, rv) != (centre.stance_height, centre.reach) {
+                        consider(self.assess(hv, rv), &mut best, &mut closest);
+                    }
+                }
+            }
+        }
+        (
+            best.map(|b| (b.stance_height, b.reach)),
+            closest.into_iter().flatten().collect(),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::GaitHints;
+    use std::path::Path;
+
+    fn tripod() -> GaitSpec {
+        GaitSpec::from_toml(include_str!("../../gaits/tripod.toml"), Path::new("tripod")).unwrap()
+    }
+
+    /// hex18 without its robot file's stance: the fit's answer meets every constraint it states,
+    /// and no stance around it (a step of 2 mm either way in height and reach) scores higher.
+    #[test]
+    fn the_fitted_stance_meets_its_constraints_and_is_a_local_best() {
+        let model = RobotModel {
+            gait_hints: GaitHints::default(),
+            ..crate::scenario::builtin::hex18()
+        };
+        let fitted = fit(&model, &tripod()).unwrap();
+        let g = &fitted.gait;
+        assert!(fitted.origins.any_fitted());
+        assert_eq!(fitted.scale, 1.0);
+        // L = 0.25 m: a quarter and an eighth
+        assert!((g.stride_length - 0.0625).abs() < 1e-9 && (g.step_height - 0.03125).abs() < 1e-9);
+        assert!(fitted.margins.unreached.is_none() && fitted.margins.worst.1 > 0.0);
+        assert!(fitted.load.share <= TORQUE_SHARE && fitted.load.feet_down == 3);
+        assert!(fitted.clearance.unwrap() >= g.step_height);
+        let search = Search {
+            model: &model,
+            leg: leg_length(&model),
+            body_depth: body_depth(&model),
+            feet_down: 3,
+            gait: &|h, r| Gait {
+                stance_height: h,
+                reach: r,
+                ..g.clone()
+            },
+        };
+        let best = search.assess(g.stance_height, g.reach).outcome.unwrap();
+        for (dh, dr) in [(0.002, 0.0), (-0.002, 0.0), (0.0, 0.002), (0.0, -0.002)] {
+            if let Ok(score) = search.assess(g.stance_height + dh, g.reach + dr).outcome {
+                assert!(score <= best + 1e-9, "({dh}, {dr}): {score} > {best}");
+            }
+        }
+    }
+
+    /// Each length comes from the gait file, else the robot file, else the fit.
+    #[test]
+    fn given_lengths_win_over_the_robot_file_and_the_fit() {
+        let model = crate::scenario::builtin::hex18(); // robot file: 0.10, 0.15, 0.03, 0.06
+        let spec = GaitSpec {
+            stance_height: Some(0.12),
+            ..tripod()
+        };
+        let fitted = fit(&model, &spec).unwrap();
+        assert_eq!(fitted.gait.stance_height, 0.12);
+        assert_eq!(fitted.origins.stance_height, Origin::GaitFile);
+        assert_eq!(fitted.gait.reach, 0.15);
+        assert_eq!(fitted.origins.reach, Origin::RobotFile);
+        let bare = RobotModel {
+            gait_hints: GaitHints {
+                reach: Some(0.16),
+                ..GaitHints::default()
+            },
+            ..model
+        };
+        let fitted = fit(&bare, &spec).unwrap();
+        assert_eq!(fitted.gait.reach, 0.16);
+        assert_eq!(fitted.origins.step_height, Origin::Fitted);
+        assert_eq!(fitted.gait.stance_height, 0.12);
+    }
+
+    /// Given lengths that do not fit are refused with the miss, not searched around.
+    #[test]
+    fn a_given_stance_out_of_reach_is_an_error() {
+        let spec = GaitSpec {
+            stance_height: Some(0.4),
+            ..tripod()
+        };
+        let e = fit(&crate::scenario::builtin::hex18(), &spec).unwrap_err();
+        assert!(
+            e.0.contains("cannot reach its standing foot position"),
+            "{e}"
+        );
+    }
+}

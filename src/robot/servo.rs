@@ -1,0 +1,146 @@
+//! Servo gains fitted to a robot when neither the scenario nor the robot file gives them.
+//!
+//! The reference servo (shared/reference: 20 N·m/rad, 0.05 N·m·s/rad) is hex18's: on the inertia
+//! its leg presents about the coxa standing, 1.59·10⁻³ kg·m², it closes the loop at ω₀ = √(k/I) ≈
+//! 112 rad/s, some eighteen times the tripod's 2π rad/s, so a swinging leg follows its target. A robot
+//! with heavier legs needs a stiffer servo for the same tracking (a leg with ten times the inertia
+//! under hex18's servo lags its swing and trips the robot), so the fit keeps ω₀ and the damping
+//! time d/k: k = ω₀²·max_j I_j over the joints, d = k·(0.05/20). It never goes below the reference.
+
+use super::model::RobotModel;
+use glam::{DMat3, DVec3};
+
+/// The reference servo's stiffness (N·m/rad) and damping (N·m·s/rad).
+pub const REFERENCE_STIFFNESS: f64 = 20.0;
+pub const REFERENCE_DAMPING: f64 = 0.05;
+/// The reference servo's bandwidth on hex18's standing leg (rad/s): √(20 / 1.59·10⁻³).
+pub const BANDWIDTH: f64 = 112.0;
+
+/// Per model joint, the moment of inertia of everything outboard of it in its leg about its axis
+/// (kg·m²), in `pose` (joint angles per model joint): Σ_k a·I_k·a + m_k·|a × (c_k − o)|².
+pub fn outboard_inertias(model: &RobotModel, pose: &[f64]) -> Vec<f64> {
+    let poses = model.link_poses(pose);
+    let mut inertias = vec![0.0; model.joints.len()];
+    for leg in &model.legs {
+        for (i, &j) in leg.joints.iter().enumerate() {
+            let joint = &model.joints[j];
+            let frame = poses[joint.parent] * joint.origin;
+            let (origin, axis) = (frame.translation, (frame.matrix3 * joint.axis).normalize());
+            inertias[j] = leg.joints[i..]
+                .iter()
+                .map(|&outboard| {
+                    let k = model.joints[outboard].child;
+                    let link = &model.links[k];
+                    let rotation: DMat3 = poses[k].matrix3;
+                    let about_com = rotation * link.inertia * rotation.transpose();
+                    let com: DVec3 = poses[k].transform_point3(link.com);
+                    axis.dot(about_com * axis)
+                        + link.mass * axis.cross(com - origin).length_squared()
+                })
+                .sum();
+        }
+    }
+    inertias
+}
+
+/// Stiffness and damping that give the robot's legs, standing in `pose`, the reference servo's
+/// bandwidth and damping time (see the module's doc), and never less than the reference.
+pub fn fitted_gains(model: &RobotModel, pose: &[f64]) -> (f64, f64) {
+    let inertia = outboard_inertias(model, pose)
+        .into_iter()
+        .fold(0.0, f64::max);
+    let stiffness = (BANDWIDTH * BANDWIDTH * inertia).max(REFERENCE_STIFFNESS);
+    (
+        stiffness,
+        stiffness * REFERENCE_DAMPING / REFERENCE_STIFFNESS,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The inertia about each joint by another route: turning joint j at 1 rad/s, the kinetic
+    /// energy of the outboard links is ½·I·1², with each link's centre velocity and the world
+    /// inertia taken by central differences of the link poses.
+    #[test]
+    fn outboard_inertias_match_the_kinetic_energy_of_a_unit_turn() {
+        let model = crate::scenario::builtin::hex18();
+        let pose: Vec<f64> = (0..model.joints.len())
+            .map(|j| [0.2, -0.4, 0.9][j % 3])
+            .collect();
+        let inertias = outboard_inertias(&model, &pose);
+        let h = 1e-6;
+        for leg in &model.legs {
+            for (i, &j) in leg.joints.iter().enumerate() {
+                let mut plus = pose.clone();
+                plus[j] += h;
+                let mut minus = pose.clone();
+                minus[j] -= h;
+                let (p, m, at) = (
+                    model.link_poses(&plus),
+                    model.link_poses(&minus),
+                    model.link_poses(&pose),
+                );
+                let joint = &model.joints[j];
+                let axis = ((at[joint.parent] * joint.origin).matrix3 * joint.axis).normalize();
+                let energy: f64 = leg.joints[i..]
+                    .iter()
+                    .map(|&o| {
+                        let k = model.joints[o].child;
+                        let link = &model.links[k];
+                        let v = (p[k].transform_point3(link.com) - m[k].transform_point3(link.com))
+                            / (2.0 * h);
+                        let r = at[k].matrix3;
+                        let world = r * link.inertia * r.transpose();
+                        0.5 * link.mass * v.length_squared() + 0.5 * axis.dot(world * axis)
+                    })
+                    .sum();
+                assert!(
+                    (2.0 * energy - inertias[j]).abs() < 1e-8,
+                    "{}: {} vs {}",
+                    joint.name,
+                    2.0 * energy,
+                    inertias[j]
+                );
+            }
+        }
+    }
+
+    /// hex18 standing gets the reference servo; legs ten times as heavy get ten times the
+    /// stiffness and damping (same bandwidth, same damping time).
+    #[test]
+    fn heavier_legs_get_proportionally_stiffer_servos() {
+        use crate::gait::{GaitController, GaitSpec, fit};
+        let model = crate::scenario::builtin::hex18();
+        let spec = GaitSpec::from_toml(
+            include_str!("../../gaits/tripod.toml"),
+            std::path::Path::new("tripod"),
+        )
+        .unwrap();
+        let controller = GaitController::new(&model, fit(&model, &spec).unwrap().gait).unwrap();
+        let mut pose = vec![0.0; model.joints.len()];
+        for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
+            for (&j, a) in leg.joints.iter().zip(angles) {
+                pose[j] = a;
+            }
+        }
+        let (k, d) = fitted_gains(&model, &pose);
+        let coxa = outboard_inertias(&model, &pose)[model.legs[0].joints[0]];
+        assert!(BANDWIDTH * BANDWIDTH * coxa < REFERENCE_STIFFNESS * 1.05);
+        assert_eq!((k, d), (REFERENCE_STIFFNESS, REFERENCE_DAMPING));
+        let mut heavy = model.clone();
+        for leg in &model.legs {
+            for &j in &leg.joints {
+                let link = &mut heavy.links[model.joints[j].child];
+                link.mass *= 10.0;
+                link.inertia *= 10.0;
+            }
+        }
+        let (k10, d10) = fitted_gains(&heavy, &pose);
+        let heavy_coxa = outboard_inertias(&heavy, &pose)[model.legs[0].joints[0]];
+        assert!((heavy_coxa / coxa - 10.0).abs() < 1e-9);
+        assert!((k10 - BANDWIDTH * BANDWIDTH * heavy_coxa).abs() < 1e-9);
+        assert!((d10 / k10 - REFERENCE_DAMPING / REFERENCE_STIFFNESS).abs() < 1e-12);
+    }
+}
