@@ -59,6 +59,11 @@ fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
         }
     }
     let torques = statics::standing_torques(model, &pose, STANDARD_GRAVITY, 6);
+    let (stiffness, damping) = robot::servo::fitted_gains(model, &pose);
+    let _ = writeln!(
+        out,
+        "  servo gains for these legs (unless a scenario or the command line sets them): {stiffness:.1} N·m/rad, {damping:.3} N·m·s/rad"
+    );
     let _ = writeln!(
         out,
         "  standing on six feet (hips {:.3} m above the ground): joint angles, and the torque each servo holds (share of its effort):",
