@@ -59,13 +59,7 @@ fn standing_on_flat_ground(model: &Arc<RobotModel>, articulation: Articulation) 
 
 /// The standing pose as per-joint angles.
 fn standing_pose(model: &RobotModel, controller: &GaitController) -> Vec<f64> {
-    let mut pose = vec![0.0; model.joints.len()];
-    for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
-        for (j, a) in leg.joints.iter().zip(angles) {
-            pose[*j] = a;
-        }
-    }
-    pose
+    model.pose_from_legs(&controller.standing_angles())
 }
 
 fn run(hexapod: &mut Hexapod, seconds: f64) -> Vec<HexapodSample> {

@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use hexsim::gait::{Fitted, GaitController, GaitSpec, fit};
+use hexsim::gait::{Fitted, GaitSpec, fit};
 use hexsim::robot::{self, GaitHints, RobotModel, statics};
 use hexsim::scenario::builtin;
 use hexsim::sim::STANDARD_GRAVITY;
@@ -49,17 +49,9 @@ fn without_hints(model: &RobotModel) -> RobotModel {
 /// The standing pose's joint angles and the torque each servo holds in it, on six feet.
 fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
     use std::fmt::Write;
-    let Ok(controller) = GaitController::new(model, fitted.gait.clone()) else {
-        return; // fitted gaits stand (fit checked it)
-    };
-    let mut pose = vec![0.0; model.joints.len()];
-    for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
-        for (j, a) in leg.joints.iter().zip(angles) {
-            pose[*j] = a;
-        }
-    }
-    let torques = statics::standing_torques(model, &pose, STANDARD_GRAVITY, 6);
-    let (stiffness, damping) = robot::servo::fitted_gains(model, &pose);
+    let pose = &fitted.standing_pose;
+    let torques = statics::standing_torques(model, pose, STANDARD_GRAVITY, 6);
+    let (stiffness, damping) = robot::servo::fitted_gains(model, pose);
     let _ = writeln!(
         out,
         "  servo gains for these legs (unless a scenario or the command line sets them): {stiffness:.1} N·m/rad, {damping:.3} N·m·s/rad"

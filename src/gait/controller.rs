@@ -72,13 +72,7 @@ const CENTRING_TOLERANCE: f64 = 1e-6;
 
 /// The robot's centre of mass in the body frame with its legs at `angles`.
 fn centre_of_mass(model: &RobotModel, angles: &[[f64; 3]; 6]) -> DVec3 {
-    let mut pose = vec![0.0; model.joints.len()];
-    for (leg, a) in model.legs.iter().zip(angles) {
-        for (&j, &q) in leg.joints.iter().zip(a) {
-            pose[j] = q;
-        }
-    }
-    let poses = model.link_poses(&pose);
+    let poses = model.link_poses(&model.pose_from_legs(angles));
     let weighted: DVec3 = model
         .links
         .iter()
@@ -90,12 +84,6 @@ fn centre_of_mass(model: &RobotModel, angles: &[[f64; 3]; 6]) -> DVec3 {
 
 /// Farther than this from its target (m), an IK answer counts as clamped.
 pub const REACH_TOLERANCE: f64 = 1e-4;
-
-/// Height of the hips' plane in the body frame: the mean height of the six first joints (zero for
-/// hex18, whose base link origin is at its hips).
-fn hips_plane(chains: &[LegChain]) -> f64 {
-    chains.iter().map(|c| c.hip().z).sum::<f64>() / chains.len().max(1) as f64
-}
 
 impl GaitController {
     /// Builds the controller and checks that the legs reach the standing pose and the swing apex.
@@ -109,7 +97,7 @@ impl GaitController {
         let mut last = [[0.0; 3]; 6];
         // the stance is measured from the hips' plane, not from the base link's origin, which a
         // URDF may put anywhere
-        let hips = hips_plane(&chains);
+        let hips = model.hips_plane();
         for (k, chain) in chains.iter().enumerate() {
             let leg = &model.legs[k];
             let reach = spec.reach;
@@ -213,7 +201,7 @@ impl GaitController {
         &self.chains
     }
 
-    /// Joint angles of the standing pose.
+    /// Joint angles of the standing pose, per leg.
     pub fn standing_angles(&self) -> [[f64; 3]; 6] {
         std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
     }

@@ -101,6 +101,8 @@ pub struct Fitted {
     pub clearance: Option<f64>,
     /// 1, or the factor the fitted stride and step height were reduced by to find a stance.
     pub scale: f64,
+    /// Joint angles per model joint, standing in the gait's pose.
+    pub standing_pose: Vec<f64>,
 }
 
 impl Fitted {
@@ -180,27 +182,15 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
         swing: spec.swing,
         offsets: spec.offsets(),
     };
+    let depth = body_depth(model);
+    let measure = |gait: Gait, scale: f64| measure(model, gait, origins, feet_down, depth, scale);
     if let (Some(h), Some(r)) = (stance_height, reach) {
         // nothing to search: the stance is given; check it
-        let gait = gait(1.0, h, r);
-        let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
-        let (load, clearance) = (
-            servo_load(model, &gait, feet_down)?,
-            clearance(model, &gait),
-        );
-        return Ok(Fitted {
-            gait,
-            origins,
-            margins,
-            load,
-            clearance,
-            scale: 1.0,
-        });
+        return measure(gait(1.0, h, r), 1.0);
     }
     let scalable = stride_length.is_none() || step_height.is_none();
     let scales: &[f64] = if scalable { &[1.0, 0.5, 0.25] } else { &[1.0] };
     let mut closest: Vec<Assessment> = Vec::new();
-    let depth = body_depth(model);
     for &scale in scales {
         let search = Search {
             model,
@@ -211,16 +201,7 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
         };
         let (best, near) = search.run(stance_height, reach);
         if let Some((h, r)) = best {
-            let gait = gait(scale, h, r);
-            let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
-            return Ok(Fitted {
-                load: servo_load(model, &gait, feet_down)?,
-                clearance: clearance(model, &gait),
-                gait,
-                origins,
-                margins,
-                scale,
-            });
+            return measure(gait(scale, h, r), scale);
         }
         closest = near;
     }
@@ -251,46 +232,41 @@ fn leg_length(model: &RobotModel) -> f64 {
     total / model.legs.len().max(1) as f64
 }
 
-/// How far the body's lowest point hangs below the hips' plane (m), when the body's shape is known.
+/// How far the body's lowest point hangs below the hips' plane (m), when the body's shape is known
+/// (read once: it may read a mesh file).
 fn body_depth(model: &RobotModel) -> Option<f64> {
-    model.body_bottom().map(|bottom| hips_plane(model) - bottom)
+    model
+        .body_bottom()
+        .map(|bottom| model.hips_plane() - bottom)
 }
 
-/// The body's lowest point above level ground, standing at the gait's stance (m).
-fn clearance(model: &RobotModel, gait: &Gait) -> Option<f64> {
-    body_depth(model).map(|depth| gait.stance_height - depth)
-}
-
-/// Mean height of the legs' first joints in the body frame (the plane stance height is measured
-/// from).
-fn hips_plane(model: &RobotModel) -> f64 {
-    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
-    let total: f64 = model
-        .legs
-        .iter()
-        .map(|leg| {
-            let joint = &model.joints[leg.joints[0]];
-            (poses[joint.parent] * joint.origin).translation.z
-        })
-        .sum();
-    total / model.legs.len().max(1) as f64
-}
-
-/// The most loaded servo standing in the gait's pose on `feet_down` feet.
-fn servo_load(model: &RobotModel, gait: &Gait, feet_down: usize) -> Result<ServoLoad, FitError> {
+/// The gait on the robot, measured: its standing pose, joint room, servo load and clearance.
+fn measure(
+    model: &RobotModel,
+    gait: Gait,
+    origins: Origins,
+    feet_down: usize,
+    body_depth: Option<f64>,
+    scale: f64,
+) -> Result<Fitted, FitError> {
     let controller =
         GaitController::new(model, gait.clone()).map_err(|e| FitError(e.to_string()))?;
-    Ok(load_of(model, &controller, feet_down))
+    let standing_pose = model.pose_from_legs(&controller.standing_angles());
+    let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
+    Ok(Fitted {
+        load: load_in(model, &standing_pose, feet_down),
+        clearance: body_depth.map(|depth| gait.stance_height - depth),
+        standing_pose,
+        gait,
+        origins,
+        margins,
+        scale,
+    })
 }
 
-fn load_of(model: &RobotModel, controller: &GaitController, feet_down: usize) -> ServoLoad {
-    let mut pose = vec![0.0; model.joints.len()];
-    for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
-        for (&j, a) in leg.joints.iter().zip(angles) {
-            pose[j] = a;
-        }
-    }
-    let torques = statics::standing_torques(model, &pose, GRAVITY, feet_down);
+/// The most loaded servo standing in `pose` on `feet_down` feet.
+fn load_in(model: &RobotModel, pose: &[f64], feet_down: usize) -> ServoLoad {
+    let torques = statics::standing_torques(model, pose, GRAVITY, feet_down);
     let (joint, share) = torques
         .iter()
         .enumerate()
@@ -445,7 +421,8 @@ impl Search<'_> {
             let penalty = (gait.step_height - c) / self.leg;
             return judged(Err(Problem::Clearance(c)), penalty);
         }
-        let load = load_of(self.model, &controller, self.feet_down);
+        let pose = self.model.pose_from_legs(&controller.standing_angles());
+        let load = load_in(self.model, &pose, self.feet_down);
         if load.share > TORQUE_SHARE {
             return judged(Err(Problem::Torque(load)), load.share - TORQUE_SHARE);
         }

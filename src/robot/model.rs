@@ -154,6 +154,29 @@ impl RobotModel {
         self.links.iter().map(|l| l.mass).sum()
     }
 
+    /// Joint angles per model joint from each leg's three (in `legs` order).
+    pub fn pose_from_legs(&self, angles: &[[f64; 3]]) -> Vec<f64> {
+        let mut pose = vec![0.0; self.joints.len()];
+        for (leg, angles) in self.legs.iter().zip(angles) {
+            for (&j, &q) in leg.joints.iter().zip(angles) {
+                pose[j] = q;
+            }
+        }
+        pose
+    }
+
+    /// Height of the hips' plane in the body frame: the mean height of the legs' first joints,
+    /// which hang from the body (zero for hex18, whose base link origin is at its hips). Stance
+    /// heights are measured from it, not from the base link's origin, which a URDF may put anywhere.
+    pub fn hips_plane(&self) -> f64 {
+        let total: f64 = self
+            .legs
+            .iter()
+            .map(|leg| self.joints[leg.joints[0]].origin.translation.z)
+            .sum();
+        total / self.legs.len().max(1) as f64
+    }
+
     /// The lowest point of the body (the root link's visuals) below its frame's origin, in the body
     /// frame (m); None when the body has no shape hexsim can measure (a mesh other than STL).
     pub fn body_bottom(&self) -> Option<f64> {

@@ -111,20 +111,14 @@ mod tests {
     /// stiffness and damping (same bandwidth, same damping time).
     #[test]
     fn heavier_legs_get_proportionally_stiffer_servos() {
-        use crate::gait::{GaitController, GaitSpec, fit};
+        use crate::gait::{GaitSpec, fit};
         let model = crate::scenario::builtin::hex18();
         let spec = GaitSpec::from_toml(
             include_str!("../../gaits/tripod.toml"),
             std::path::Path::new("tripod"),
         )
         .unwrap();
-        let controller = GaitController::new(&model, fit(&model, &spec).unwrap().gait).unwrap();
-        let mut pose = vec![0.0; model.joints.len()];
-        for (leg, angles) in model.legs.iter().zip(controller.standing_angles()) {
-            for (&j, a) in leg.joints.iter().zip(angles) {
-                pose[j] = a;
-            }
-        }
+        let pose = fit(&model, &spec).unwrap().standing_pose;
         let (k, d) = fitted_gains(&model, &pose);
         let coxa = outboard_inertias(&model, &pose)[model.legs[0].joints[0]];
         assert!(BANDWIDTH * BANDWIDTH * coxa < REFERENCE_STIFFNESS * 1.05);

@@ -83,12 +83,7 @@ impl WalkRun {
         self.outputs.check_writable()?;
         let controller = GaitController::new(&self.robot, self.gait.gait.clone())
             .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?;
-        let mut pose = vec![0.0; self.robot.joints.len()];
-        for (leg, angles) in self.robot.legs.iter().zip(controller.standing_angles()) {
-            for (j, a) in leg.joints.iter().zip(angles) {
-                pose[*j] = a;
-            }
-        }
+        let pose = self.robot.pose_from_legs(&controller.standing_angles());
         let dt = self.settings.dt;
         let hexapod = Hexapod::new(
             self.robot.clone(),

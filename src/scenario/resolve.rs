@@ -263,7 +263,7 @@ fn resolve_walk(
     if spec.pgs_iterations == Some(0) {
         return Err("pgs_iterations: expected at least 1".into());
     }
-    let gains = resolve_servo(spec.servo.unwrap_or_default(), &robot, &gait.gait)?;
+    let gains = resolve_servo(spec.servo.unwrap_or_default(), &robot, &gait.standing_pose)?;
     let commands = resolve_commands(spec, &gait.gait)?;
     if let Some(start) = spec.start
         && ![start.x, start.y, Some(start.heading_deg)]
@@ -290,20 +290,10 @@ fn resolve_walk(
     })
 }
 
-/// The servo gains: as given, else fitted to the robot standing in the gait's pose.
-fn resolve_servo(servo: ServoSpec, robot: &RobotModel, gait: &Gait) -> Result<ServoGains, String> {
+/// The servo gains: as given, else fitted to the robot standing in `pose` (the gait's).
+fn resolve_servo(servo: ServoSpec, robot: &RobotModel, pose: &[f64]) -> Result<ServoGains, String> {
     use crate::robot::servo::{REFERENCE_DAMPING, REFERENCE_STIFFNESS, fitted_gains};
-    let fitted = || {
-        let controller = crate::gait::GaitController::new(robot, gait.clone())
-            .expect("a fitted gait stands (fit checked it)");
-        let mut pose = vec![0.0; robot.joints.len()];
-        for (leg, angles) in robot.legs.iter().zip(controller.standing_angles()) {
-            for (&j, a) in leg.joints.iter().zip(angles) {
-                pose[j] = a;
-            }
-        }
-        fitted_gains(robot, &pose)
-    };
+    let fitted = || fitted_gains(robot, pose);
     let (stiffness, damping) = match (servo.stiffness, servo.damping) {
         (Some(k), Some(d)) => (k, d),
         (Some(k), None) => (k, k * REFERENCE_DAMPING / REFERENCE_STIFFNESS),
