@@ -221,3 +221,59 @@ fn mesh_visuals_are_found_by_package_and_drawn_at_their_scale() {
         body.components
     );
 }
+
+/// `hexsim robot --record`: a still picture that opens as designed — the robot standing beside
+/// the printed report, through a camera, with its feet named as gait files name them, the walking
+/// direction and (asked for) each leg's workspace; everything static, no timeline to look for.
+#[test]
+fn a_robot_standing_is_recorded_beside_its_report() {
+    let file = scratch("recording").join("kraby_standing.rrd");
+    let stdout = record(
+        &[
+            "robot",
+            "tests/data/third_party/kraby/hexapod.urdf",
+            "--workspace",
+        ],
+        &file,
+    );
+    let contents = read_back(&file).unwrap();
+    assert_eq!(contents.activations, [(true, true)], "activate and default");
+    assert!(!contents.activated_early);
+    let panel = contents.at(true, "time_panel").expect("a time panel");
+    assert!(!panel.texts.contains("sim_time"), "{:?}", panel.texts);
+    for class in ["3D", "TextDocument"] {
+        assert!(
+            blueprint_with(&contents, "ViewBlueprint:class_identifier", class).is_some(),
+            "no {class} view"
+        );
+    }
+    assert!(
+        blueprint_with(&contents, "EyeControls3D:tracking_entity", "world/camera").is_some(),
+        "the 3D view does not look through the camera"
+    );
+    // the report shown is the one printed (less the line naming the recording)
+    let report = contents.at(false, "report").expect("the report");
+    let shown = report.texts.iter().next().unwrap();
+    let printed = stdout.lines().next().unwrap();
+    assert!(shown.contains(printed), "{shown}");
+    assert!(shown.contains("walking direction +y"), "{shown}");
+    let feet = contents.at(false, "world/feet").expect("the feet");
+    assert!(LEGS.iter().all(|l| feet.texts.contains(*l)), "{feet:?}");
+    for leg in LEGS {
+        let workspace = contents.at(false, &format!("world/workspace/{leg}"));
+        assert!(workspace.is_some(), "no workspace for {leg}");
+    }
+    assert!(contents.at(false, "world/ground").is_some());
+    let moving: Vec<&str> = contents
+        .under(false, "")
+        .filter(|(_, l)| l.rows > 0)
+        .map(|(path, _)| path)
+        .collect();
+    assert!(moving.is_empty(), "not a still picture: {moving:?}");
+    // every link is drawn: Kraby's 19 links (its merged servo horns and feet among them)
+    let links = contents
+        .under(false, "world/robot")
+        .filter(|(path, _)| path.ends_with("visual_0"))
+        .count();
+    assert!(links >= 19, "{links} links drawn");
+}

@@ -4,6 +4,7 @@
 use anyhow::Result;
 use clap::Args;
 use hexsim::gait::{Fitted, GaitSpec, fit};
+use hexsim::record::standing;
 use hexsim::robot::{self, GaitHints, RobotModel, statics};
 use hexsim::scenario::builtin;
 use hexsim::sim::STANDARD_GRAVITY;
@@ -16,6 +17,17 @@ pub struct RobotArgs {
     /// Gait whose standing pose is checked. Default: gaits/tripod.toml (built in).
     #[arg(long)]
     gait: Option<PathBuf>,
+    /// Also write a rerun recording of the robot standing in the gait's fitted pose on level
+    /// ground, beside this report.
+    #[arg(long, value_name = "FILE.rrd")]
+    record: Option<PathBuf>,
+    /// With --record: draw each leg's reachable workspace as points (its joints swept between
+    /// their limits).
+    #[arg(long, requires = "record")]
+    workspace: bool,
+    /// With --record: open the recording in the rerun viewer.
+    #[arg(long, requires = "record")]
+    spawn: bool,
 }
 
 pub fn robot_command(args: RobotArgs) -> Result<()> {
@@ -24,7 +36,28 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
         Some(path) => GaitSpec::from_file(path)?,
         None => GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))?,
     };
-    print!("{}", describe(&args.robot, &model, &gait));
+    let report = describe(&args.robot, &model, &gait);
+    print!("{report}");
+    if let Some(path) = &args.record {
+        // the standing pose of the gait's fit; a robot it does not fit stands with its joints at
+        // zero, so the recording still shows what was loaded
+        let pose = fit(&model, &gait)
+            .map(|f| f.standing_pose)
+            .unwrap_or_else(|_| vec![0.0; model.joints.len()]);
+        let written = standing::record(
+            path,
+            &standing::Standing {
+                model: &model,
+                pose: &pose,
+                report: &report,
+                workspace: args.workspace,
+            },
+        )?;
+        println!("recording: {}", written.display());
+        if args.spawn {
+            hexsim::record::rerun::spawn_viewer(&written)?;
+        }
+    }
     Ok(())
 }
 

@@ -130,6 +130,11 @@ impl View {
         View::new("StateTimeline", name, origin)
     }
 
+    /// A text document (`TextDocument`) logged at `origin`.
+    pub fn text_document(name: &str, origin: &str) -> Self {
+        View::new("TextDocument", name, origin)
+    }
+
     /// The 3D view looks through the `Pinhole` camera logged at `entity` (until the user moves
     /// the view, which leaves the camera where it is).
     pub fn through_camera(mut self, entity: &str) -> Self {
@@ -171,8 +176,9 @@ fn uuid_bytes(id: u64) -> [u8; 16] {
 }
 
 /// Sends `root` as the default blueprint of `stream`'s application, with the time panel on
-/// `timeline` (a duration timeline, whose history ranges are in seconds).
-pub fn send(stream: &RecordingStream, root: &Layout, timeline: &str) -> Result<()> {
+/// `timeline` (a duration timeline, whose history ranges are in seconds), or on none for a still
+/// picture (whose views then cannot draw histories).
+pub fn send(stream: &RecordingStream, root: &Layout, timeline: Option<&str>) -> Result<()> {
     let application = stream
         .store_info()
         .map(|info| info.application_id().clone())
@@ -193,12 +199,11 @@ pub fn send(stream: &RecordingStream, root: &Layout, timeline: &str) -> Result<(
     )?;
     // the views get the whole window; the side panels and the time panel's stream tree are a
     // click away
-    blueprint.log(
-        "time_panel",
-        &TimePanelBlueprint::new()
-            .with_timeline(TimelineName(timeline.into()))
-            .with_state(PanelState::Collapsed),
-    )?;
+    let mut time_panel = TimePanelBlueprint::new().with_state(PanelState::Collapsed);
+    if let Some(timeline) = timeline {
+        time_panel = time_panel.with_timeline(TimelineName(timeline.into()));
+    }
+    blueprint.log("time_panel", &time_panel)?;
     for panel in ["blueprint_panel", "selection_panel"] {
         blueprint.log(
             panel,
@@ -232,7 +237,7 @@ pub fn send(stream: &RecordingStream, root: &Layout, timeline: &str) -> Result<(
 fn log_layout(
     stream: &RecordingStream,
     layout: &Layout,
-    timeline: &str,
+    timeline: Option<&str>,
     ids: &mut Ids,
 ) -> Result<(String, u64)> {
     let c = match layout {
@@ -269,7 +274,7 @@ fn log_layout(
 fn log_view(
     stream: &RecordingStream,
     view: &View,
-    timeline: &str,
+    timeline: Option<&str>,
     ids: &mut Ids,
 ) -> Result<(String, u64)> {
     let id = ids.next();
@@ -302,6 +307,9 @@ fn log_view(
         )?;
     }
     for (entity, history) in &view.history {
+        let Some(timeline) = timeline else {
+            anyhow::bail!("view {}: a history needs a timeline", view.name);
+        };
         let start = match history {
             History::Whole => TimeRangeBoundary::Infinite,
             History::Last(seconds) => {

@@ -27,19 +27,21 @@ pub fn log_pose(
     entity: &str,
     pose: &CameraPose,
 ) -> anyhow::Result<()> {
-    stream.log(
-        entity,
-        &rerun::Transform3D::from_translation_rotation(
-            pose.eye.as_vec3().to_array(),
-            rerun::Quaternion::from_xyzw(
-                glam::DQuat::from_mat3(&pose.axes)
-                    .normalize()
-                    .as_quat()
-                    .to_array(),
-            ),
-        ),
-    )?;
+    stream.log(entity, &transform(pose))?;
     Ok(())
+}
+
+/// The camera's pose as rerun logs it.
+pub fn transform(pose: &CameraPose) -> rerun::Transform3D {
+    rerun::Transform3D::from_translation_rotation(
+        pose.eye.as_vec3().to_array(),
+        rerun::Quaternion::from_xyzw(
+            glam::DQuat::from_mat3(&pose.axes)
+                .normalize()
+                .as_quat()
+                .to_array(),
+        ),
+    )
 }
 
 /// Where the camera is, and its axes in the world, in the `Pinhole` convention RDF

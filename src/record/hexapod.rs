@@ -4,37 +4,24 @@ use super::Observer;
 use super::background::Background;
 use super::blueprint::{History, Layout, View};
 use super::camera::{self, FollowCamera};
+use super::links::LinkTree;
 use super::rerun::Recording;
 use super::table::CsvTable;
-use crate::robot::{LEG_NAMES, RobotModel, Shape, Visual};
+use crate::robot::{LEG_NAMES, RobotModel};
 use crate::sim::{WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
-use glam::{DAffine3, DQuat};
+use glam::DAffine3;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-fn quaternion(m: &DAffine3) -> rerun::Quaternion {
-    rerun::Quaternion::from_xyzw(
-        DQuat::from_mat3(&m.matrix3)
-            .normalize()
-            .as_quat()
-            .to_array(),
-    )
-}
-
-fn rgba(c: [f32; 4]) -> [u8; 4] {
-    c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-}
 
 /// Records the robot (links with their URDF shapes), its foot forces, the feet's stance trails,
 /// the body's path, the footfall diagram and time series, with a camera that follows the body.
 pub struct HexapodRecorder {
     recording: Recording,
     every: u64,
-    /// Per link, its entity: links nest as the kinematic tree does, each under a static entity
-    /// holding its joint's origin, so a sample logs the root's pose and each joint's rotation.
-    link_paths: Vec<String>,
+    /// The links' entities.
+    links: LinkTree,
     /// Whether links can drift from their joints (impulse joints): then each link's full pose
     /// relative to its joint frame is logged, not only the rotation.
     joints_drift: bool,
@@ -132,22 +119,7 @@ impl HexapodRecorder {
         let recording = Recording::create(path, name, dt, &layout(model))?;
         recording.log_terrain("world/terrain", terrain)?;
         let rec = recording.stream();
-        let mut link_paths: Vec<String> = Vec::new();
-        for link in &model.links {
-            let entity = match link.parent_joint {
-                None => format!("world/robot/{}", link.name),
-                Some(j) => {
-                    let joint = &model.joints[j];
-                    let frame = format!("{}/{}", link_paths[joint.parent], joint.name);
-                    log_pose(rec, &frame, &joint.origin, true)?;
-                    format!("{frame}/{}", link.name)
-                }
-            };
-            for (k, visual) in link.visuals.iter().enumerate() {
-                log_visual(rec, &format!("{entity}/visual_{k}"), visual)?;
-            }
-            link_paths.push(entity);
-        }
+        let links = LinkTree::log(rec, model, "world/robot")?;
         recording.name_series("plots/body/attitude_deg", &["roll", "pitch", "yaw"])?;
         recording.name_series("plots/feet/normal_force", &LEG_NAMES)?;
         recording.name_series("plots/feet/slip_speed", &LEG_NAMES)?;
@@ -195,7 +167,7 @@ impl HexapodRecorder {
         Ok(HexapodRecorder {
             recording,
             every,
-            link_paths,
+            links,
             joints_drift,
             scene_every: ((1.0 / (SCENE_RATE * dt * every as f64)).round() as u64).max(1),
             force_scale: None,
@@ -230,7 +202,7 @@ impl HexapodRecorder {
 /// The robot's horizontal radius, which sets the follow camera's distance: its farthest foot
 /// with each leg stretched out level from its hip along the leg's heading at rest — hex18's zero
 /// pose; a URDF whose zero pose hangs the tibias down (a PhantomX) is measured the same way.
-fn robot_radius(model: &RobotModel) -> f64 {
+pub(super) fn robot_radius(model: &RobotModel) -> f64 {
     let radius = model
         .legs
         .iter()
@@ -262,78 +234,6 @@ fn force_scale(model: &RobotModel, link_frames: &[DAffine3]) -> f64 {
         / model.legs.len().max(1) as f64;
     let weight_share = model.total_mass() * crate::sim::STANDARD_GRAVITY / 6.0;
     reach.max(0.01) / weight_share.max(1e-9)
-}
-
-/// Logs `pose` (translation and rotation) at `entity`, static or at the current time.
-fn log_pose(
-    rec: &rerun::RecordingStream,
-    entity: &str,
-    pose: &DAffine3,
-    is_static: bool,
-) -> Result<()> {
-    let transform = rerun::Transform3D::from_translation_rotation(
-        pose.translation.as_vec3().to_array(),
-        quaternion(pose),
-    );
-    if is_static {
-        rec.log_static(entity, &transform)?;
-    } else {
-        rec.log(entity, &transform)?;
-    }
-    Ok(())
-}
-
-fn log_visual(rec: &rerun::RecordingStream, entity: &str, visual: &Visual) -> Result<()> {
-    let mut origin = visual.origin;
-    let color = rgba(visual.color);
-    match &visual.shape {
-        Shape::Box { half_extents } => rec.log_static(
-            entity,
-            &rerun::Boxes3D::from_half_sizes([half_extents.as_vec3().to_array()])
-                .with_colors([color])
-                .with_fill_mode(rerun::FillMode::Solid),
-        )?,
-        Shape::Cylinder { radius, length } => rec.log_static(
-            entity,
-            &rerun::Cylinders3D::from_lengths_and_radii([*length as f32], [*radius as f32])
-                .with_colors([color])
-                .with_fill_mode(rerun::FillMode::Solid),
-        )?,
-        Shape::Capsule { radius, length } => {
-            // rerun's capsule runs from its origin along +z; the URDF's is centred
-            origin *= DAffine3::from_translation(glam::DVec3::new(0.0, 0.0, -length / 2.0));
-            rec.log_static(
-                entity,
-                &rerun::Capsules3D::from_lengths_and_radii([*length as f32], [*radius as f32])
-                    .with_colors([color])
-                    .with_fill_mode(rerun::FillMode::Solid),
-            )?
-        }
-        Shape::Sphere { radius } => rec.log_static(
-            entity,
-            &rerun::Ellipsoids3D::from_radii([*radius as f32])
-                .with_colors([color])
-                .with_fill_mode(rerun::FillMode::Solid),
-        )?,
-        Shape::Mesh { path, scale } => match rerun::Asset3D::from_file_path(path) {
-            Ok(asset) => {
-                rec.log_static(entity, &asset.with_albedo_factor(color))?;
-                // the URDF's mesh scale (e.g. 0.001 for a mesh drawn in millimetres)
-                let transform = rerun::Transform3D::from_translation_rotation_scale(
-                    origin.translation.as_vec3().to_array(),
-                    quaternion(&origin),
-                    scale.as_vec3().to_array(),
-                );
-                rec.log_static(entity, &transform)?;
-                return Ok(());
-            }
-            Err(_) => rec.log_static(
-                entity,
-                &rerun::Ellipsoids3D::from_radii([0.01f32]).with_colors([color]),
-            )?,
-        },
-    }
-    log_pose(rec, entity, &origin, true)
 }
 
 impl HexapodRecorder {
@@ -426,25 +326,8 @@ impl HexapodRecorder {
         link_frames: &[DAffine3],
     ) -> Result<()> {
         let rec = self.recording.stream();
-        for ((entity, link), frame) in self.link_paths.iter().zip(&model.links).zip(link_frames) {
-            match link.parent_joint {
-                None => log_pose(rec, entity, frame, false)?,
-                Some(j) => {
-                    let joint = &model.joints[j];
-                    let joint_frame = link_frames[joint.parent] * joint.origin;
-                    let relative = joint_frame.inverse() * *frame;
-                    if self.joints_drift {
-                        log_pose(rec, entity, &relative, false)?;
-                    } else {
-                        // a rigid joint only turns: its link sits at the joint frame's origin
-                        rec.log(
-                            entity.as_str(),
-                            &rerun::Transform3D::from_rotation(quaternion(&relative)),
-                        )?;
-                    }
-                }
-            }
-        }
+        self.links
+            .log_frames(rec, model, link_frames, self.joints_drift, false)?;
         let (_, _, yaw) = s.robot.roll_pitch_yaw();
         let frame_dt = self.recording.dt() * (self.every * self.scene_every) as f64;
         let view = self.camera.follow(s.robot.body.translation, yaw, frame_dt);

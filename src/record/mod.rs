@@ -7,9 +7,11 @@ pub mod ball;
 pub mod blueprint;
 pub mod camera;
 pub mod hexapod;
+pub mod links;
 pub mod output;
 pub mod progress;
 pub mod rerun;
+pub mod standing;
 pub mod table;
 
 use std::path::PathBuf;

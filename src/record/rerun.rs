@@ -30,6 +30,22 @@ impl Recording {
     /// Creates the file; `dt` is the simulation step, for the `sim_time` timeline; `layout` is
     /// the viewer's default arrangement of views.
     pub fn create(path: &Path, name: String, dt: f64, layout: &Layout) -> Result<Self> {
+        Self::open(path, name, dt, layout, Some(TIMELINE))
+    }
+
+    /// Creates the file for a still picture: everything in it is static, and the time panel
+    /// names no timeline (the viewer would warn that it finds none).
+    pub fn create_still(path: &Path, name: String, layout: &Layout) -> Result<Self> {
+        Self::open(path, name, 1.0, layout, None)
+    }
+
+    fn open(
+        path: &Path,
+        name: String,
+        dt: f64,
+        layout: &Layout,
+        timeline: Option<&str>,
+    ) -> Result<Self> {
         // chunks as large as the pushes allow, rather than one every 200 ms of wall time
         let batching = rerun::log::ChunkBatcherConfig {
             flush_tick: std::time::Duration::from_secs(3600),
@@ -42,7 +58,7 @@ impl Recording {
             .batcher_config(batching)
             .save(partial_path(path))
             .with_context(|| format!("cannot create the recording {}", path.display()))?;
-        blueprint::send(&stream, layout, TIMELINE)?;
+        blueprint::send(&stream, layout, timeline)?;
         stream.set_log_time_enabled(false);
         stream.log_static("/", &rerun::ViewCoordinates::RIGHT_HAND_Z_UP())?;
         Ok(Recording {
