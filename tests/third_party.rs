@@ -35,7 +35,9 @@ fn walk(robot: &str, terrain: &str, name: &str) -> serde_json::Value {
 /// change under 10°, and over the paper's natural terrain without tilting past 20°. The PhantomX
 /// is rectangular, the huaibovip hexapod hexagonal, the MushroomRL hexapod's long legs sprawl
 /// from a small body and are mounted ahead of their hips (an offset femur), and its placeholder
-/// leg inertias (1e-2 kg·m²) need servos stiffer than hex18's (fitted).
+/// leg inertias (1e-2 kg·m²) need servos stiffer than hex18's (fitted). Kraby's round body has
+/// its legs 45° apart on two sides of its URDF's y axis, so hexsim walks it along +y (chosen
+/// from the legs), and its base link's origin is on the ground, 0.2 m below its hips.
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -51,6 +53,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
             "mushroom",
             "tests/data/third_party/mushroom_hexapod/hexapod.urdf",
         ),
+        ("kraby", "tests/data/third_party/kraby/hexapod.urdf"),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));
         let stance = &flat["stance"];
@@ -68,6 +71,14 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         );
         assert!(heading.abs() < 10.0, "{name} turned {heading:.1}°");
         assert!(stance["least_joint_room_deg"].as_f64().unwrap() > 0.0);
+        // the body walks at the stance height it was given, measured from the hips' plane
+        // whatever the base link's origin (Kraby's is on the ground under its body)
+        let height = flat["body_height_mean"].as_f64().unwrap();
+        let stance_height = stance["stance_height"].as_f64().unwrap();
+        assert!(
+            (height - stance_height).abs() < 0.1 * stance_height,
+            "{name}: hips {height:.4} m above the ground, stance height {stance_height:.4} m"
+        );
         let natural = walk(robot, "terrains/natural.toml", &format!("{name}_natural"));
         let tilt = natural["max_roll_deg"]
             .as_f64()

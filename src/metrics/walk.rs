@@ -355,7 +355,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
     Metric {
         name: "body_height_mean",
         unit: "m",
-        what: "mean height of the body frame's origin above the terrain under it",
+        what: "mean height of the hips' plane above the terrain under it (what a stance height sets)",
         noise: Some(0.002),
         better: Better::Neither,
         bounds: &[Bound::min("body_height_min"), Bound::max("body_height_max")],

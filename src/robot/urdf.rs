@@ -297,6 +297,23 @@ fn check_inertial(link: &urdf_rs::Link) -> Result<(f64, DVec3, DMat3), String> {
     ))
 }
 
+/// The principal moments (ascending) of an inertia tensor no rigid body can have: the two smaller
+/// sum to less than the largest (A + B ≥ C holds for any mass distribution, since
+/// A + B − C = 2∫z² dm about the principal axes). None if the tensor is physical, to a relative
+/// 10⁻⁶ that forgives rounding in a URDF's digits (a rod or a disc sits on the bound exactly).
+fn impossible_inertia(m: &DMat3) -> Option<[f64; 3]> {
+    use rapier3d::na;
+    let a = m.to_cols_array();
+    let mut moments: Vec<f64> = na::Matrix3::from_column_slice(&a)
+        .symmetric_eigenvalues()
+        .iter()
+        .copied()
+        .collect();
+    moments.sort_by(f64::total_cmp);
+    let [a, b, c] = [moments[0], moments[1], moments[2]];
+    (a + b < c * (1.0 - 1e-6)).then_some([a, b, c])
+}
+
 fn positive_definite(m: &DMat3) -> bool {
     let a = m.to_cols_array_2d();
     let minor1 = a[0][0];
@@ -574,6 +591,23 @@ fn build(
             ));
         }
     }
+    let impossible: Vec<(&str, [f64; 3])> = links
+        .iter()
+        .filter_map(|l| Some((l.name.as_str(), impossible_inertia(&l.inertia)?)))
+        .collect();
+    if let Some((first, [a, b, c])) = impossible.first() {
+        let others: Vec<&str> = impossible[1..].iter().map(|(name, _)| *name).collect();
+        let more = if others.is_empty() {
+            String::new()
+        } else {
+            format!(", and so do {} more: {}", others.len(), others.join(", "))
+        };
+        warnings.push(format!(
+            "link `{first}`: principal moments of inertia {a:.3e}, {b:.3e}, {c:.3e} kg·m² break \
+             A + B ≥ C, which no rigid body can (MuJoCo refuses such a link unless told to \
+             balance it){more}; simulated as given"
+        ));
+    }
     warnings.extend(mesh_problems.warnings());
     let (legs, forward): (_, Forward) =
         legs::find_legs(&links, &joints, &mesh_collisions, forward)?;
@@ -620,4 +654,30 @@ fn add_mass(body: &mut Link, mass: f64, com: DVec3, inertia: DMat3) {
 
 fn outer(a: DVec3, b: DVec3) -> DMat3 {
     DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A solid box's inertia is physical; a thin disc sits on A + B = C and passes; a tensor whose
+    /// two smaller moments fall short of the largest is flagged, however it is turned.
+    #[test]
+    fn inertias_no_rigid_body_can_have_are_flagged() {
+        let (m, x, y, z) = (2.0, 0.3, 0.2, 0.1);
+        let solid = DMat3::from_diagonal(
+            DVec3::new(y * y + z * z, x * x + z * z, x * x + y * y) * m / 12.0,
+        );
+        assert_eq!(impossible_inertia(&solid), None);
+        let r: f64 = 0.1;
+        let disc = DMat3::from_diagonal(DVec3::new(0.25, 0.25, 0.5) * m * r * r);
+        assert_eq!(impossible_inertia(&disc), None);
+        let turn = DMat3::from_euler(glam::EulerRot::ZYX, 0.4, -0.7, 1.1);
+        let bad = DMat3::from_diagonal(DVec3::new(1.0, 2.0, 3.5));
+        let found = impossible_inertia(&(turn * bad * turn.transpose())).unwrap();
+        for (got, want) in found.iter().zip([1.0, 2.0, 3.5]) {
+            assert!((got - want).abs() < 1e-9, "{found:?}");
+        }
+        assert_eq!(impossible_inertia(&(turn * solid * turn.transpose())), None);
+    }
 }

@@ -67,7 +67,10 @@ pub struct HexapodSample {
     pub time: f64,
     /// The body (root link) frame in the world.
     pub body: DAffine3,
-    /// Height of the body frame's origin above the terrain under it (m).
+    /// Height of the hips' plane above the terrain under it (m): the point of the body on its z
+    /// axis at the hips' mean height (`RobotModel::hips_plane`), which is what a gait's stance
+    /// height sets (hex18's base link origin; a URDF may put its base link's origin anywhere,
+    /// e.g. on the ground under the body).
     pub body_height: f64,
     pub body_rotation: DQuat,
     /// Velocity of the body frame's origin and angular velocity (world).
@@ -104,6 +107,8 @@ pub struct Hexapod {
     joints: Box<dyn Joints>,
     /// the root's rapier frame is the base link frame shifted to its centre of mass
     root_com: DVec3,
+    /// The hips' plane's centre in the body frame (see [`HexapodSample::body_height`]).
+    hips_centre: DVec3,
     targets: Vec<f64>,
     /// Joint angles and rates now (read once per step: both the servos and the sample use them).
     angles: Vec<f64>,
@@ -181,6 +186,7 @@ impl Hexapod {
             settings.gains,
         );
         let n = model.joints.len();
+        let hips_centre = DVec3::new(0.0, 0.0, model.hips_plane());
         let mut hexapod = Hexapod {
             engine,
             model,
@@ -189,6 +195,7 @@ impl Hexapod {
             bodies,
             joints,
             root_com,
+            hips_centre,
             targets: pose.to_vec(),
             angles: vec![0.0; n],
             rates: vec![0.0; n],
@@ -319,8 +326,10 @@ impl Hexapod {
         HexapodSample {
             step: self.step,
             time: self.time(),
-            body_height: body.translation.z
-                - self.terrain.height(body.translation.x, body.translation.y),
+            body_height: {
+                let hips = body.transform_point3(self.hips_centre);
+                hips.z - self.terrain.height(hips.x, hips.y)
+            },
             body,
             body_rotation: DQuat::from_mat3(&body.matrix3).normalize(),
             body_velocity: v_com - omega.cross(com_offset),
