@@ -114,3 +114,21 @@ fn the_robot_command_shows_the_fitted_stance() {
         assert!(stdout.contains(expected), "no {expected:?} in {stdout}");
     }
 }
+
+/// `hexsim robot` on Kraby says which way it walks and why, and which URDF links it merged.
+#[test]
+fn the_robot_command_shows_the_walking_direction_and_merged_links() {
+    let out = hexsim()
+        .args(["robot", "tests/data/third_party/kraby/hexapod.urdf"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    for expected in [
+        "walking direction +y (chosen: the legs do not split three a side about x)",
+        "18 URDF links fixed to others, merged: ",
+        "endcap_0 into foot_0",
+    ] {
+        assert!(stdout.contains(expected), "no {expected:?} in {stdout}");
+    }
+}

@@ -142,6 +142,20 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
         model.joints.len()
     );
     let _ = writeln!(out, "  walking direction {}", model.forward.describe());
+    let merged: Vec<String> = model
+        .links
+        .iter()
+        .filter(|l| !l.merged.is_empty())
+        .map(|l| format!("{} into {}", l.merged.join(", "), l.name))
+        .collect();
+    if !merged.is_empty() {
+        let count: usize = model.links.iter().map(|l| l.merged.len()).sum();
+        let _ = writeln!(
+            out,
+            "  {count} URDF links fixed to others, merged: {}",
+            merged.join("; ")
+        );
+    }
     let leg_mass = |leg: &robot::Leg| -> f64 {
         leg.joints
             .iter()

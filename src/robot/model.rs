@@ -60,6 +60,8 @@ pub struct Link {
     pub inertia: DMat3,
     pub visuals: Vec<Visual>,
     pub foot: Option<Foot>,
+    /// The URDF links fixed to this one (by fixed joints) and merged into it, by name.
+    pub merged: Vec<String>,
 }
 
 /// A revolute joint: the child's frame is `parent frame · origin · Rot(axis, q)`.

@@ -457,6 +457,7 @@ fn build(
                     urdf_rs::JointType::Fixed => {
                         body_of[k] = body_of[parent];
                         in_body[k] = origin;
+                        links[body_of[k]].merged.push(urdf_link.name.clone());
                     }
                     urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
                         let axis = DVec3::from_array(joint.axis.xyz.0);
@@ -633,6 +634,7 @@ fn empty_link(name: &str, parent_joint: Option<usize>) -> Link {
         inertia: DMat3::ZERO,
         visuals: Vec::new(),
         foot: None,
+        merged: Vec::new(),
     }
 }
 
