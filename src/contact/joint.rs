@@ -34,6 +34,10 @@ pub const MAX_JOINT_CONTACTS: usize = 6;
 type Block = na::SMatrix<f64, { 2 * MAX_JOINT_CONTACTS }, { 2 * MAX_JOINT_CONTACTS }>;
 type Column = na::SVector<f64, { 2 * MAX_JOINT_CONTACTS }>;
 
+/// Singular values below this fraction of T_SS's largest entry count as zero in the least-squares
+/// solve of a singular joint problem (coincident contacts).
+const SINGULAR: f64 = 1e-9;
+
 /// The forces on `contacts` over a step, solved together. `mobility(i, j)` is W_ij in the
 /// contacts' ground-frame axes (t₁, t₂, n): W_ij[a][b] = a_i·M⁻¹·b_j. A contact that does not touch
 /// gives `None` (and its state is reset). At most [`MAX_JOINT_CONTACTS`] contacts.
@@ -107,7 +111,25 @@ pub fn respond_jointly(
         }
         // symmetrise: W is symmetric, its numerical copy only nearly
         let t_ss = (t_ss + t_ss.transpose()) * 0.5;
-        let Some(x) = t_ss.lu().solve(&rhs) else {
+        // T_SS is singular when contacts coincide (two spheres on one point): any split of
+        // their force stops them, and the least-squares solution of least norm shares it equally
+        let Some(x) = t_ss.lu().solve(&rhs).or_else(|| {
+            t_ss.svd(true, true)
+                .solve(&rhs, SINGULAR * t_ss.amax())
+                .ok()
+        }) else {
+            // not even that (a mobility with NaN): each contact's force as if alone
+            for &s in sticking {
+                let pc = p(touching[s]);
+                let t_ii = in_plane(mobility(touching[s], touching[s]));
+                stops[s] = match t_ii.try_inverse() {
+                    Some(mass) => {
+                        let u = mass * na::Vector2::new(pc.demand.x, pc.demand.y);
+                        pc.previous_friction - DVec2::new(u.x, u.y)
+                    }
+                    None => DVec2::splat(f64::INFINITY),
+                };
+            }
             break;
         };
         let mut changed = false;
@@ -358,6 +380,59 @@ mod tests {
         assert!(
             worst > 1e-5,
             "solved alone, the contacts still slip at most {worst} m/s"
+        );
+    }
+
+    /// Two contacts at the same point of a body (a foot that two collision spheres would both
+    /// report, or a URDF with duplicated feet) make the joint problem singular: T_SS has two equal
+    /// block rows. The stopping forces are then the least-squares (minimum-norm) solution — the
+    /// contacts share the force that stops the point, together exactly the lone contact's — not
+    /// zero, which is what a failed LU solve used to leave them with (reported as sticking).
+    #[test]
+    fn coincident_contacts_share_the_force_that_stops_them() {
+        let frame = tilted(0.1, -0.2);
+        let (m, r) = (1.0, 0.05);
+        let arm = -r * frame.normal;
+        let body = Body {
+            mass: m,
+            inverse_inertia: DMat3::from_diagonal(DVec3::splat(1.0 / (0.4 * m * r * r))),
+            arms: vec![arm, arm],
+            frames: vec![frame, frame],
+        };
+        let model = ContactModel::default();
+        let velocity = frame.to_world(DVec3::new(3e-4, -2e-4, -0.01));
+        let geometry = body.geometry(0, 1e-3);
+        let contacts = [0, 1].map(|_| JointContact {
+            geometry: &geometry,
+            velocity,
+        });
+        let mut states = [ContactState::default(); 2];
+        let mut out = [None; 2];
+        respond_jointly(
+            &model,
+            &contacts,
+            |i, j| body.mobility(i, j),
+            DT,
+            &mut states,
+            &mut out,
+        );
+        let forces = out.map(|f| f.unwrap());
+        assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
+        // the pair's friction stops the point as one contact with the pair's normal impulse would
+        let total = forces[0].friction + forces[1].friction;
+        let slip = frame.to_local(velocity).truncate();
+        let mobility = body.mobility(0, 0);
+        let t = glam::DMat2::from_cols(mobility.x_axis.truncate(), mobility.y_axis.truncate());
+        let normal_push = mobility.z_axis.truncate() * (forces[0].normal_force * 2.0);
+        let after = slip + DT * (t * frame.to_local(total).truncate() + normal_push);
+        assert!(
+            after.length() < 1e-9 && total.length() > 0.1,
+            "friction {total} leaves the point slipping at {after}"
+        );
+        assert!(
+            (forces[0].friction - forces[1].friction).length() < 1e-9 * total.length(),
+            "shared unequally: {:?}",
+            [forces[0].friction, forces[1].friction]
         );
     }
 }

@@ -69,6 +69,15 @@ impl Engine {
         self.dt
     }
 
+    /// Computes every body's world-frame mass properties now. rapier does it in its step, so
+    /// before the first one a body's inverse inertia is unset and a multibody's mass matrix,
+    /// factorised then, is not its own (the contact mobility read from it was NaN).
+    pub fn update_mass_properties(&mut self) {
+        for (_, body) in self.bodies.iter_mut() {
+            body.recompute_mass_properties_from_colliders(&self.colliders);
+        }
+    }
+
     /// Advances the world by one step.
     pub fn step(&mut self) {
         self.pipeline.step(

@@ -9,13 +9,15 @@
 //!   URDF's `effort`; the sample carries the torque actually applied.
 //! - Nothing sleeps.
 
-use super::articulation::{Articulation, JointDrift, Joints, ServoGains, affine_of, pose_of};
+use super::articulation::{
+    Articulation, ContactPoint, JointDrift, Joints, ServoGains, affine_of, pose_of,
+};
 use super::engine::{Engine, STANDARD_GRAVITY};
 use super::foot_contact::FootContacts;
 use crate::contact::{ContactForce, ContactModel};
 use crate::robot::RobotModel;
-use crate::terrain::HeightGrid;
-use glam::{DAffine3, DQuat, DVec3};
+use crate::terrain::{GroundFrame, HeightGrid};
+use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
 use std::sync::Arc;
 
@@ -177,6 +179,7 @@ impl Hexapod {
                 .build();
             bodies.push(engine.bodies.insert(rb));
         }
+        engine.update_mass_properties();
         let joints = settings.articulation.build(
             &mut engine,
             &model,
@@ -206,7 +209,53 @@ impl Hexapod {
             physics_seconds: 0.0,
         };
         hexapod.read_joints();
+        if settings.articulation == Articulation::Impulse {
+            // the feet's normal dampers move the articulated robot, as in the multibody
+            let mut reference = Hexapod::new(
+                hexapod.model.clone(),
+                hexapod.terrain.clone(),
+                contact,
+                HexapodSettings {
+                    articulation: Articulation::Multibody,
+                    ..settings
+                },
+                placement,
+                pose,
+            );
+            // its mass matrix as a step augments it (the servos' implicit springs and dampers)
+            reference.step();
+            let masses: Vec<(usize, f64)> = hexapod
+                .model
+                .legs
+                .iter()
+                .zip(reference.foot_normal_masses())
+                .map(|(leg, mass)| (leg.foot_link, mass))
+                .collect();
+            hexapod.joints.set_damper_masses(&masses);
+        }
         hexapod
+    }
+
+    /// Each foot's effective mass along the vertical at its lowest point, 1/W_nn, as the contact
+    /// model sees it now (the articulated robot's in the multibody).
+    pub fn foot_normal_masses(&mut self) -> [f64; 6] {
+        let mut masses = [0.0; 6];
+        for (k, leg) in self.model.legs.iter().enumerate() {
+            let frame = self.link_frame(leg.foot_link);
+            let point = [ContactPoint {
+                link: leg.foot_link,
+                body: self.bodies[leg.foot_link],
+                point: frame.transform_point3(leg.foot.center) - DVec3::Z * leg.foot.radius,
+                com: frame.transform_point3(self.model.links[leg.foot_link].com),
+                frame: GroundFrame::from_normal(DVec3::Z),
+            }];
+            let mut velocity = [DVec3::ZERO];
+            let mut mobility = [DMat3::ZERO];
+            self.joints
+                .contact_mobility(&self.engine, &point, &mut velocity, &mut mobility);
+            masses[k] = 1.0 / mobility[0].z_axis.z;
+        }
+        masses
     }
 
     /// Reads every joint's angle and rate from rapier.
@@ -341,6 +390,73 @@ impl Hexapod {
             foot_positions,
             foot_contacts: self.last_contacts,
             joint_drift: self.drift,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gait::{GaitSpec, fit};
+    use crate::scenario::builtin;
+    use std::path::Path;
+
+    fn standing(articulation: Articulation) -> Hexapod {
+        let model = Arc::new(builtin::hex18());
+        let spec =
+            GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path)).unwrap();
+        let pose = fit(&model, &spec).unwrap().standing_pose;
+        let ground = Arc::new(crate::terrain::flat([2.0, 2.0], [0.0, 0.0], 0.0).unwrap());
+        Hexapod::new(
+            model,
+            ground,
+            ContactModel::default(),
+            HexapodSettings {
+                articulation,
+                ..HexapodSettings::default()
+            },
+            Placement {
+                x: 0.0,
+                y: 0.0,
+                yaw: 0.0,
+            },
+            &pose,
+        )
+    }
+
+    /// A foot's normal damper moves the articulated robot in both articulations: with impulse
+    /// joints the damping uses the multibody's effective mass (in the starting pose, after a
+    /// step), not the foot link's alone, which is much lighter — so the same c damps the same.
+    #[test]
+    fn feet_are_damped_with_the_articulated_robots_mass_in_both_articulations() {
+        // the multibody's after a step, whose mass matrix carries the servos as a step does
+        let mut multibody = standing(Articulation::Multibody);
+        multibody.step();
+        let multibody = multibody.foot_normal_masses();
+        let mut impulse = standing(Articulation::Impulse);
+        let link_alone: Vec<f64> = {
+            let model = impulse.model.clone();
+            model
+                .legs
+                .iter()
+                .map(|l| model.links[l.foot_link].mass)
+                .collect()
+        };
+        let impulse = impulse.foot_normal_masses();
+        for k in 0..6 {
+            assert!(
+                (impulse[k] - multibody[k]).abs() < 1e-9 * multibody[k],
+                "foot {k}: impulse {} kg, multibody {} kg",
+                impulse[k],
+                multibody[k]
+            );
+            // the articulated mass is well above the foot link's own (0.05 kg on hex18)
+            assert!(
+                multibody[k] > 1.2 * link_alone[k],
+                "foot {k}: {} kg against the link's {} kg",
+                multibody[k],
+                link_alone[k]
+            );
         }
     }
 }

@@ -113,6 +113,11 @@ pub(super) trait Joints: Send {
         mobility: &mut [DMat3],
     );
 
+    /// The mass each foot link's normal damper moves, from the articulated robot (see
+    /// `impulse`): `(link, mass)`. Articulations whose contact mobility is the articulated
+    /// robot's already ignore it.
+    fn set_damper_masses(&mut self, _masses: &[(usize, f64)]) {}
+
     /// The servo torque applied at `joint` over the last step (N·m), given its target and its
     /// rate now.
     fn applied_torque(&self, joint: usize, target: f64, rate: f64) -> f64;
