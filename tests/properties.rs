@@ -44,6 +44,7 @@ proptest! {
             normal: NormalLaw::SpringDamper { stiffness, damping },
             friction,
             orientation,
+            ..ContactModel::default()
         };
         let center = DVec3::new(x, y, terrain.height(x, y) + radius - depth);
         let geometry = sphere_geometry(terrain, center, radius, orientation);

@@ -46,6 +46,10 @@ pub struct ContactArgs {
     /// The paper's half-step XE = YE (m) for its finite-difference angles.
     #[arg(long, default_value_t = ContactSpec::default().paper_step)]
     paper_step: f64,
+    /// Fraction of a sticking contact's drift that its stick force undoes per step (0: off, each
+    /// friction law as its equation; the default halves the creep of a foot under a changing load).
+    #[arg(long, default_value_t = ContactSpec::default().drift_recovery)]
+    drift_recovery: f64,
 }
 
 impl ContactArgs {
@@ -64,6 +68,7 @@ impl ContactArgs {
             stribeck_velocity: self.stribeck_velocity,
             orientation: self.orientation,
             paper_step: self.paper_step,
+            drift_recovery: self.drift_recovery,
         }
     }
 }

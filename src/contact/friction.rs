@@ -20,9 +20,10 @@
 //! of regularised models (MuJoCo's, Drake's) that need a velocity to make a force.
 //!
 //! The load is measured one step late, so under a load that keeps changing (a walking robot's
-//! foot) a sticking contact still drifts a little; the stick force therefore also undoes half of
-//! the drift accumulated since the contact last stuck (the material point's slip integrated while
-//! sticking — not the geometric contact point, so a rolling ball is not held back).
+//! foot) a sticking contact still drifts a little; the stick force therefore also undoes a fraction
+//! (`ContactModel::drift_recovery`, default ½; 0 turns it off) of the drift accumulated since the
+//! contact last stuck (the material point's slip integrated while sticking — not the geometric
+//! contact point, so a rolling ball is not held back).
 //!
 //! The other laws are continuous functions of the slip; they are evaluated as written, and only
 //! limited to F_stop when they would otherwise reverse the slip within one step (which explicit

@@ -213,6 +213,9 @@ pub struct ContactSpec {
     pub orientation: OrientationChoice,
     /// The paper's XE = YE (m).
     pub paper_step: f64,
+    /// Fraction of a sticking contact's drift its stick force undoes per step (0: off; see
+    /// `ContactModel::drift_recovery`).
+    pub drift_recovery: f64,
 }
 
 impl Default for ContactSpec {
@@ -231,6 +234,7 @@ impl Default for ContactSpec {
             stribeck_velocity: 0.05,
             orientation: OrientationChoice::Exact,
             paper_step: 0.01,
+            drift_recovery: crate::contact::DRIFT_RECOVERY,
         }
     }
 }
@@ -281,6 +285,7 @@ impl ContactSpec {
             normal,
             friction,
             orientation,
+            drift_recovery: self.drift_recovery,
         }
     }
 }

@@ -459,4 +459,18 @@ mod tests {
             );
         }
     }
+
+    /// The contact mobility is there from the start: a foot that touches before the first step
+    /// (a robot placed on a steep slope) gets a finite effective mass, not the NaN of a mass
+    /// matrix factorised before rapier had computed the bodies' mass properties.
+    #[test]
+    fn feet_have_a_finite_effective_mass_before_the_first_step() {
+        for articulation in [Articulation::Multibody, Articulation::Impulse] {
+            let masses = standing(articulation).foot_normal_masses();
+            assert!(
+                masses.iter().all(|m| m.is_finite() && *m > 0.0),
+                "{articulation:?}: {masses:?}"
+            );
+        }
+    }
 }
