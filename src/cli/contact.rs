@@ -50,6 +50,10 @@ pub struct ContactArgs {
     /// friction law as its equation; the default halves the creep of a foot under a changing load).
     #[arg(long, default_value_t = ContactSpec::default().drift_recovery)]
     drift_recovery: f64,
+    /// Rolling resistance ρ (m): a torque of at most ρ·Fn against rolling (0: none; a sphere's
+    /// rolling-resistance coefficient is ρ/r).
+    #[arg(long, default_value_t = ContactSpec::default().rolling_resistance)]
+    rolling_resistance: f64,
 }
 
 impl ContactArgs {
@@ -69,6 +73,7 @@ impl ContactArgs {
             orientation: self.orientation,
             paper_step: self.paper_step,
             drift_recovery: self.drift_recovery,
+            rolling_resistance: self.rolling_resistance,
         }
     }
 }

@@ -13,11 +13,13 @@ mod friction;
 mod geometry;
 pub mod joint;
 mod normal;
+mod rolling;
 
 pub use friction::{FrictionLaw, FrictionOutcome};
 pub use geometry::{SphereGeometry, sphere_geometry};
 pub use joint::respond_jointly;
 pub use normal::{NormalLaw, exact_decay_factor};
+pub use rolling::RollingBody;
 
 use crate::terrain::{GroundFrame, Orientation};
 use glam::{DMat2, DMat3, DVec2, DVec3};
@@ -37,6 +39,11 @@ pub struct ContactModel {
     /// that drift each step. It acts only while a contact sticks, on its own drift, so it returns
     /// a displaced foot at most to where friction first held it.
     pub drift_recovery: f64,
+    /// Rolling resistance ρ (m): a torque of at most ρ·Fn against the body's rolling, its angular
+    /// velocity about the ground plane's axes — the lever arm by which a deforming contact's
+    /// pressure leads its centre (MuJoCo's rolling friction, condim 6, in the same unit; a
+    /// rolling-resistance coefficient c_rr = ρ/r for a sphere of radius r). 0: none.
+    pub rolling_resistance: f64,
 }
 
 impl Default for ContactModel {
@@ -47,6 +54,7 @@ impl Default for ContactModel {
             friction: FrictionLaw::default(),
             orientation: Orientation::default(),
             drift_recovery: DRIFT_RECOVERY,
+            rolling_resistance: 0.0,
         }
     }
 }
@@ -136,6 +144,9 @@ pub struct ContactState {
     drift: DVec3,
     /// Last step's normal force (0 before the contact).
     normal_force: f64,
+    /// Last step's rolling-resistance torque and rolling angular velocity (world), for the
+    /// rolling load estimate (see `rolling`).
+    rolling: Option<(DVec3, DVec3)>,
 }
 
 /// The contact's response over one step.
@@ -270,6 +281,15 @@ impl ContactModel {
                 format!(
                     "expected a fraction of the drift undone per step, 0 (off) to 1, got {}",
                     self.drift_recovery
+                ),
+            ));
+        }
+        if !(self.rolling_resistance.is_finite() && self.rolling_resistance >= 0.0) {
+            return Err((
+                "rolling_resistance".into(),
+                format!(
+                    "expected a lever arm ≥ 0 m (0: none), got {}",
+                    self.rolling_resistance
                 ),
             ));
         }

@@ -89,6 +89,13 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
     if let Err((field, expected)) = spec.contact.model().validate() {
         return Err(format!("contact.{field}: {expected}"));
     }
+    if matches!(spec.kind, Kind::Walk) && spec.contact.rolling_resistance != 0.0 {
+        return Err(format!(
+            "contact.rolling_resistance: expected 0 for a walk, got {} (rolling resistance acts on \
+             a rolling ball, `hexsim ball`; a robot's feet are fixed to its legs and do not roll)",
+            spec.contact.rolling_resistance
+        ));
+    }
     spec.expect.validate(spec.kind)?;
     for (field, tolerance) in &spec.tolerance {
         for v in [tolerance.rel, tolerance.abs].into_iter().flatten() {

@@ -216,6 +216,9 @@ pub struct ContactSpec {
     /// Fraction of a sticking contact's drift its stick force undoes per step (0: off; see
     /// `ContactModel::drift_recovery`).
     pub drift_recovery: f64,
+    /// Rolling resistance ρ (m): torque ≤ ρ·Fn against rolling (0: none; see
+    /// `ContactModel::rolling_resistance`).
+    pub rolling_resistance: f64,
 }
 
 impl Default for ContactSpec {
@@ -235,6 +238,7 @@ impl Default for ContactSpec {
             orientation: OrientationChoice::Exact,
             paper_step: 0.01,
             drift_recovery: crate::contact::DRIFT_RECOVERY,
+            rolling_resistance: 0.0,
         }
     }
 }
@@ -286,6 +290,7 @@ impl ContactSpec {
             friction,
             orientation,
             drift_recovery: self.drift_recovery,
+            rolling_resistance: self.rolling_resistance,
         }
     }
 }

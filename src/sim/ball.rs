@@ -2,9 +2,11 @@
 //! ground force.
 
 use super::engine::{Engine, STANDARD_GRAVITY};
-use crate::contact::{ContactForce, ContactModel, ContactState, EffectiveMass, sphere_geometry};
+use crate::contact::{
+    ContactForce, ContactModel, ContactState, EffectiveMass, RollingBody, sphere_geometry,
+};
 use crate::terrain::HeightGrid;
-use glam::{DMat3, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
 use std::sync::Arc;
 
@@ -172,41 +174,56 @@ impl BallSim {
         let response = if geometry.penetration > 0.0 {
             let arm = geometry.point - center;
             let point_velocity = velocity + angular_velocity.cross(arm);
-            let mass = if self.config.lock_rotation {
-                EffectiveMass::particle(self.config.mass)
+            if self.config.lock_rotation {
+                let mass = EffectiveMass::particle(self.config.mass);
+                self.contact
+                    .respond(
+                        &geometry,
+                        point_velocity,
+                        &mass,
+                        dt,
+                        &mut self.contact_state,
+                    )
+                    .map(|c| (c, DVec3::ZERO))
             } else {
-                let inverse_inertia =
-                    DMat3::from_diagonal(DVec3::splat(1.0 / self.config.inertia()));
-                EffectiveMass::rigid_body(self.config.mass, inverse_inertia, arm, &geometry.frame)
-            };
-            self.contact.respond(
-                &geometry,
-                point_velocity,
-                &mass,
-                dt,
-                &mut self.contact_state,
-            )
+                let body = RollingBody {
+                    mass: self.config.mass,
+                    inertia: self.config.inertia(),
+                    arm: -arm,
+                    angular_velocity,
+                };
+                self.contact.respond_rolling(
+                    &geometry,
+                    point_velocity,
+                    &body,
+                    dt,
+                    &mut self.contact_state,
+                )
+            }
         } else {
-            self.contact.respond(
-                &geometry,
-                DVec3::ZERO,
-                &EffectiveMass::particle(1.0),
-                dt,
-                &mut self.contact_state,
-            )
+            self.contact
+                .respond(
+                    &geometry,
+                    DVec3::ZERO,
+                    &EffectiveMass::particle(1.0),
+                    dt,
+                    &mut self.contact_state,
+                )
+                .map(|c| (c, DVec3::ZERO))
         };
         let body = &mut self.engine.bodies[self.ball];
         body.reset_forces(false);
         body.reset_torques(false);
-        if let Some(c) = &response {
+        if let Some((c, rolling)) = &response {
             // Force and torque about our own centre: rapier's `add_force_at_point` measures the arm
             // from its world centre of mass, which is not computed until the first step.
             body.add_force(c.force.as_vec3(), true);
-            body.add_torque((c.point - center).cross(c.force).as_vec3(), true);
+            let torque = (c.point - center).cross(c.force) + *rolling;
+            body.add_torque(torque.as_vec3(), true);
         }
         self.engine.step();
         self.step += 1;
-        self.last_contact = response;
+        self.last_contact = response.map(|(c, _)| c);
         self.sample()
     }
 
