@@ -2,7 +2,9 @@
 //! command line, with its defaults (the reference contact of shared/reference §2).
 
 use clap::Args;
-use hexsim::scenario::spec::{ContactSpec, FrictionChoice, NormalChoice, OrientationChoice};
+use hexsim::scenario::spec::{
+    ContactSpec, FrictionChoice, NormalChoice, OrientationChoice, VariantChoice,
+};
 
 /// Contact parameters; their defaults are the scenario's (`ContactSpec::default`).
 #[derive(Args)]
@@ -54,6 +56,10 @@ pub struct ContactArgs {
     /// rolling-resistance coefficient is ρ/r).
     #[arg(long, default_value_t = ContactSpec::default().rolling_resistance)]
     rolling_resistance: f64,
+    /// Contact model: hexsim's, or the paper's step for step (vertical penetration, its angles
+    /// with --paper-step, explicit damper, friction laws unlimited, forces at the sphere's centre).
+    #[arg(long, value_enum, default_value_t = ContactSpec::default().variant)]
+    contact_model: VariantChoice,
 }
 
 impl ContactArgs {
@@ -74,6 +80,7 @@ impl ContactArgs {
             paper_step: self.paper_step,
             drift_recovery: self.drift_recovery,
             rolling_resistance: self.rolling_resistance,
+            variant: self.contact_model,
         }
     }
 }

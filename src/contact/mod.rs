@@ -8,17 +8,22 @@
 //! 3. Normal force from the [`NormalLaw`] (eq. 5–6: F = k·x + c·ẋ, never pulling).
 //! 4. In-plane force from the [`FrictionLaw`] (Coulomb, viscous, Stribeck, Karnopp).
 //! 5. The sum acts at the contact point (so a ball rolls).
+//!
+//! That is hexsim's variant; `paper` holds the paper's as written, for comparison, and `rolling`
+//! the rolling resistance the paper's model lacks.
 
 mod friction;
 mod geometry;
 pub mod joint;
 mod normal;
+mod paper;
 mod rolling;
 
 pub use friction::{FrictionLaw, FrictionOutcome};
 pub use geometry::{SphereGeometry, sphere_geometry};
 pub use joint::respond_jointly;
 pub use normal::{NormalLaw, exact_decay_factor};
+pub use paper::paper_geometry;
 pub use rolling::RollingBody;
 
 use crate::terrain::{GroundFrame, Orientation};
@@ -44,6 +49,17 @@ pub struct ContactModel {
     /// pressure leads its centre (MuJoCo's rolling friction, condim 6, in the same unit; a
     /// rolling-resistance coefficient c_rr = ρ/r for a sphere of radius r). 0: none.
     pub rolling_resistance: f64,
+    /// hexsim's contact, or the paper's step for step (see `paper`).
+    pub variant: Variant,
+}
+
+/// Which contact: hexsim's (closest point, exact normal or the paper's angles, exact-decay
+/// damper, friction limited at the stopping force) or the paper's as written (`paper`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Variant {
+    #[default]
+    Hexsim,
+    Paper,
 }
 
 impl Default for ContactModel {
@@ -55,6 +71,7 @@ impl Default for ContactModel {
             orientation: Orientation::default(),
             drift_recovery: DRIFT_RECOVERY,
             rolling_resistance: 0.0,
+            variant: Variant::Hexsim,
         }
     }
 }
@@ -267,6 +284,22 @@ impl ContactModel {
         }
     }
 
+    /// The sphere's geometry as this contact sees it: hexsim's closest point, or the paper's
+    /// vertical reading (which needs the paper's orientation: its half-steps).
+    pub fn sphere_geometry(
+        &self,
+        terrain: &crate::terrain::HeightGrid,
+        center: DVec3,
+        radius: f64,
+    ) -> SphereGeometry {
+        match (self.variant, self.orientation) {
+            (Variant::Paper, Orientation::Paper { xe, ye }) => {
+                paper_geometry(terrain, center, radius, xe, ye)
+            }
+            _ => sphere_geometry(terrain, center, radius, self.orientation),
+        }
+    }
+
     /// Checks every parameter, naming the bad one (`normal.damping`, `friction.mu_static`, …).
     pub fn validate(&self) -> Result<(), (String, String)> {
         self.normal
@@ -283,6 +316,23 @@ impl ContactModel {
                     self.drift_recovery
                 ),
             ));
+        }
+        if self.variant == Variant::Paper {
+            if !matches!(self.orientation, Orientation::Paper { .. }) {
+                return Err((
+                    "orientation".into(),
+                    "expected the paper's (its finite differences) for the paper variant".into(),
+                ));
+            }
+            if self.rolling_resistance != 0.0 {
+                return Err((
+                    "rolling_resistance".into(),
+                    format!(
+                        "expected 0 for the paper variant, which has none, got {}",
+                        self.rolling_resistance
+                    ),
+                ));
+            }
         }
         if !(self.rolling_resistance.is_finite() && self.rolling_resistance >= 0.0) {
             return Err((

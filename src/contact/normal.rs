@@ -64,6 +64,23 @@ impl NormalLaw {
         (elastic + damping * rate).max(0.0)
     }
 
+    /// The law as written, its damper explicit: k·x + c·ẋ (Hunt–Crossley k·xⁿ·(1 + d·ẋ)),
+    /// clamped at ≥ 0 — the paper's eq. 6, which [`Self::force`] improves on for light bodies.
+    pub fn explicit_force(&self, x: f64, rate: f64) -> f64 {
+        if x <= 0.0 {
+            return 0.0;
+        }
+        let force = match *self {
+            NormalLaw::SpringDamper { stiffness, damping } => stiffness * x + damping * rate,
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                damping,
+            } => stiffness * x.powf(exponent) * (1.0 + damping * rate),
+        };
+        force.max(0.0)
+    }
+
     /// Elastic energy stored at penetration `x`: ½·k·x² or k·xⁿ⁺¹/(n+1).
     pub fn stored_energy(&self, x: f64) -> f64 {
         if x <= 0.0 {

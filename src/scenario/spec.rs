@@ -219,6 +219,22 @@ pub struct ContactSpec {
     /// Rolling resistance ρ (m): torque ≤ ρ·Fn against rolling (0: none; see
     /// `ContactModel::rolling_resistance`).
     pub rolling_resistance: f64,
+    /// hexsim's contact or the paper's step for step (which reads the terrain with the paper's
+    /// orientation, `paper_step`, and has no drift recovery).
+    pub variant: VariantChoice,
+}
+
+/// Which contact model: see `contact::Variant`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum VariantChoice {
+    /// hexsim's: closest point along the normal, exact-decay damper, friction limited at the
+    /// force that stops the contact, forces at the contact point.
+    #[default]
+    Hexsim,
+    /// The paper's as written: vertical penetration from the height table, its finite-difference
+    /// angles, explicit damper, friction laws unlimited, forces at the sphere's centre.
+    Paper,
 }
 
 impl Default for ContactSpec {
@@ -239,6 +255,7 @@ impl Default for ContactSpec {
             paper_step: 0.01,
             drift_recovery: crate::contact::DRIFT_RECOVERY,
             rolling_resistance: 0.0,
+            variant: VariantChoice::Hexsim,
         }
     }
 }
@@ -278,7 +295,12 @@ impl ContactSpec {
             },
             FrictionChoice::None => FrictionLaw::None,
         };
-        let orientation = match self.orientation {
+        let paper = self.variant == VariantChoice::Paper;
+        let orientation = match if paper {
+            OrientationChoice::Paper
+        } else {
+            self.orientation
+        } {
             OrientationChoice::Exact => Orientation::Exact,
             OrientationChoice::Paper => Orientation::Paper {
                 xe: self.paper_step,
@@ -289,8 +311,13 @@ impl ContactSpec {
             normal,
             friction,
             orientation,
-            drift_recovery: self.drift_recovery,
+            drift_recovery: if paper { 0.0 } else { self.drift_recovery },
             rolling_resistance: self.rolling_resistance,
+            variant: if paper {
+                crate::contact::Variant::Paper
+            } else {
+                crate::contact::Variant::Hexsim
+            },
         }
     }
 }

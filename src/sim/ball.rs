@@ -3,7 +3,7 @@
 
 use super::engine::{Engine, STANDARD_GRAVITY};
 use crate::contact::{
-    ContactForce, ContactModel, ContactState, EffectiveMass, RollingBody, sphere_geometry,
+    ContactForce, ContactModel, ContactState, EffectiveMass, RollingBody, Variant,
 };
 use crate::terrain::HeightGrid;
 use glam::{DVec3, Vec3};
@@ -165,13 +165,21 @@ impl BallSim {
         let center = to_f64(body.translation());
         let velocity = to_f64(body.linvel());
         let angular_velocity = to_f64(body.angvel());
-        let geometry = sphere_geometry(
-            &self.terrain,
-            center,
-            self.config.radius,
-            self.contact.orientation,
-        );
-        let response = if geometry.penetration > 0.0 {
+        let geometry = self
+            .contact
+            .sphere_geometry(&self.terrain, center, self.config.radius);
+        let response = if self.contact.variant == Variant::Paper {
+            // the paper's: the centre's velocity, the force at the centre (no spin)
+            self.contact
+                .respond_paper(
+                    &geometry,
+                    velocity,
+                    self.config.mass,
+                    dt,
+                    &mut self.contact_state,
+                )
+                .map(|c| (c, DVec3::ZERO))
+        } else if geometry.penetration > 0.0 {
             let arm = geometry.point - center;
             let point_velocity = velocity + angular_velocity.cross(arm);
             if self.config.lock_rotation {
@@ -240,7 +248,9 @@ impl BallSim {
         let c = &self.config;
         let kinetic_energy = 0.5 * c.mass * velocity.length_squared()
             + 0.5 * c.inertia() * angular_velocity.length_squared();
-        let geometry = sphere_geometry(&self.terrain, position, c.radius, self.contact.orientation);
+        let geometry = self
+            .contact
+            .sphere_geometry(&self.terrain, position, c.radius);
         BallSample {
             step: self.step,
             time: self.step as f64 * self.dt(),

@@ -7,7 +7,7 @@ use super::articulation::{ContactPoint, Joints};
 use super::engine::Engine;
 use crate::contact::joint::JointContact;
 use crate::contact::{
-    ContactForce, ContactModel, ContactState, SphereGeometry, respond_jointly, sphere_geometry,
+    ContactForce, ContactModel, ContactState, SphereGeometry, Variant, respond_jointly,
 };
 use crate::robot::RobotModel;
 use crate::terrain::{GroundFrame, HeightGrid};
@@ -47,7 +47,7 @@ impl FootContacts {
                 self.states[k] = ContactState::default();
                 continue;
             }
-            let geometry = sphere_geometry(terrain, center, leg.foot.radius, contact.orientation);
+            let geometry = contact.sphere_geometry(terrain, center, leg.foot.radius);
             if geometry.penetration <= 0.0 {
                 self.states[k] = ContactState::default();
                 continue;
@@ -81,14 +81,28 @@ impl FootContacts {
             states[i] = self.states[legs[i]];
         }
         let mut forces = [None; 6];
-        respond_jointly(
-            contact,
-            &inputs[..n],
-            |i, j| mobility[i * n + j],
-            engine.dt(),
-            &mut states[..n],
-            &mut forces[..n],
-        );
+        if contact.variant == Variant::Paper {
+            // the paper's: each foot alone, its sphere's centre velocity, the force there
+            for i in 0..n {
+                let normal_mass = 1.0 / mobility[i * n + i].z_axis.z;
+                forces[i] = contact.respond_paper(
+                    inputs[i].geometry,
+                    velocities[i],
+                    normal_mass,
+                    engine.dt(),
+                    &mut states[i],
+                );
+            }
+        } else {
+            respond_jointly(
+                contact,
+                &inputs[..n],
+                |i, j| mobility[i * n + j],
+                engine.dt(),
+                &mut states[..n],
+                &mut forces[..n],
+            );
+        }
         let mut contacts = [None; 6];
         for i in 0..n {
             self.states[legs[i]] = states[i];
