@@ -3,6 +3,7 @@
 
 pub mod batch;
 pub mod bench;
+pub mod compare;
 pub mod contact;
 pub mod gait;
 pub mod metrics;

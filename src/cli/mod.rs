@@ -4,6 +4,7 @@
 mod ball;
 mod batch;
 mod bench;
+mod compare;
 mod contact;
 mod merge;
 mod robot;
@@ -43,6 +44,9 @@ pub enum Command {
     /// Measure simulated steps per second on the reference workloads (build with --release):
     /// the walk with the recording off and on, a batch on every core, and the ball.
     Bench(bench::BenchArgs),
+    /// Run one scenario under several contact settings side by side: a table of their metrics
+    /// and one recording with every setting superposed (exit 1: some diverged).
+    Compare(compare::CompareArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(merge::MergeArgs),
     /// Show what hexsim makes of a robot: its legs, walking direction, masses, and the torque
@@ -62,6 +66,7 @@ impl Cli {
             Some(Command::Run(args)) => run::run(*args),
             Some(Command::Ball(args)) => ball::ball(*args),
             Some(Command::Batch(args)) => batch::batch(*args),
+            Some(Command::Compare(args)) => compare::compare(args),
             Some(Command::Merge(args)) => merge::merge(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Bench(args)) => bench::bench(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Robot(args)) => robot::robot_command(args).map(|()| ExitCode::SUCCESS),

@@ -15,6 +15,17 @@ pub struct LinkTree {
 impl LinkTree {
     /// Logs the joint origins and the links' shapes (static) under `root` (e.g. `world/robot`).
     pub fn log(rec: &rerun::RecordingStream, model: &RobotModel, root: &str) -> Result<Self> {
+        Self::log_tinted(rec, model, root, None)
+    }
+
+    /// [`Self::log`] with every shape in one colour instead of the URDF's (RGB), to tell robots
+    /// apart.
+    pub fn log_tinted(
+        rec: &rerun::RecordingStream,
+        model: &RobotModel,
+        root: &str,
+        tint: Option<[u8; 3]>,
+    ) -> Result<Self> {
         let mut paths: Vec<String> = Vec::new();
         for link in &model.links {
             let entity = match link.parent_joint {
@@ -27,7 +38,7 @@ impl LinkTree {
                 }
             };
             for (k, visual) in link.visuals.iter().enumerate() {
-                log_visual(rec, &format!("{entity}/visual_{k}"), visual)?;
+                log_visual(rec, &format!("{entity}/visual_{k}"), visual, tint)?;
             }
             paths.push(entity);
         }
@@ -102,9 +113,17 @@ fn log_pose(
     Ok(())
 }
 
-fn log_visual(rec: &rerun::RecordingStream, entity: &str, visual: &Visual) -> Result<()> {
+fn log_visual(
+    rec: &rerun::RecordingStream,
+    entity: &str,
+    visual: &Visual,
+    tint: Option<[u8; 3]>,
+) -> Result<()> {
     let mut origin = visual.origin;
-    let color = rgba(visual.color);
+    let color = match tint {
+        Some([r, g, b]) => [r, g, b, 255],
+        None => rgba(visual.color),
+    };
     match &visual.shape {
         Shape::Box { half_extents } => rec.log_static(
             entity,

@@ -6,6 +6,7 @@ pub mod background;
 pub mod ball;
 pub mod blueprint;
 pub mod camera;
+pub mod compare;
 pub mod hexapod;
 pub mod links;
 pub mod output;

@@ -121,6 +121,23 @@ impl Report {
 }
 
 /// Reads a scenario file; a file with a `[sweep]` table gives one scenario per combination.
+/// Resolves a scenario given as a TOML table (e.g. a scenario file's with some fields changed);
+/// `path` is the file it came from, for relative paths and errors.
+pub fn from_table(
+    table: toml::Table,
+    name: String,
+    path: &Path,
+) -> Result<Scenario, ScenarioError> {
+    let spec: ScenarioSpec =
+        toml::Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| ScenarioError {
+                file: path.to_path_buf(),
+                message: format!("{name}: {}", e.message()),
+            })?;
+    Scenario::resolve(spec, name, path)
+}
+
 pub fn load_file(path: &Path) -> Result<Vec<Scenario>, ScenarioError> {
     let fail = |message: String| ScenarioError {
         file: path.to_path_buf(),
@@ -166,6 +183,19 @@ impl Scenario {
     /// The terrain's name for messages and recordings.
     pub fn terrain_name(&self) -> &str {
         &self.terrain.name
+    }
+
+    /// The ball, for ball scenarios.
+    pub fn ball(&self) -> Option<&BallConfig> {
+        match &self.setup {
+            Setup::Ball(config) => Some(config),
+            Setup::Walk(_) => None,
+        }
+    }
+
+    /// The contact model it runs with.
+    pub fn contact(&self) -> &ContactModel {
+        &self.contact
     }
 
     /// The robot, for walk scenarios.

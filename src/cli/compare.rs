@@ -1,0 +1,140 @@
+//! `hexsim compare FILE`: one scenario under several contact settings, side by side — a table of
+//! their metrics, a JSON of them, and one recording with every setting superposed.
+
+use anyhow::Result;
+use clap::Args;
+use hexsim::compare;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub struct CompareArgs {
+    /// Comparison file (TOML): a scenario and the [[setting]]s to run it under (see
+    /// comparisons/).
+    file: PathBuf,
+    /// The recording of every setting superposed.
+    #[arg(long, default_value = "compare.rrd")]
+    record: PathBuf,
+    /// Do not write a recording.
+    #[arg(long)]
+    no_record: bool,
+    /// Every setting's metrics as JSON.
+    #[arg(long)]
+    metrics: Option<PathBuf>,
+    /// Folder for each setting's trajectory CSV (NAME.csv). Default: a temporary folder, removed
+    /// after.
+    #[arg(long)]
+    trajectories: Option<PathBuf>,
+    /// Worker threads, one run each. Default: all cores.
+    #[arg(short, long)]
+    jobs: Option<usize>,
+    /// Open the recording in the rerun viewer when done.
+    #[arg(long)]
+    spawn: bool,
+}
+
+/// Exit codes: 0 every setting ran to its end, 1 some diverged (the others are still reported
+/// and recorded), 2 an input error.
+pub fn compare(args: CompareArgs) -> Result<ExitCode> {
+    let comparison = compare::load(&args.file)?;
+    if !args.no_record {
+        hexsim::record::output::check_writable(&args.record)?;
+    }
+    if let Some(path) = &args.metrics {
+        hexsim::record::output::check_writable(path)?;
+    }
+    let temporary = args.trajectories.is_none();
+    let dir = args.trajectories.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(format!("hexsim-compare-{}", std::process::id()))
+    });
+    let jobs = args.jobs.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
+    if let Some(d) = &comparison.description {
+        println!("{d}");
+    }
+    let outcomes = compare::run(&comparison, &dir, jobs)?;
+    let mut failed = false;
+    let mut json = Vec::new();
+    let mut rows: Vec<(String, Vec<String>)> = Vec::new();
+    for outcome in &outcomes {
+        let (metrics, failure) = match &outcome.report {
+            Ok(report) => (Some(report.metrics.to_json()), report.failure.clone()),
+            Err(e) => (None, Some(format!("{e:#}"))),
+        };
+        failed |= failure.is_some();
+        if let Some(serde_json::Value::Object(map)) = &metrics {
+            for (key, value) in map {
+                // per-foot lists (foot slip) as their sum
+                let (key, v) = match value {
+                    serde_json::Value::Array(items) if items.iter().all(|i| i.is_number()) => (
+                        format!("{key} (sum)"),
+                        items.iter().filter_map(serde_json::Value::as_f64).sum(),
+                    ),
+                    _ => match value.as_f64() {
+                        Some(v) => (key.clone(), v),
+                        None => continue,
+                    },
+                };
+                let key = &key;
+                let cell = if v.fract() == 0.0 && v.abs() < 1e12 {
+                    format!("{v:.0}")
+                } else {
+                    format!("{v:.4}")
+                };
+                match rows.iter_mut().find(|(k, _)| k == key) {
+                    Some((_, cells)) => cells.push(cell),
+                    None => rows.push((key.clone(), vec![cell])),
+                }
+            }
+        }
+        json.push(serde_json::json!({
+            "name": outcome.name,
+            "metrics": metrics,
+            "failure": failure,
+        }));
+    }
+    let names: Vec<&str> = outcomes.iter().map(|o| o.name.as_str()).collect();
+    let width = rows.iter().map(|(k, _)| k.len()).max().unwrap_or(6).max(6);
+    let cell_width = names.iter().map(|n| n.len()).max().unwrap_or(8).max(10);
+    print!("{:width$}", "metric");
+    for name in &names {
+        print!("  {name:>cell_width$}");
+    }
+    println!();
+    for (key, cells) in &rows {
+        print!("{key:width$}");
+        for cell in cells {
+            print!("  {cell:>cell_width$}");
+        }
+        println!();
+    }
+    for (outcome, entry) in outcomes.iter().zip(&json) {
+        if let Some(failure) = entry["failure"].as_str() {
+            println!("{}: {failure}", outcome.name);
+        }
+    }
+    if let Some(path) = &args.metrics {
+        let all = serde_json::json!({
+            "comparison": args.file.display().to_string(),
+            "settings": json,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&all)? + "\n")?;
+        println!("wrote {}", path.display());
+    }
+    if !args.no_record {
+        let written = hexsim::record::compare::write(&args.record, &comparison, &outcomes)?;
+        println!("wrote {}", written.display());
+        if args.spawn {
+            hexsim::record::rerun::spawn_viewer(&written)?;
+        }
+    }
+    if temporary {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    Ok(if failed {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}

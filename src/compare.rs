@@ -1,0 +1,183 @@
+//! Contact models side by side (`hexsim compare FILE`): one scenario — a ball or a walk — run
+//! under several contact settings (normal and friction laws, the paper's variant, stiffness,
+//! damping, rolling resistance…), each a set of `[contact]` fields laid over the scenario's, the
+//! runs in parallel, their metrics in one table and their motion in one recording
+//! (`record::compare`).
+//!
+//! ```toml
+//! description = "the ball on the bell: hexsim's contact, the paper's, with rolling resistance"
+//! scenario = "../scenarios/ball_bell.toml"
+//! duration = 20.0                 # optional: overrides the scenario's
+//! [[setting]]
+//! name = "hexsim"                 # no fields: the scenario's own contact
+//! [[setting]]
+//! name = "paper"
+//! contact = { variant = "paper" }
+//! ```
+
+use crate::runner::Outputs;
+use crate::scenario::{self, Report, Scenario, ScenarioError};
+use rayon::prelude::*;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// At most this many settings, each drawn in its own colour.
+pub const MAX_SETTINGS: usize = 8;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CompareSpec {
+    #[serde(default)]
+    description: Option<String>,
+    scenario: PathBuf,
+    #[serde(default)]
+    duration: Option<f64>,
+    #[serde(rename = "setting", default)]
+    settings: Vec<SettingSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SettingSpec {
+    name: String,
+    #[serde(default)]
+    contact: toml::Table,
+}
+
+/// A comparison ready to run: the scenario once per setting, each named by its setting.
+pub struct Comparison {
+    pub file: PathBuf,
+    pub description: Option<String>,
+    pub settings: Vec<Scenario>,
+}
+
+/// Reads a comparison file and resolves the scenario under each setting; errors name the file,
+/// the setting and the field.
+pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
+    let fail = |message: String| ScenarioError {
+        file: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| fail(format!("cannot read the comparison file: {e}")))?;
+    let spec: CompareSpec =
+        toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
+    if spec.settings.is_empty() {
+        return Err(fail(
+            "expected at least one [[setting]] (a name and the [contact] fields it changes)".into(),
+        ));
+    }
+    if spec.settings.len() > MAX_SETTINGS {
+        return Err(fail(format!(
+            "{} settings: expected at most {MAX_SETTINGS}",
+            spec.settings.len()
+        )));
+    }
+    for (k, s) in spec.settings.iter().enumerate() {
+        let clean = !s.name.is_empty()
+            && s.name
+                .chars()
+                .all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.' | ' '));
+        if !clean {
+            return Err(fail(format!(
+                "setting {}: name {:?}: expected letters, digits, spaces, '-', '_' or '.'",
+                k + 1,
+                s.name
+            )));
+        }
+        if spec.settings[..k].iter().any(|o| o.name == s.name) {
+            return Err(fail(format!(
+                "setting {:?} is named twice: expected distinct names",
+                s.name
+            )));
+        }
+    }
+    if let Some(d) = spec.duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        return Err(fail(format!(
+            "duration: expected a finite number > 0 s, got {d}"
+        )));
+    }
+    let scenario_path = path.parent().unwrap_or(Path::new("")).join(&spec.scenario);
+    let scenario_text = std::fs::read_to_string(&scenario_path).map_err(|e| {
+        fail(format!(
+            "scenario: cannot read {}: {e}",
+            scenario_path.display()
+        ))
+    })?;
+    let table: toml::Table = scenario_text.parse().map_err(|e: toml::de::Error| {
+        fail(format!(
+            "scenario {}: {}",
+            scenario_path.display(),
+            e.to_string().trim_end()
+        ))
+    })?;
+    if table.contains_key("sweep") {
+        return Err(fail(format!(
+            "scenario {}: has a [sweep]; expected one scenario (the settings are the comparison)",
+            scenario_path.display()
+        )));
+    }
+    let mut settings = Vec::with_capacity(spec.settings.len());
+    for setting in &spec.settings {
+        let mut table = table.clone();
+        if let Some(d) = spec.duration {
+            table.insert("duration".into(), toml::Value::Float(d));
+        }
+        let contact = table
+            .entry("contact")
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let Some(contact) = contact.as_table_mut() else {
+            return Err(fail(format!(
+                "scenario {}: [contact] is not a table",
+                scenario_path.display()
+            )));
+        };
+        for (key, value) in &setting.contact {
+            contact.insert(key.clone(), value.clone());
+        }
+        let resolved = scenario::from_table(table, setting.name.clone(), &scenario_path)
+            .map_err(|e| fail(format!("setting {:?}: {e}", setting.name)))?;
+        settings.push(resolved);
+    }
+    Ok(Comparison {
+        file: path.to_path_buf(),
+        description: spec.description,
+        settings,
+    })
+}
+
+/// One setting's run: its report (or why it could not run) and its trajectory CSV.
+pub struct Outcome {
+    pub name: String,
+    pub report: anyhow::Result<Report>,
+    pub trajectory: PathBuf,
+}
+
+/// Runs every setting, in parallel on `jobs` threads (each run alone is deterministic), writing
+/// each trajectory to `dir`/NAME.csv.
+pub fn run(comparison: &Comparison, dir: &Path, jobs: usize) -> anyhow::Result<Vec<Outcome>> {
+    std::fs::create_dir_all(dir)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()?;
+    Ok(pool.install(|| {
+        comparison
+            .settings
+            .par_iter()
+            .map(|s| {
+                let trajectory = dir.join(format!("{}.csv", s.name.replace(' ', "_")));
+                let report = s.run(Outputs {
+                    trajectory: Some(trajectory.clone()),
+                    ..Outputs::default()
+                });
+                Outcome {
+                    name: s.name.clone(),
+                    report,
+                    trajectory,
+                }
+            })
+            .collect()
+    }))
+}

@@ -1,0 +1,140 @@
+//! `hexsim compare`: one scenario under several contact settings, end to end — the metrics
+//! table and JSON, the superposed recording, and clear errors for a broken comparison file.
+
+mod common;
+use common::{hexsim, scratch};
+use hexsim::record::rerun::read_back;
+
+/// The shipped ball comparison runs every setting, reports each one's metrics and draws each
+/// ball with its path and plots; the paper's ball, which cannot roll, stops where hexsim's rolls.
+#[test]
+fn a_comparison_reports_and_records_every_setting() {
+    let dir = scratch("compare");
+    let (json, rrd) = (dir.join("ball.json"), dir.join("ball.rrd"));
+    let out = hexsim()
+        .args(["compare", "comparisons/ball_bell.toml", "--metrics"])
+        .arg(&json)
+        .arg("--record")
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let names = ["hexsim", "paper", "rolling 2 mm", "soft Hunt-Crossley"];
+    let header = stdout.lines().find(|l| l.starts_with("metric")).unwrap();
+    assert!(names.iter().all(|n| header.contains(n)), "{header}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let settings = report["settings"].as_array().unwrap();
+    assert_eq!(settings.len(), 4);
+    let speed = |k: usize| settings[k]["metrics"]["final_speed"].as_f64().unwrap();
+    assert!(speed(0) > 0.1, "hexsim's ball rolls on: {}", speed(0));
+    assert!(
+        speed(1) < 1e-3 && speed(2) < 1e-3,
+        "{} {}",
+        speed(1),
+        speed(2)
+    );
+    let contents = read_back(&rrd).unwrap();
+    assert_eq!(contents.activations, [(true, true)]);
+    for name in names.map(|n| n.replace(' ', "_")) {
+        let ball = contents.at(false, &format!("world/{name}/ball"));
+        assert!(ball.is_some_and(|b| b.rows > 100), "{name}: {ball:?}");
+        assert!(
+            contents
+                .at(false, &format!("plots/height/{name}"))
+                .is_some()
+        );
+        assert!(contents.at(false, &format!("world/paths/{name}")).is_some());
+    }
+}
+
+/// A walk comparison draws each setting's robot, tinted, and plots their bodies (entity paths
+/// spell a setting's spaces as underscores).
+#[test]
+fn a_walk_comparison_draws_every_robot() {
+    let dir = scratch("compare");
+    let rrd = dir.join("walk.rrd");
+    let out = hexsim()
+        .args(["compare", "comparisons/hex18_natural.toml", "--record"])
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("forward_distance"), "{stdout}");
+    let contents = read_back(&rrd).unwrap();
+    for name in [
+        "hexsim",
+        "stiff",
+        "slippery",
+        "Coulomb",
+        "no_drift_recovery",
+    ] {
+        let links = contents
+            .under(false, &format!("world/{name}/robot"))
+            .filter(|(_, l)| l.rows > 0)
+            .count();
+        assert!(links >= 18, "{name}: {links} moving links");
+        assert!(
+            contents
+                .at(false, &format!("plots/forward_x/{name}"))
+                .is_some()
+        );
+    }
+}
+
+/// A broken comparison is an input error (exit 2) naming the file, the setting and the field.
+#[test]
+fn a_broken_comparison_says_where() {
+    let dir = scratch("compare-bad");
+    let cases = [
+        (
+            "scenario = \"SCENARIOS/ball_bell.toml\"\n[[setting]]\nname = \"a\"\ncontact = { stifness = 1e4 }\n",
+            vec!["setting \"a\"", "stifness"],
+        ),
+        (
+            "scenario = \"SCENARIOS/ball_bell.toml\"\n[[setting]]\nname = \"a\"\n[[setting]]\nname = \"a\"\n",
+            vec!["setting \"a\" is named twice"],
+        ),
+        (
+            "scenario = \"SCENARIOS/sweep_contact.toml\"\n[[setting]]\nname = \"a\"\n",
+            vec!["has a [sweep]"],
+        ),
+        (
+            "scenario = \"SCENARIOS/ball_bell.toml\"\n",
+            vec!["expected at least one [[setting]]"],
+        ),
+        (
+            "scenario = \"SCENARIOS/ball_bell.toml\"\n[[setting]]\nname = \"a\"\ncontact = { variant = \"paper\", rolling_resistance = 0.002 }\n",
+            vec!["setting \"a\"", "contact.rolling_resistance"],
+        ),
+    ];
+    for (k, (text, expected)) in cases.iter().enumerate() {
+        let scenarios = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        let file = dir.join(format!("case_{k}.toml"));
+        let text = text.replace("SCENARIOS", &scenarios.to_string_lossy());
+        std::fs::write(&file, text).unwrap();
+        let out = hexsim()
+            .arg("compare")
+            .arg(&file)
+            .arg("--record")
+            .arg(dir.join("x.rrd"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "case {k}: {stderr}");
+        assert!(stderr.contains(&format!("case_{k}.toml")), "{stderr}");
+        for e in expected {
+            assert!(stderr.contains(e), "case {k}: no {e:?} in {stderr}");
+        }
+    }
+}
