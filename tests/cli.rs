@@ -152,7 +152,7 @@ fn run_walks_and_writes_recording_trajectory_and_metrics() {
     assert!(
         header.starts_with("time,x,y,z,roll,pitch,yaw")
             && header.contains("lf_coxa_joint_torque")
-            && header.ends_with("rr_contact")
+            && header.ends_with("rr_contact,rr_slip")
     );
     assert_eq!(
         trajectory.lines().count(),

@@ -44,11 +44,17 @@ fn a_comparison_reports_and_records_every_setting() {
     for name in names.map(|n| n.replace(' ', "_")) {
         let ball = contents.at(false, &format!("world/{name}/ball"));
         assert!(ball.is_some_and(|b| b.rows > 100), "{name}: {ball:?}");
-        assert!(
-            contents
-                .at(false, &format!("plots/height/{name}"))
-                .is_some()
-        );
+        for plot in [
+            "height",
+            "speed",
+            "total_energy",
+            "normal_force",
+            "penetration_mm",
+            "slip",
+        ] {
+            let series = contents.at(false, &format!("plots/{plot}/{name}"));
+            assert!(series.is_some_and(|s| s.rows > 100), "{plot}/{name}");
+        }
         assert!(contents.at(false, &format!("world/paths/{name}")).is_some());
     }
 }

@@ -149,7 +149,7 @@ pub struct BallTrajectory {
 }
 
 impl BallTrajectory {
-    pub const HEADER: [&str; 18] = [
+    pub const HEADER: [&str; 19] = [
         "time",
         "x",
         "y",
@@ -168,6 +168,7 @@ impl BallTrajectory {
         "kinetic_energy",
         "potential_energy",
         "total_energy",
+        "slip",
     ];
 
     pub fn create(path: &Path, every: u64) -> Result<Self> {
@@ -210,6 +211,7 @@ impl<W: ?Sized> Observer<BallSample, W> for BallTrajectory {
             s.kinetic_energy,
             s.potential_energy,
             s.total_energy(),
+            s.contact.map_or(0.0, |c| c.slip.length()),
         ];
         self.table.row(&row)
     }

@@ -27,20 +27,21 @@ pub const COLORS: [[u8; 3]; 8] = [
 ];
 
 /// What is plotted, per kind: a trajectory CSV column, or a quantity computed from its row.
-const BALL_PLOTS: [&str; 5] = [
+const BALL_PLOTS: [&str; 6] = [
     "height",
     "speed",
     "total_energy",
     "normal_force",
     "penetration_mm",
+    "slip",
 ];
 const WALK_PLOTS: [&str; 6] = [
     "forward_x",
     "body_z",
     "roll_deg",
-    "pitch_deg",
     "feet_normal_force",
-    "speed",
+    "feet_slip",
+    "pitch_deg",
 ];
 
 /// One trajectory CSV, its columns by name.
@@ -258,6 +259,11 @@ pub fn write(path: &Path, comparison: &Comparison, outcomes: &[Outcome]) -> Resu
                     "feet_normal_force" => crate::robot::LEG_NAMES
                         .iter()
                         .map(|l| table.get(values, &format!("{l}_normal")))
+                        .sum(),
+                    // the feet's slip speeds summed: how much the stance feet slide
+                    "feet_slip" => crate::robot::LEG_NAMES
+                        .iter()
+                        .map(|l| table.get(values, &format!("{l}_slip")))
                         .sum(),
                     other => table.get(values, other),
                 }

@@ -365,7 +365,7 @@ impl HexapodRecorder {
 }
 
 /// Writes every `every`-th step as a CSV row: time, body pose and velocity, joint angles, targets
-/// and torques, and per foot its force and contact state.
+/// and torques, and per foot its force, contact state and slip speed.
 pub struct HexapodTrajectory {
     table: CsvTable,
     every: u64,
@@ -382,7 +382,9 @@ impl HexapodTrajectory {
             header.extend(model.joints.iter().map(|j| format!("{}_{suffix}", j.name)));
         }
         for leg in LEG_NAMES {
-            header.extend(["fx", "fy", "fz", "normal", "contact"].map(|q| format!("{leg}_{q}")));
+            header.extend(
+                ["fx", "fy", "fz", "normal", "contact", "slip"].map(|q| format!("{leg}_{q}")),
+            );
         }
         Ok(HexapodTrajectory {
             table: CsvTable::create(path, header)?,
@@ -423,8 +425,15 @@ impl<W: ?Sized> Observer<WalkSample, W> for HexapodTrajectory {
         row.extend(&r.joint_torques);
         for c in &r.foot_contacts {
             match c {
-                Some(c) => row.extend([c.force.x, c.force.y, c.force.z, c.normal_force, 1.0]),
-                None => row.extend([0.0; 5]),
+                Some(c) => row.extend([
+                    c.force.x,
+                    c.force.y,
+                    c.force.z,
+                    c.normal_force,
+                    1.0,
+                    c.slip.length(),
+                ]),
+                None => row.extend([0.0; 6]),
             }
         }
         self.table.row(&row)
