@@ -133,7 +133,7 @@ fn on_a_slope_the_papers_ball_slides_but_cannot_roll() {
 /// V6, the reference foot (0.05 kg): the paper's explicit damper multiplies the foot's normal
 /// velocity by 1 − c·h/m = −2 each step at c = 150 N·s/m, h = 1 ms — the ground throws the foot
 /// released at rest off the slope (at up to 2.1 m/s; hexsim's holds it still); at h = 0.2 ms
-/// (c·h/m = 0.6) it holds on 20° without creeping.
+/// (c·h/m = 0.6) it holds on 20° without creeping, and (V7) slides on 45° at the Coulomb rate.
 #[test]
 fn the_papers_damper_needs_a_small_step_on_a_light_foot() {
     let foot = BallConfig {
@@ -167,6 +167,18 @@ fn the_papers_damper_needs_a_small_step_on_a_light_foot() {
         .fold(0.0, f64::max);
     println!("V6 paper at 0.2 ms: crept {:.3e} m in 4 s", crept);
     assert!(crept < 1e-4, "crept {crept}");
+    // V7: on 45° (tan 45° > μs) it slides at g·(sin θ − μk·cos θ)
+    let angle = 45f64.to_radians();
+    let depth = foot.mass * G * angle.cos() / 2e4;
+    let placed = BallConfig {
+        position: on_slope(angle, 20.0, foot.radius, depth),
+        ..foot
+    };
+    let slides = run_ball_with_step(placed, plane(45.0), model, 2.0, 2e-4);
+    let a = downhill_acceleration(&slides, 45.0, 0.2, 2.0);
+    let expected = G * (angle.sin() - 0.8 * angle.cos());
+    println!("V7 paper at 0.2 ms: a = {a:.4} m/s² (expected {expected:.4})");
+    assert!((a - expected).abs() < 0.02 * expected, "a = {a}");
 }
 
 /// V9–V10: a ball that cannot roll and sticks where friction holds it — on the bell it stays on
