@@ -4,10 +4,9 @@
 
 mod common;
 use common::*;
-use glam::DVec3;
 use hexsim::contact::{ContactModel, Variant};
-use hexsim::sim::{BallConfig, BallSample};
-use hexsim::terrain::{self, HeightGrid, Orientation};
+use hexsim::sim::BallConfig;
+use hexsim::terrain::{self, Orientation};
 
 /// `model` as the paper would run it: its variant, its central differences (XE = YE = 1 cm).
 fn paper(model: ContactModel) -> ContactModel {
@@ -17,33 +16,6 @@ fn paper(model: ContactModel) -> ContactModel {
         drift_recovery: 0.0,
         ..model
     }
-}
-
-fn plane(angle_deg: f64) -> HeightGrid {
-    terrain::slope([60.0, 10.0], [0.0, 0.0], angle_deg.to_radians(), 0.0).unwrap()
-}
-
-/// A ball (or foot) released at rest on a plane of `angle_deg`, its lowest point on the ground.
-fn on_plane(angle_deg: f64, config: BallConfig, model: ContactModel, s: f64) -> Vec<BallSample> {
-    let angle = angle_deg.to_radians();
-    let depth = config.mass * G * angle.cos() / 2e4;
-    let config = BallConfig {
-        position: on_slope(angle, 20.0, config.radius, depth),
-        ..config
-    };
-    run_ball(config, plane(angle_deg), model, s)
-}
-
-fn downhill_acceleration(samples: &[BallSample], angle_deg: f64, t0: f64, t1: f64) -> f64 {
-    let angle = angle_deg.to_radians();
-    let downhill = DVec3::new(-angle.cos(), 0.0, -angle.sin());
-    let window: Vec<&BallSample> = samples
-        .iter()
-        .filter(|s| s.time >= t0 && s.time <= t1)
-        .collect();
-    let t: Vec<f64> = window.iter().map(|s| s.time).collect();
-    let v: Vec<f64> = window.iter().map(|s| s.velocity.dot(downhill)).collect();
-    fitted_rate(&t, &v)
 }
 
 /// Coefficient of restitution of the reference ball dropped 0.5 m on flat ground.
@@ -105,25 +77,25 @@ fn flat_ground_bounces_differ_only_by_the_damper() {
 /// same force, and settles where the spring carries m·g·cos θ.
 #[test]
 fn on_a_slope_the_papers_ball_slides_but_cannot_roll() {
-    let rolls = on_plane(
+    let rolls = released_on_plane(
         30.0,
         BallConfig::default(),
         paper(spring_damper(2e4, 150.0, karnopp(0.8, 0.8))),
         2.0,
     );
-    let a = downhill_acceleration(&rolls, 30.0, 0.2, 2.0);
+    let a = downhill_acceleration(&rolls, 30f64.to_radians(), 0.2, 2.0);
     println!(
         "V4 paper: a = {a:.4} m/s² (hexsim's rolls at {:.4})",
         5.0 / 7.0 * G * 0.5
     );
     assert!(a.abs() < 0.01, "the paper's ball moved at {a} m/s²");
-    let slides = on_plane(
+    let slides = released_on_plane(
         30.0,
         BallConfig::default(),
         paper(spring_damper(2e4, 150.0, karnopp(0.05, 0.05))),
         2.0,
     );
-    let a = downhill_acceleration(&slides, 30.0, 0.2, 2.0);
+    let a = downhill_acceleration(&slides, 30f64.to_radians(), 0.2, 2.0);
     let angle = 30f64.to_radians();
     let expected = G * (angle.sin() - 0.05 * angle.cos());
     println!("V5 paper: a = {a:.4} m/s² (expected {expected:.4})");
@@ -143,7 +115,7 @@ fn the_papers_damper_needs_a_small_step_on_a_light_foot() {
         ..BallConfig::default()
     };
     let model = paper(spring_damper(2e4, 150.0, karnopp(0.9, 0.8)));
-    let blown = on_plane(20.0, foot, model, 0.5);
+    let blown = released_on_plane(20.0, foot, model, 0.5);
     let worst = blown
         .iter()
         .map(|s| s.velocity.length())
@@ -175,7 +147,7 @@ fn the_papers_damper_needs_a_small_step_on_a_light_foot() {
         ..foot
     };
     let slides = run_ball_with_step(placed, plane(45.0), model, 2.0, 2e-4);
-    let a = downhill_acceleration(&slides, 45.0, 0.2, 2.0);
+    let a = downhill_acceleration(&slides, 45f64.to_radians(), 0.2, 2.0);
     let expected = G * (angle.sin() - 0.8 * angle.cos());
     println!("V7 paper at 0.2 ms: a = {a:.4} m/s² (expected {expected:.4})");
     assert!((a - expected).abs() < 0.02 * expected, "a = {a}");

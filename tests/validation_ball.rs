@@ -11,10 +11,6 @@ fn flat() -> HeightGrid {
     terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap()
 }
 
-fn plane(angle_deg: f64) -> HeightGrid {
-    terrain::slope([60.0, 10.0], [0.0, 0.0], angle_deg.to_radians(), 0.0).unwrap()
-}
-
 /// Coefficient of restitution from the first bounce: drop from `drop` (lowest point above ground),
 /// e = sqrt(h1 / drop) with h1 the lowest point's height at the first apex.
 fn restitution(damping: f64) -> f64 {
@@ -225,33 +221,15 @@ fn v3_rest_penetration_and_load() {
     );
 }
 
-/// Acceleration along the slope (downhill positive) fitted over [t0, t1].
-fn downhill_acceleration(samples: &[BallSample], angle: f64, t0: f64, t1: f64) -> f64 {
-    let downhill = glam::DVec3::new(-angle.cos(), 0.0, -angle.sin());
-    let window: Vec<&BallSample> = samples
-        .iter()
-        .filter(|s| s.time >= t0 && s.time <= t1)
-        .collect();
-    let t: Vec<f64> = window.iter().map(|s| s.time).collect();
-    let v: Vec<f64> = window.iter().map(|s| s.velocity.dot(downhill)).collect();
-    fitted_rate(&t, &v)
-}
-
 fn released_on_slope(
     angle_deg: f64,
     friction: FrictionLaw,
     config: BallConfig,
     seconds: f64,
 ) -> Vec<BallSample> {
-    let angle = angle_deg.to_radians();
-    let depth = config.mass * G * angle.cos() / 2e4;
-    let config = BallConfig {
-        position: on_slope(angle, 20.0, config.radius, depth),
-        ..config
-    };
-    run_ball(
+    released_on_plane(
+        angle_deg,
         config,
-        plane(angle_deg),
         spring_damper(2e4, 150.0, friction),
         seconds,
     )
@@ -715,17 +693,11 @@ fn released_on_slope_with(
     config: BallConfig,
     seconds: f64,
 ) -> Vec<BallSample> {
-    let angle = angle_deg.to_radians();
-    let depth = config.mass * G * angle.cos() / 2e4;
-    let config = BallConfig {
-        position: on_slope(angle, 20.0, config.radius, depth),
-        ..config
-    };
     let model = ContactModel {
         rolling_resistance: rho,
         ..spring_damper(2e4, 150.0, karnopp(0.9, 0.8))
     };
-    run_ball(config, plane(angle_deg), model, seconds)
+    released_on_plane(angle_deg, config, model, seconds)
 }
 
 #[test]

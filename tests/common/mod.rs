@@ -89,3 +89,38 @@ pub fn fitted_rate(t: &[f64], y: &[f64]) -> f64 {
     let sxx: f64 = t.iter().map(|a| (a - mt) * (a - mt)).sum();
     sxy / sxx
 }
+
+/// A plane rising at `angle_deg` towards +x (60 m × 10 m).
+pub fn plane(angle_deg: f64) -> HeightGrid {
+    hexsim::terrain::slope([60.0, 10.0], [0.0, 0.0], angle_deg.to_radians(), 0.0).unwrap()
+}
+
+/// A ball (or foot) released at rest on [`plane`]`(angle_deg)`, resting at the spring's static
+/// depth, run for `seconds` under `contact`.
+pub fn released_on_plane(
+    angle_deg: f64,
+    config: BallConfig,
+    contact: ContactModel,
+    seconds: f64,
+) -> Vec<BallSample> {
+    let angle = angle_deg.to_radians();
+    let depth = config.mass * G * angle.cos() / 2e4;
+    let config = BallConfig {
+        position: on_slope(angle, 20.0, config.radius, depth),
+        ..config
+    };
+    run_ball(config, plane(angle_deg), contact, seconds)
+}
+
+/// Acceleration along a plane of `angle` (rad) rising towards +x (downhill positive), fitted
+/// over [t0, t1].
+pub fn downhill_acceleration(samples: &[BallSample], angle: f64, t0: f64, t1: f64) -> f64 {
+    let downhill = glam::DVec3::new(-angle.cos(), 0.0, -angle.sin());
+    let window: Vec<&BallSample> = samples
+        .iter()
+        .filter(|s| s.time >= t0 && s.time <= t1)
+        .collect();
+    let t: Vec<f64> = window.iter().map(|s| s.time).collect();
+    let v: Vec<f64> = window.iter().map(|s| s.velocity.dot(downhill)).collect();
+    fitted_rate(&t, &v)
+}
