@@ -144,3 +144,42 @@ fn a_broken_comparison_says_where() {
         }
     }
 }
+
+/// A setting that diverges (hex18 under the paper's explicit damper at 1 ms) is reported with why,
+/// exit 1, and the others are still recorded, the diverged one up to where it stopped.
+#[test]
+fn a_diverging_setting_is_reported_and_the_rest_recorded() {
+    let dir = scratch("compare-diverge");
+    let scenario =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/natural_tripod.toml");
+    let file = dir.join("diverge.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "scenario = {:?}\nduration = 6.0\n[[setting]]\nname = \"hexsim\"\n[[setting]]\nname = \"paper\"\ncontact = {{ variant = \"paper\" }}\n",
+            scenario.to_string_lossy()
+        ),
+    )
+    .unwrap();
+    let rrd = dir.join("diverge.rrd");
+    let out = hexsim()
+        .arg("compare")
+        .arg(&file)
+        .arg("--record")
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(
+        stdout.contains("paper: the simulation diverged"),
+        "{stdout}"
+    );
+    let contents = read_back(&rrd).unwrap();
+    for name in ["hexsim", "paper"] {
+        let rows = contents
+            .at(false, &format!("plots/forward_x/{name}"))
+            .map_or(0, |s| s.rows);
+        assert!(rows > 100, "{name}: {rows} samples");
+    }
+}

@@ -129,7 +129,15 @@ pub fn write(path: &Path, comparison: &Comparison, outcomes: &[Outcome]) -> Resu
     for (k, outcome) in outcomes.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
         let entity = entity_name(&outcome.name);
-        let table = Table::read(&outcome.trajectory)?;
+        // a setting that could not run has no trajectory: it is in the table with its error
+        let table = if outcome.report.is_ok() {
+            Table::read(&outcome.trajectory)?
+        } else {
+            Table {
+                columns: HashMap::new(),
+                rows: Vec::new(),
+            }
+        };
         for plot in plots {
             rec.log_static(
                 format!("plots/{plot}/{entity}"),
