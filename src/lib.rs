@@ -7,6 +7,7 @@ pub mod compare;
 pub mod contact;
 pub mod gait;
 pub mod metrics;
+pub mod optimize;
 pub mod record;
 pub mod robot;
 pub mod runner;

@@ -7,6 +7,7 @@ mod bench;
 mod compare;
 mod contact;
 mod merge;
+mod optimize;
 mod robot;
 mod run;
 mod terrain;
@@ -49,6 +50,9 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(merge::MergeArgs),
+    /// Search gait and servo parameters for the best walk on a set of terrain seeds (CMA-ES),
+    /// and write the best gait as a gait file.
+    Optimize(optimize::OptimizeArgs),
     /// Show what hexsim makes of a robot: its legs, walking direction, masses, and the torque
     /// each servo holds standing in a gait's pose.
     Robot(robot::RobotArgs),
@@ -67,6 +71,7 @@ impl Cli {
             Some(Command::Ball(args)) => ball::ball(*args),
             Some(Command::Batch(args)) => batch::batch(*args),
             Some(Command::Compare(args)) => compare::compare(args),
+            Some(Command::Optimize(args)) => optimize::optimize(args),
             Some(Command::Merge(args)) => merge::merge(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Bench(args)) => bench::bench(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Robot(args)) => robot::robot_command(args).map(|()| ExitCode::SUCCESS),

@@ -1,0 +1,174 @@
+//! `hexsim optimize`: a tiny search end to end, and clear errors for a broken specification.
+
+mod common;
+use common::{hexsim, scratch};
+
+const SPEC: &str = r#"
+seeds = [3]
+generations = 1
+population = 2
+[scenario]
+terrain = "TERRAINS/natural.toml"
+duration = 1.0
+[scenario.start]
+x = -1.25
+y = 0.0
+[parameters]
+"gait.period" = [0.8, 1.2]
+"gait.stride_length" = [0.04, 0.08]
+[objective]
+forward_distance = 1.0
+[constraints]
+max_tilt_deg = 20
+"#;
+
+fn spec(extra: &str, replace: Option<(&str, &str)>) -> String {
+    let terrains = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains");
+    let mut text = SPEC.replace("TERRAINS", &terrains.to_string_lossy());
+    if let Some((from, to)) = replace {
+        text = text.replace(from, to);
+    }
+    text + extra
+}
+
+/// A search of two candidates after the start: every evaluation logged, the best gait written
+/// as a gait file that `hexsim run --gait` walks, and the summary.
+#[test]
+fn a_tiny_search_runs_end_to_end() {
+    let dir = scratch("optimize");
+    let file = dir.join("tiny.toml");
+    std::fs::write(&file, spec("", None)).unwrap();
+    let out_dir = dir.join("out");
+    let out = hexsim()
+        .arg("optimize")
+        .arg(&file)
+        .arg("--output")
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("generation 1/1"), "{stdout}");
+    let log = std::fs::read_to_string(out_dir.join("evaluations.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> = log
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3, "the start and two candidates");
+    for line in &lines {
+        assert_eq!(line["status"], "ok", "{line}");
+        let period = line["parameters"]["gait.period"].as_f64().unwrap();
+        assert!((0.8..=1.2).contains(&period), "{period}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
+            .unwrap();
+    let best = summary["best"]["objective"].as_f64().unwrap();
+    let all_best = lines
+        .iter()
+        .filter_map(|l| l["objective"].as_f64())
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(best, all_best);
+    let gait = out_dir.join("best_gait.toml");
+    let run = hexsim()
+        .args([
+            "run",
+            "--no-record",
+            "--duration",
+            "1",
+            "--terrain",
+            "terrains/flat.toml",
+            "--gait",
+        ])
+        .arg(&gait)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+/// A broken specification is an input error (exit 2) naming the file and the field.
+#[test]
+fn a_broken_specification_says_where() {
+    let dir = scratch("optimize-bad");
+    let cases = [
+        (
+            spec("", Some(("\"gait.period\"", "\"gait.perod\""))),
+            "parameters.gait.perod: unknown parameter",
+        ),
+        (
+            spec("", Some(("[0.8, 1.2]", "[1.2, 0.8]"))),
+            "parameters.gait.period: expected [low, high] with low < high",
+        ),
+        (
+            spec(
+                "",
+                Some((
+                    "\"gait.stride_length\" = [0.04, 0.08]",
+                    "\"gait.duty_factor\" = [0.5, 1.2]",
+                )),
+            ),
+            "parameters.gait.duty_factor: [0.5, 1.2] leaves what the field accepts",
+        ),
+        (
+            spec(
+                "",
+                Some(("forward_distance = 1.0", "forward_distanse = 1.0")),
+            ),
+            "objective.forward_distanse: unknown metric",
+        ),
+        (
+            spec("", Some(("seeds = [3]", "seeds = []"))),
+            "seeds: expected at least one terrain seed",
+        ),
+    ];
+    for (k, (text, expected)) in cases.iter().enumerate() {
+        let file = dir.join(format!("case_{k}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let out = hexsim()
+            .arg("optimize")
+            .arg(&file)
+            .arg("--output")
+            .arg(dir.join("out"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "case {k}: {stderr}");
+        assert!(stderr.contains(&format!("case_{k}.toml")), "{stderr}");
+        assert!(
+            stderr.contains(expected),
+            "case {k}: no {expected:?} in {stderr}"
+        );
+    }
+}
+
+/// The same specification and seed give the same search, evaluation for evaluation.
+#[test]
+fn a_search_is_deterministic() {
+    let dir = scratch("optimize-twice");
+    let file = dir.join("tiny.toml");
+    std::fs::write(&file, spec("", None)).unwrap();
+    let logs: Vec<String> = ["a", "b"]
+        .iter()
+        .map(|run| {
+            let out_dir = dir.join(run);
+            let out = hexsim()
+                .arg("optimize")
+                .arg(&file)
+                .arg("--output")
+                .arg(&out_dir)
+                .output()
+                .unwrap();
+            assert!(out.status.success());
+            std::fs::read_to_string(out_dir.join("evaluations.jsonl")).unwrap()
+        })
+        .collect();
+    assert_eq!(logs[0], logs[1]);
+}
