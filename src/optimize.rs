@@ -54,6 +54,9 @@ struct OptimizeSpec {
     #[serde(default = "impulse")]
     articulation: crate::sim::Articulation,
     seeds: Vec<u32>,
+    /// Terrain seeds not searched on, on which the start and the best are checked after.
+    #[serde(default)]
+    check_seeds: Vec<u32>,
     #[serde(default = "default_generations")]
     generations: usize,
     #[serde(default)]
@@ -87,6 +90,7 @@ pub struct Optimization {
     base: toml::Table,
     scenario_path: PathBuf,
     pub seeds: Vec<u32>,
+    pub check_seeds: Vec<u32>,
     pub generations: usize,
     pub population: Option<usize>,
     pub seed: u64,
@@ -256,6 +260,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         base,
         scenario_path,
         seeds: spec.seeds,
+        check_seeds: spec.check_seeds,
         generations: spec.generations,
         population: spec.population,
         seed: spec.seed,
@@ -305,9 +310,21 @@ impl Optimization {
     /// Evaluates a candidate on every seed: its objective (the mean over seeds of Σ w·metric,
     /// maximised) or why it failed, and each seed's metrics.
     pub fn evaluate(&self, x: &[f64]) -> Evaluation {
-        let table = self.candidate_table(x);
-        let runs: Vec<Result<HexapodMetrics, String>> = self
-            .seeds
+        self.evaluate_on(x, &self.seeds, None)
+    }
+
+    /// [`Self::evaluate`] on `seeds`, in `articulation` if given (else the search's).
+    pub fn evaluate_on(
+        &self,
+        x: &[f64],
+        seeds: &[u32],
+        articulation: Option<crate::sim::Articulation>,
+    ) -> Evaluation {
+        let mut table = self.candidate_table(x);
+        if let Some(a) = articulation {
+            table.insert("articulation".into(), toml::Value::String(a.name().into()));
+        }
+        let runs: Vec<Result<HexapodMetrics, String>> = seeds
             .par_iter()
             .map(|&seed| {
                 let scenario = resolve(&table, &self.scenario_path, "candidate", seed)
@@ -344,20 +361,22 @@ impl Optimization {
                 }
             }
         }
-        let objective = self
-            .objective
-            .iter()
-            .map(|(name, weight)| {
-                let mean = metrics.iter().map(|m| metric_value(m, name)).sum::<f64>()
-                    / metrics.len() as f64;
-                weight * mean
-            })
-            .sum();
+        let objective = metrics.iter().map(|m| self.score(m)).sum::<f64>() / metrics.len() as f64;
         Evaluation {
             objective: Some(objective),
             failure: None,
             metrics,
         }
+    }
+}
+
+impl Optimization {
+    /// One run's Σ weight · metric.
+    pub fn score(&self, m: &HexapodMetrics) -> f64 {
+        self.objective
+            .iter()
+            .map(|(name, weight)| weight * metric_value(m, name))
+            .sum()
     }
 }
 

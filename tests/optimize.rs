@@ -5,6 +5,7 @@ use common::{hexsim, scratch};
 
 const SPEC: &str = r#"
 seeds = [3]
+check_seeds = [4]
 generations = 1
 population = 2
 [scenario]
@@ -73,6 +74,26 @@ fn a_tiny_search_runs_end_to_end() {
         .filter_map(|l| l["objective"].as_f64())
         .fold(f64::NEG_INFINITY, f64::max);
     assert_eq!(best, all_best);
+    // the start and the best checked on the searched and the unsearched seed, both articulations
+    let per_seed = summary["per_seed"].as_array().unwrap();
+    assert_eq!(per_seed.len(), 2);
+    assert_eq!(per_seed[1]["searched"], false);
+    for key in [
+        "start_impulse",
+        "best_impulse",
+        "start_multibody",
+        "best_multibody",
+    ] {
+        assert!(
+            per_seed.iter().all(|s| s[key].is_number()),
+            "{key}: {per_seed:?}"
+        );
+    }
+    assert_eq!(
+        per_seed[0]["best_impulse"].as_f64(),
+        Some(best),
+        "one seed: its objective"
+    );
     let gait = out_dir.join("best_gait.toml");
     let run = hexsim()
         .args([

@@ -4,6 +4,7 @@ use anyhow::Result;
 use clap::Args;
 use fcmaes_core::{Cmaes, CmaesParams, Fitness};
 use hexsim::optimize::{self, Evaluation, Optimization};
+use hexsim::sim::Articulation;
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::PathBuf;
@@ -63,6 +64,19 @@ fn log_line(
         "failure": e.failure,
         "metrics_per_seed": metrics,
     })
+}
+
+/// Each seed's objective for the candidate `x` in `articulation` (None where it failed).
+fn per_seed(
+    opt: &Optimization,
+    x: &[f64],
+    seeds: &[u32],
+    articulation: Articulation,
+) -> Vec<Option<f64>> {
+    seeds
+        .par_iter()
+        .map(|&s| opt.evaluate_on(x, &[s], Some(articulation)).objective)
+        .collect()
 }
 
 /// Exit codes: 0 done (or interrupted, with what was found so far), 1 no candidate met the
@@ -168,6 +182,57 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         "best": { "parameters": x, "objective": objective },
         "parameter_names": opt.parameters.iter().map(|(n, _, _)| n.clone()).collect::<Vec<_>>(),
     });
+    std::fs::write(
+        args.output.join("summary.json"),
+        serde_json::to_string_pretty(&summary)? + "\n",
+    )?;
+    // the start and the best on every seed, searched and not, in both articulations: what the
+    // search found, and how much of it the exact (multibody) joints keep
+    let all_seeds: Vec<(u32, bool)> = opt
+        .seeds
+        .iter()
+        .map(|&s| (s, true))
+        .chain(opt.check_seeds.iter().map(|&s| (s, false)))
+        .collect();
+    let seeds: Vec<u32> = all_seeds.iter().map(|(s, _)| *s).collect();
+    let mut columns = Vec::new();
+    for articulation in [Articulation::Impulse, Articulation::Multibody] {
+        let (a, b) = pool.install(|| {
+            rayon::join(
+                || per_seed(&opt, &opt.start, &seeds, articulation),
+                || per_seed(&opt, &x, &seeds, articulation),
+            )
+        });
+        columns.push((a, b));
+    }
+    println!(
+        "objective per seed             start (impulse)  best (impulse)  start (multibody)  best (multibody)"
+    );
+    let cell = |v: &Option<f64>| v.map_or("failed".to_string(), |v| format!("{v:.4}"));
+    let mut checks = Vec::new();
+    for (k, (seed, searched)) in all_seeds.iter().enumerate() {
+        let label = format!(
+            "seed {seed}{}",
+            if *searched { "" } else { " (not searched)" }
+        );
+        println!(
+            "{label:30} {:>15}  {:>14}  {:>17}  {:>16}",
+            cell(&columns[0].0[k]),
+            cell(&columns[0].1[k]),
+            cell(&columns[1].0[k]),
+            cell(&columns[1].1[k]),
+        );
+        checks.push(serde_json::json!({
+            "seed": seed,
+            "searched": searched,
+            "start_impulse": columns[0].0[k],
+            "best_impulse": columns[0].1[k],
+            "start_multibody": columns[1].0[k],
+            "best_multibody": columns[1].1[k],
+        }));
+    }
+    let mut summary = summary;
+    summary["per_seed"] = serde_json::Value::Array(checks);
     std::fs::write(
         args.output.join("summary.json"),
         serde_json::to_string_pretty(&summary)? + "\n",
