@@ -343,6 +343,8 @@ impl Optimization {
                     ));
                 }
                 match report.metrics {
+                    // stopped by Ctrl-C: not a result (the search stops and keeps the rest)
+                    Metrics::Walk(m) if !m.complete => Err(INTERRUPTED.into()),
                     Metrics::Walk(m) => Ok(*m),
                     Metrics::Ball(_) => Err("not a walk".into()),
                 }
@@ -393,10 +395,20 @@ pub fn metric_value(m: &HexapodMetrics, name: &str) -> f64 {
         })
 }
 
+/// The failure of an evaluation that Ctrl-C cut short.
+pub const INTERRUPTED: &str = "interrupted";
+
 /// One candidate's result.
 pub struct Evaluation {
     /// Σ weight · metric, the mean over the seeds; None when it failed.
     pub objective: Option<f64>,
     pub failure: Option<String>,
     pub metrics: Vec<HexapodMetrics>,
+}
+
+impl Evaluation {
+    /// Cut short by Ctrl-C: neither logged nor told to the optimiser.
+    pub fn interrupted(&self) -> bool {
+        self.failure.as_deref() == Some(INTERRUPTED)
+    }
 }

@@ -193,3 +193,68 @@ fn a_search_is_deterministic() {
         .collect();
     assert_eq!(logs[0], logs[1]);
 }
+
+/// Resume: a search cut short (its log truncated after the first generation, as Ctrl-C leaves it,
+/// or a real Ctrl-C) and continued with --resume replays what is logged and ends with the same
+/// log, line for line, as a search never interrupted.
+#[test]
+fn an_interrupted_search_resumes_to_the_same_result() {
+    let dir = scratch("optimize-resume");
+    let file = dir.join("two.toml");
+    std::fs::write(
+        &file,
+        spec("", Some(("generations = 1", "generations = 3"))),
+    )
+    .unwrap();
+    let run = |out: &std::path::Path, resume: bool| {
+        let mut cmd = hexsim();
+        cmd.arg("optimize").arg(&file).arg("--output").arg(out);
+        if resume {
+            cmd.arg("--resume");
+        }
+        let o = cmd.output().unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+        )
+    };
+    let whole = dir.join("whole");
+    assert_eq!(run(&whole, false).0, Some(0));
+    let expected = std::fs::read_to_string(whole.join("evaluations.jsonl")).unwrap();
+    // the start and generation 1 (two candidates) kept, the rest lost
+    let cut = dir.join("cut");
+    std::fs::create_dir_all(&cut).unwrap();
+    let kept: Vec<&str> = expected.lines().take(3).collect();
+    std::fs::write(cut.join("evaluations.jsonl"), kept.join("\n") + "\n").unwrap();
+    let (code, stdout) = run(&cut, true);
+    assert_eq!(code, Some(0), "{stdout}");
+    assert!(
+        stdout.contains("generation 1/3") && stdout.contains("(replayed from the log)"),
+        "{stdout}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(cut.join("evaluations.jsonl")).unwrap(),
+        expected
+    );
+    // a real Ctrl-C, wherever it lands: exit 130 (or 0 if it finished first), then --resume
+    let real = dir.join("real");
+    let mut child = hexsim()
+        .arg("optimize")
+        .arg(&file)
+        .arg("--output")
+        .arg(&real)
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(400));
+    let _ = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let code = child.wait().unwrap().code();
+    assert!(matches!(code, Some(130) | Some(0)), "{code:?}");
+    assert_eq!(run(&real, true).0, Some(0));
+    assert_eq!(
+        std::fs::read_to_string(real.join("evaluations.jsonl")).unwrap(),
+        expected
+    );
+}

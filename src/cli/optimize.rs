@@ -22,6 +22,52 @@ pub struct OptimizeArgs {
     /// Worker threads. Default: all cores.
     #[arg(short, long)]
     jobs: Option<usize>,
+    /// Continue an interrupted search: the evaluations already in the output folder's log are
+    /// replayed (the same specification and seed ask for the same candidates), not run again.
+    #[arg(long)]
+    resume: bool,
+}
+
+/// Whether a logged candidate is this one, to within the last bits a decimal log can lose.
+fn same(logged: &[f64], x: &[f64]) -> bool {
+    logged.len() == x.len()
+        && logged
+            .iter()
+            .zip(x)
+            .all(|(a, b)| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1e-300))
+}
+
+/// Logged evaluations by (generation, index): the parameters and the result.
+type Logged = std::collections::HashMap<(usize, usize), (Vec<f64>, Evaluation)>;
+
+/// Reads an earlier log (a cut-off last line is dropped).
+fn read_log(path: &std::path::Path, opt: &Optimization) -> Result<Logged> {
+    let mut logged = Logged::new();
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return Ok(logged);
+    };
+    for line in text.lines() {
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
+            continue;
+        };
+        let at = |k: &str| v[k].as_u64().map(|n| n as usize);
+        let (Some(generation), Some(index)) = (at("generation"), at("index")) else {
+            continue;
+        };
+        let x: Option<Vec<f64>> = opt
+            .parameters
+            .iter()
+            .map(|(name, _, _)| v["parameters"][name].as_f64())
+            .collect();
+        let Some(x) = x else { continue };
+        let evaluation = Evaluation {
+            objective: v["objective"].as_f64(),
+            failure: v["failure"].as_str().map(str::to_string),
+            metrics: Vec::new(),
+        };
+        logged.insert((generation, index), (x, evaluation));
+    }
+    Ok(logged)
 }
 
 /// One logged evaluation.
@@ -79,8 +125,8 @@ fn per_seed(
         .collect()
 }
 
-/// Exit codes: 0 done (or interrupted, with what was found so far), 1 no candidate met the
-/// constraints, 2 an input error.
+/// Exit codes: 0 done, 1 no candidate met the constraints, 2 an input error, 130 interrupted
+/// (what was found so far written; `--resume` continues).
 pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     let opt = optimize::load(&args.file)?;
     std::fs::create_dir_all(&args.output)?;
@@ -106,10 +152,38 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     };
     let mut es = Cmaes::new(fitness, &opt.start, &[0.3], &params);
     let log_path = args.output.join("evaluations.jsonl");
-    let mut log = std::io::BufWriter::new(std::fs::File::create(&log_path)?);
+    let logged = if args.resume {
+        read_log(&log_path, &opt)?
+    } else {
+        Logged::new()
+    };
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(args.resume)
+        .write(true)
+        .truncate(!args.resume)
+        .open(&log_path)?;
+    let mut log = std::io::BufWriter::new(file);
     let started = std::time::Instant::now();
-    let start = pool.install(|| opt.evaluate(&opt.start));
-    writeln!(log, "{}", log_line(&opt, 0, 0, &opt.start, &start))?;
+    // a candidate the log already holds (same generation, index and parameters) is replayed
+    let evaluate = |generation: usize, index: usize, x: &[f64]| -> (Evaluation, bool) {
+        match logged.get(&(generation, index)) {
+            // the same candidate: JSON's decimal round trip may move the last bit
+            Some((logged_x, e)) if same(logged_x, x) => (
+                Evaluation {
+                    objective: e.objective,
+                    failure: e.failure.clone(),
+                    metrics: Vec::new(),
+                },
+                true,
+            ),
+            _ => (opt.evaluate(x), false),
+        }
+    };
+    let (start, replayed) = pool.install(|| evaluate(0, 0, &opt.start));
+    if !replayed && !start.interrupted() {
+        writeln!(log, "{}", log_line(&opt, 0, 0, &opt.start, &start))?;
+    }
     println!(
         "start: objective {}",
         start.objective.map_or_else(
@@ -118,16 +192,38 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         )
     );
     let mut best: Option<(f64, Vec<f64>)> = start.objective.map(|o| (o, opt.start.clone()));
-    let mut evaluations = 1usize;
+    let (mut evaluations, mut replays) = (1usize, usize::from(replayed));
+    let mut interrupted = start.interrupted();
     for generation in 1..=opt.generations {
+        if interrupted {
+            break;
+        }
         let xs = es.ask();
-        let results: Vec<Evaluation> =
-            pool.install(|| xs.par_iter().map(|x| opt.evaluate(x)).collect());
+        let results: Vec<(Evaluation, bool)> = pool.install(|| {
+            xs.par_iter()
+                .enumerate()
+                .map(|(i, x)| evaluate(generation, i, x))
+                .collect()
+        });
+        if results.iter().any(|(e, _)| e.interrupted()) {
+            // keep what finished; the generation is not told, --resume runs it again
+            for (i, (x, (e, replayed))) in xs.iter().zip(&results).enumerate() {
+                if !replayed && !e.interrupted() {
+                    writeln!(log, "{}", log_line(&opt, generation, i, x, e))?;
+                }
+            }
+            interrupted = true;
+            break;
+        }
         evaluations += xs.len();
         let mut ys = Vec::with_capacity(xs.len());
         let mut objectives = Vec::new();
-        for (i, (x, e)) in xs.iter().zip(&results).enumerate() {
-            writeln!(log, "{}", log_line(&opt, generation, i, x, e))?;
+        for (i, (x, (e, replayed))) in xs.iter().zip(&results).enumerate() {
+            if *replayed {
+                replays += 1;
+            } else {
+                writeln!(log, "{}", log_line(&opt, generation, i, x, e))?;
+            }
             // CMA-ES minimises; a failed candidate ranks below every one that ran
             ys.push(e.objective.map_or(f64::MAX, |o| -o));
             if let Some(o) = e.objective {
@@ -140,27 +236,41 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         log.flush()?;
         objectives.sort_by(f64::total_cmp);
         let median = objectives.get(objectives.len() / 2).copied();
-        let rate = evaluations as f64 / started.elapsed().as_secs_f64();
+        let rate = (evaluations - replays).max(1) as f64 / started.elapsed().as_secs_f64();
         let left = (opt.generations - generation) * population;
         println!(
-            "generation {generation}/{}: best {}, median {}, {} failed; {rate:.2} evaluations/s, ETA {:.0} s",
+            "generation {generation}/{}: best {}, median {}, {} failed; {rate:.2} evaluations/s, ETA {:.0} s{}",
             opt.generations,
             best.as_ref().map_or("-".into(), |(b, _)| format!("{b:.4}")),
             median.map_or("-".into(), |m| format!("{m:.4}")),
             xs.len() - objectives.len(),
             left as f64 / rate.max(1e-9),
+            if results.iter().all(|(_, r)| *r) {
+                " (replayed from the log)"
+            } else {
+                ""
+            },
         );
         let stop = es.tell(&ys);
-        if stop != 0 || hexsim::runner::interrupted() {
+        if stop != 0 {
             break;
         }
     }
-    let Some((objective, x)) = best else {
+    log.flush()?;
+    if interrupted {
         println!(
-            "no candidate met the constraints; every evaluation is in {}",
+            "interrupted: every finished evaluation is in {}; continue with --resume",
             log_path.display()
         );
-        return Ok(ExitCode::from(1));
+    }
+    let Some((objective, x)) = best else {
+        if !interrupted {
+            println!(
+                "no candidate met the constraints; every evaluation is in {}",
+                log_path.display()
+            );
+        }
+        return Ok(ExitCode::from(if interrupted { 130 } else { 1 }));
     };
     let gait_path = args.output.join("best_gait.toml");
     std::fs::write(
@@ -186,6 +296,10 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         args.output.join("summary.json"),
         serde_json::to_string_pretty(&summary)? + "\n",
     )?;
+    if interrupted {
+        // the best so far is written; the checks would be cut short too
+        return Ok(ExitCode::from(130));
+    }
     // the start and the best on every seed, searched and not, in both articulations: what the
     // search found, and how much of it the exact (multibody) joints keep
     let all_seeds: Vec<(u32, bool)> = opt
