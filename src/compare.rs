@@ -99,20 +99,7 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
             "duration: expected a finite number > 0 s, got {d}"
         )));
     }
-    let scenario_path = path.parent().unwrap_or(Path::new("")).join(&spec.scenario);
-    let scenario_text = std::fs::read_to_string(&scenario_path).map_err(|e| {
-        fail(format!(
-            "scenario: cannot read {}: {e}",
-            scenario_path.display()
-        ))
-    })?;
-    let table: toml::Table = scenario_text.parse().map_err(|e: toml::de::Error| {
-        fail(format!(
-            "scenario {}: {}",
-            scenario_path.display(),
-            e.to_string().trim_end()
-        ))
-    })?;
+    let (scenario_path, table) = scenario::read_table(path, &spec.scenario).map_err(fail)?;
     if table.contains_key("sweep") {
         return Err(fail(format!(
             "scenario {}: has a [sweep]; expected one scenario (the settings are the comparison)",
@@ -125,18 +112,8 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
         if let Some(d) = spec.duration {
             table.insert("duration".into(), toml::Value::Float(d));
         }
-        let contact = table
-            .entry("contact")
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        let Some(contact) = contact.as_table_mut() else {
-            return Err(fail(format!(
-                "scenario {}: [contact] is not a table",
-                scenario_path.display()
-            )));
-        };
-        for (key, value) in &setting.contact {
-            contact.insert(key.clone(), value.clone());
-        }
+        scenario::overlay(&mut table, "contact", setting.contact.clone())
+            .map_err(|e| fail(format!("scenario {}: {e}", scenario_path.display())))?;
         let resolved = scenario::from_table(table, setting.name.clone(), &scenario_path)
             .map_err(|e| fail(format!("setting {:?}: {e}", setting.name)))?;
         settings.push(resolved);

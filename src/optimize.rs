@@ -175,23 +175,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         )));
     }
     let (scenario_path, mut base) = match &spec.scenario {
-        toml::Value::String(file) => {
-            let scenario_path = path.parent().unwrap_or(Path::new("")).join(file);
-            let text = std::fs::read_to_string(&scenario_path).map_err(|e| {
-                fail(format!(
-                    "scenario: cannot read {}: {e}",
-                    scenario_path.display()
-                ))
-            })?;
-            let table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-                fail(format!(
-                    "scenario {}: {}",
-                    scenario_path.display(),
-                    e.to_string().trim_end()
-                ))
-            })?;
-            (scenario_path, table)
-        }
+        toml::Value::String(file) => scenario::read_table(path, Path::new(file)).map_err(fail)?,
         toml::Value::Table(table) => (path.to_path_buf(), table.clone()),
         _ => {
             return Err(fail(
@@ -288,12 +272,12 @@ impl Optimization {
         let mut table = self.base.clone();
         for ((name, _, _), &value) in self.parameters.iter().zip(x) {
             let (section, field) = name.split_once('.').expect("parameters are dotted");
-            let entry = table
-                .entry(section)
-                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-            if let Some(t) = entry.as_table_mut() {
-                t.insert(field.into(), toml::Value::Float(value));
-            }
+            // the base's gait and servo are tables (load checked the gait; servo is made)
+            let _ = scenario::overlay(
+                &mut table,
+                section,
+                [(field.to_string(), toml::Value::Float(value))],
+            );
         }
         table
     }

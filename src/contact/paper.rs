@@ -15,7 +15,7 @@
 //!   paper's SimMechanics body takes the force at its frame; for the ball it assumed no slip and
 //!   neglected friction), so a ball does not spin; hexsim's acts at the contact point.
 
-use super::{ContactForce, ContactModel, ContactState, SphereGeometry};
+use super::{ContactForce, ContactModel, ContactState, PendingContact, SphereGeometry};
 use crate::terrain::{GroundFrame, HeightGrid};
 use glam::{DVec2, DVec3};
 
@@ -69,27 +69,18 @@ impl ContactModel {
             },
             _ => DVec2::splat(f64::INFINITY),
         };
-        let outcome = if normal_force > 0.0 {
-            self.friction.force(slip, normal_force, stop)
-        } else {
-            super::FrictionOutcome {
-                force: DVec2::ZERO,
-                sticking: false,
-            }
-        };
-        let friction = frame.to_world(outcome.force.extend(0.0));
-        let slip_world = frame.to_world(slip.extend(0.0));
-        state.previous = Some((friction, slip_world));
-        Some(ContactForce {
+        // the law decides given `stop`; `finish` keeps the state as for hexsim's contact
+        let pending = PendingContact {
             point: geometry.point,
-            force: normal_force * frame.normal + friction,
-            normal_force,
-            friction,
+            frame: *frame,
             penetration: geometry.penetration,
             normal_velocity: local.z,
-            slip: slip_world,
-            sticking: outcome.sticking,
-            frame: *frame,
-        })
+            slip,
+            normal_force,
+            previous_friction: DVec2::ZERO,
+            demand: DVec2::ZERO,
+            normal_change: 0.0,
+        };
+        Some(self.finish(&pending, stop, dt, state))
     }
 }

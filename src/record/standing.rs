@@ -39,9 +39,9 @@ pub struct Standing<'a> {
     pub workspace: bool,
 }
 
-/// The body's frame standing in `pose` with its lowest foot on the ground (z = 0), level.
-pub fn body_on_ground(model: &RobotModel, pose: &[f64]) -> DAffine3 {
-    let frames = model.link_poses(pose);
+/// The body's frame standing level with its lowest foot on the ground (z = 0), given the links'
+/// poses in the body frame (`RobotModel::link_poses`).
+pub fn body_on_ground(model: &RobotModel, frames: &[DAffine3]) -> DAffine3 {
     let lowest = model
         .legs
         .iter()
@@ -99,12 +99,9 @@ pub fn record(path: &Path, standing: &Standing) -> Result<PathBuf> {
     let model = standing.model;
     let recording = Recording::create_still(path, format!("{} standing", model.name), &layout())?;
     let rec = recording.stream();
-    let body = body_on_ground(model, standing.pose);
-    let frames: Vec<DAffine3> = model
-        .link_poses(standing.pose)
-        .into_iter()
-        .map(|f| body * f)
-        .collect();
+    let in_body = model.link_poses(standing.pose);
+    let body = body_on_ground(model, &in_body);
+    let frames: Vec<DAffine3> = in_body.into_iter().map(|f| body * f).collect();
     let feet: Vec<DVec3> = model
         .legs
         .iter()
@@ -187,8 +184,8 @@ mod tests {
         let spec =
             GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path)).unwrap();
         let fitted = fit(&model, &spec).unwrap();
-        let body = body_on_ground(&model, &fitted.standing_pose);
         let frames = model.link_poses(&fitted.standing_pose);
+        let body = body_on_ground(&model, &frames);
         for leg in &model.legs {
             let foot = (body * frames[leg.foot_link]).transform_point3(leg.foot.center);
             assert!(

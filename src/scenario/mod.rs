@@ -121,6 +121,35 @@ impl Report {
 }
 
 /// Reads a scenario file; a file with a `[sweep]` table gives one scenario per combination.
+/// Reads the scenario file `file`, relative to the folder of `spec` (the file naming it), as a TOML
+/// table, for a command that lays fields of its own over a scenario (`compare`, `optimize`).
+/// Returns the scenario's path (its relative paths resolve against it) and its table.
+pub fn read_table(spec: &Path, file: &Path) -> Result<(PathBuf, toml::Table), String> {
+    let path = spec.parent().unwrap_or(Path::new("")).join(file);
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("scenario: cannot read {}: {e}", path.display()))?;
+    let table = text.parse().map_err(|e: toml::de::Error| {
+        format!("scenario {}: {}", path.display(), e.to_string().trim_end())
+    })?;
+    Ok((path, table))
+}
+
+/// Lays `fields` over the table `section` of a scenario's `table` (made if it has none).
+pub fn overlay(
+    table: &mut toml::Table,
+    section: &str,
+    fields: impl IntoIterator<Item = (String, toml::Value)>,
+) -> Result<(), String> {
+    let entry = table
+        .entry(section)
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    let Some(target) = entry.as_table_mut() else {
+        return Err(format!("[{section}] is not a table"));
+    };
+    target.extend(fields);
+    Ok(())
+}
+
 /// Resolves a scenario given as a TOML table (e.g. a scenario file's with some fields changed);
 /// `path` is the file it came from, for relative paths and errors.
 pub fn from_table(
