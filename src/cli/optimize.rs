@@ -292,6 +292,7 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         "best": { "parameters": x, "objective": objective },
         "parameter_names": opt.parameters.iter().map(|(n, _, _)| n.clone()).collect::<Vec<_>>(),
     });
+    // written now, so the summary survives checks that Ctrl-C cuts short
     std::fs::write(
         args.output.join("summary.json"),
         serde_json::to_string_pretty(&summary)? + "\n",
@@ -318,6 +319,10 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
             )
         });
         columns.push((a, b));
+    }
+    if hexsim::runner::interrupted() {
+        // the checks were cut short: their runs are not results
+        return Ok(ExitCode::from(130));
     }
     println!(
         "objective per seed             start (impulse)  best (impulse)  start (multibody)  best (multibody)"
