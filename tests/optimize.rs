@@ -2,6 +2,7 @@
 
 mod common;
 use common::{hexsim, scratch};
+use hexsim::record::rerun::read_back;
 
 const SPEC: &str = r#"
 seeds = [3]
@@ -94,6 +95,27 @@ fn a_tiny_search_runs_end_to_end() {
         Some(best),
         "one seed: its objective"
     );
+    // the search's recording: every evaluation's objective and parameters over the evaluations
+    let search = read_back(&out_dir.join("search.rrd")).unwrap();
+    assert_eq!(search.activations, [(true, true)]);
+    let evaluations = search.at(false, "plots/objective/evaluations");
+    assert!(evaluations.is_some_and(|e| e.rows == 3), "{evaluations:?}");
+    for name in ["gait_period", "gait_stride_length"] {
+        let p = search.at(false, &format!("plots/parameters/{name}"));
+        assert!(p.is_some_and(|p| p.rows == 3), "{name}: {p:?}");
+    }
+    assert!(search.at(false, "summary").is_some());
+    // each seed's: the start and the best walking it, superposed
+    for seed in [3, 4] {
+        let walk = read_back(&out_dir.join(format!("seed-{seed}.rrd"))).unwrap();
+        for name in ["start", "best"] {
+            let links = walk
+                .under(false, &format!("world/{name}/robot"))
+                .filter(|(_, l)| l.rows > 10)
+                .count();
+            assert!(links > 6, "seed {seed}, {name}: {links} links moving");
+        }
+    }
     let gait = out_dir.join("best_gait.toml");
     let run = hexsim()
         .args([
@@ -149,6 +171,50 @@ fn a_broken_specification_says_where() {
             spec("", Some(("seeds = [3]", "seeds = []"))),
             "seeds: expected at least one terrain seed",
         ),
+        (
+            spec("", Some(("[0.8, 1.2]", "[\"sine\", \"cycloid\"]"))),
+            "parameters.gait.period: a number; expected bounds [low, high]",
+        ),
+        (
+            spec(
+                "",
+                Some((
+                    "\"gait.period\" = [0.8, 1.2]",
+                    "\"gait.period\" = [0.8, 1.2]\n\"gait.swing\" = [0, 1]",
+                )),
+            ),
+            "parameters.gait.swing: a choice; expected a list of names among sine, cycloid, rectangle",
+        ),
+        (
+            spec(
+                "",
+                Some((
+                    "\"gait.period\" = [0.8, 1.2]",
+                    "\"gait.period\" = [0.8, 1.2]\n\"gait.swing\" = [\"sine\", \"zigzag\"]",
+                )),
+            ),
+            "parameters.gait.swing: unknown choice \"zigzag\"",
+        ),
+        (
+            spec(
+                "",
+                Some((
+                    "\"gait.period\" = [0.8, 1.2]",
+                    "\"gait.period\" = [0.8, 1.2]\n\"gait.phase_offsets.lf\" = [0.5, 1.5]",
+                )),
+            ),
+            "parameters.gait.phase_offsets.lf: [0.5, 1.5] leaves what the field accepts",
+        ),
+        (
+            spec(
+                "",
+                Some((
+                    "\"gait.period\" = [0.8, 1.2]",
+                    "\"gait.period\" = [0.8, 1.2]\n\"command.forward\" = [0.05, 0.2]",
+                )),
+            ),
+            "parameters.gait.stride_length: the speed is commanded",
+        ),
     ];
     for (k, (text, expected)) in cases.iter().enumerate() {
         let file = dir.join(format!("case_{k}.toml"));
@@ -185,6 +251,7 @@ fn a_search_is_deterministic() {
                 .arg(&file)
                 .arg("--output")
                 .arg(&out_dir)
+                .arg("--no-record")
                 .output()
                 .unwrap();
             assert!(out.status.success());
@@ -208,7 +275,11 @@ fn an_interrupted_search_resumes_to_the_same_result() {
     .unwrap();
     let run = |out: &std::path::Path, resume: bool| {
         let mut cmd = hexsim();
-        cmd.arg("optimize").arg(&file).arg("--output").arg(out);
+        cmd.arg("optimize")
+            .arg(&file)
+            .arg("--output")
+            .arg(out)
+            .arg("--no-record");
         if resume {
             cmd.arg("--resume");
         }
@@ -256,5 +327,95 @@ fn an_interrupted_search_resumes_to_the_same_result() {
     assert_eq!(
         std::fs::read_to_string(real.join("evaluations.jsonl")).unwrap(),
         expected
+    );
+}
+
+/// A search spread over shards, as a cluster's array jobs run it (each step every shard's slice
+/// of one generation, then --resume), logs exactly what one process does, line for line; a
+/// choice (the swing shape) and a phase offset are searched along, and logged by value.
+#[test]
+fn a_sharded_search_joins_to_the_same_log() {
+    let dir = scratch("optimize-shards");
+    let file = dir.join("sharded.toml");
+    let searched = concat!(
+        "\"gait.period\" = [0.8, 1.2]\n",
+        "\"gait.swing\" = [\"sine\", \"cycloid\", \"rectangle\"]\n",
+        "\"gait.phase_offsets.rf\" = [0.3, 0.7]",
+    );
+    let text = spec(
+        "",
+        Some((
+            "\"gait.period\" = [0.8, 1.2]\n\"gait.stride_length\" = [0.04, 0.08]",
+            searched,
+        )),
+    )
+    .replace("generations = 1", "generations = 2")
+    .replace("population = 2", "population = 3");
+    std::fs::write(&file, text).unwrap();
+    let run = |out: &std::path::Path, extra: &[&str]| {
+        let o = hexsim()
+            .arg("optimize")
+            .arg(&file)
+            .arg("--output")
+            .arg(out)
+            .arg("--no-record")
+            .args(extra)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{extra:?}: {stdout}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        stdout
+    };
+    let whole = dir.join("whole");
+    run(&whole, &[]);
+    let expected = std::fs::read_to_string(whole.join("evaluations.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> = expected
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 1 + 2 * 3);
+    for line in &lines {
+        let p = &line["parameters"];
+        let swing = p["gait.swing"].as_str().unwrap();
+        assert!(["sine", "cycloid", "rectangle"].contains(&swing), "{line}");
+        let rf = p["gait.phase_offsets.rf"].as_f64().unwrap();
+        assert!((0.3..=0.7).contains(&rf), "{line}");
+    }
+    // two shards, one generation per step; a step ahead of its generation has nothing to run
+    let sharded = dir.join("sharded");
+    let mut done = false;
+    for _step in 0..4 {
+        let first = run(&sharded, &["--shard", "1/2"]);
+        let second = run(&sharded, &["--shard", "2/2"]);
+        if first.contains("are all logged") && second.contains("are all logged") {
+            done = true;
+            break;
+        }
+        assert!(first.contains("shard 1/2: ran"), "{first}");
+        assert!(second.contains("shard 2/2: ran"), "{second}");
+    }
+    assert!(done, "two generations take two steps");
+    assert!(
+        !sharded.join("evaluations.jsonl").exists() || {
+            std::fs::read_to_string(sharded.join("evaluations.jsonl"))
+                .unwrap()
+                .is_empty()
+        }
+    );
+    let end = run(&sharded, &["--resume"]);
+    assert!(end.contains("(replayed from the log)"), "{end}");
+    assert_eq!(
+        std::fs::read_to_string(sharded.join("evaluations.jsonl")).unwrap(),
+        expected
+    );
+    let best = std::fs::read_to_string(sharded.join("best_gait.toml")).unwrap();
+    assert!(
+        best.contains("swing = ") && best.contains("rf = "),
+        "{best}"
     );
 }

@@ -78,14 +78,14 @@ impl Table {
     }
 }
 
-fn layout(walk: bool) -> Layout {
+fn layout(walk: bool, title: &str) -> Layout {
     let plots: &[&str] = if walk { &WALK_PLOTS } else { &BALL_PLOTS };
     let origins: Vec<String> = plots.iter().map(|p| format!("plots/{p}")).collect();
     let refs: Vec<&str> = origins.iter().map(String::as_str).collect();
     let (first, rest) = refs.split_at(refs.len().div_ceil(2));
     Layout::horizontal(
         vec![
-            View::spatial_3d("settings superposed", "world")
+            View::spatial_3d(title, "world")
                 .through_camera("world/camera")
                 .with_history("world/paths", History::Whole)
                 .into(),
@@ -100,6 +100,16 @@ fn layout(walk: bool) -> Layout {
 
 /// Writes the comparison's recording to `path` from the runs' trajectories.
 pub fn write(path: &Path, comparison: &Comparison, outcomes: &[Outcome]) -> Result<PathBuf> {
+    write_titled(path, "settings superposed", comparison, outcomes)
+}
+
+/// [`write`], its 3D view titled `title`.
+pub fn write_titled(
+    path: &Path,
+    title: &str,
+    comparison: &Comparison,
+    outcomes: &[Outcome],
+) -> Result<PathBuf> {
     let first = comparison
         .settings
         .first()
@@ -110,7 +120,7 @@ pub fn write(path: &Path, comparison: &Comparison, outcomes: &[Outcome]) -> Resu
         .file
         .file_stem()
         .map_or("comparison".into(), |s| s.to_string_lossy().into_owned());
-    let recording = Recording::create(path, name, dt, &layout(robot.is_some()))?;
+    let recording = Recording::create(path, name, dt, &layout(robot.is_some(), title))?;
     let rec = recording.stream();
     recording.log_terrain("world/terrain", &first.build_terrain()?)?;
     let size = match (&robot, first.ball()) {

@@ -12,6 +12,7 @@ pub mod links;
 pub mod output;
 pub mod progress;
 pub mod rerun;
+pub mod search;
 pub mod standing;
 pub mod table;
 

@@ -39,6 +39,17 @@ impl Recording {
         Self::open(path, name, 1.0, layout, None)
     }
 
+    /// Creates the file for data over a sequence (an evaluation count, say) rather than time:
+    /// the time panel opens on `timeline`, set by [`Recording::set_sequence`].
+    pub fn create_sequence(
+        path: &Path,
+        name: String,
+        timeline: &str,
+        layout: &Layout,
+    ) -> Result<Self> {
+        Self::open(path, name, 1.0, layout, Some(timeline))
+    }
+
     fn open(
         path: &Path,
         name: String,
@@ -93,6 +104,11 @@ impl Recording {
             rerun::TimeCell::from_duration_nanos(step as i64 * self.dt_nanos),
         );
         sample
+    }
+
+    /// Sets the sequence `timeline` (see [`Recording::create_sequence`]) to `n`.
+    pub fn set_sequence(&self, timeline: &'static str, n: i64) {
+        self.stream.set_time_sequence(timeline, n);
     }
 
     /// Logs the terrain as a static mesh coloured by height.

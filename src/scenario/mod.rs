@@ -249,6 +249,14 @@ impl Scenario {
         }
     }
 
+    /// The servo gains (given or fitted) and the velocity commands, for walk scenarios.
+    pub fn drive(&self) -> Option<(crate::sim::ServoGains, &CommandSchedule)> {
+        match &self.setup {
+            Setup::Walk(w) => Some((w.settings.gains, &w.commands)),
+            Setup::Ball(_) => None,
+        }
+    }
+
     /// Steps the run will take.
     pub fn total_steps(&self) -> u64 {
         let time = match &self.setup {

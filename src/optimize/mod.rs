@@ -1,0 +1,674 @@
+//! `hexsim optimize FILE`: searches gait and servo parameters for the best walk on a set of
+//! terrain seeds, by CMA-ES (the `fcmaes-core` crate's active CMA-ES, driven ask/tell so that
+//! hexsim evaluates each generation's candidates in parallel, each run a plain scenario run).
+//!
+//! ```toml
+//! scenario = "../scenarios/natural_tripod.toml"   # robot, gait, terrain, contact, start
+//! duration = 8.0                                   # optional: overrides the scenario's
+//! articulation = "impulse"                         # default: impulse joints, 4× faster
+//! seeds = [11, 12, 13]                             # terrain seeds every candidate walks
+//! generations = 12
+//! seed = 1                                         # the search's own seed
+//! [parameters]                                     # searched, within [low, high]
+//! "gait.period" = [0.6, 1.4]
+//! "gait.duty_factor" = [0.5, 0.75]
+//! [objective]                                      # maximised: Σ weight · metric (mean over seeds)
+//! forward_distance = 1.0
+//! [constraints]                                    # the scenario's [expect] keys
+//! max_tilt_deg = 15
+//! ```
+//!
+//! Each candidate is the scenario with its parameters laid over it (the gait written inline); a
+//! candidate that breaks a constraint, diverges or cannot stand on any seed ranks below every
+//! one that does not, and the search goes on. Every evaluation is a line of the JSON Lines log.
+
+pub mod log;
+
+use crate::metrics::{HexapodMetrics, Metrics, walk};
+use crate::runner::Outputs;
+use crate::scenario::{self, Report, Scenario, ScenarioError};
+use rayon::prelude::*;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// What a searchable field accepts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Accepts {
+    /// A number > 0.
+    Positive,
+    /// A number strictly between 0 and 1.
+    Fraction,
+    /// A cycle fraction: bounds within [0, 1], the value taken modulo 1 (a phase of 1 is 0).
+    Phase,
+    /// Any finite number.
+    Finite,
+    /// One of these names, searched as a choice.
+    OneOf(&'static [&'static str]),
+}
+
+/// The fields that can be searched, and what each accepts.
+const SEARCHABLE: &[(&str, Accepts)] = &[
+    ("gait.period", Accepts::Positive),
+    ("gait.duty_factor", Accepts::Fraction),
+    ("gait.stride_length", Accepts::Positive),
+    ("gait.step_height", Accepts::Positive),
+    ("gait.stance_height", Accepts::Positive),
+    ("gait.reach", Accepts::Positive),
+    ("gait.swing", Accepts::OneOf(SWINGS)),
+    ("gait.phase_offsets.lf", Accepts::Phase),
+    ("gait.phase_offsets.lm", Accepts::Phase),
+    ("gait.phase_offsets.lr", Accepts::Phase),
+    ("gait.phase_offsets.rf", Accepts::Phase),
+    ("gait.phase_offsets.rm", Accepts::Phase),
+    ("gait.phase_offsets.rr", Accepts::Phase),
+    ("servo.stiffness", Accepts::Positive),
+    ("servo.damping", Accepts::Positive),
+    ("command.forward", Accepts::Finite),
+];
+
+/// The gait file's swing shapes (`gait::SwingShape`).
+const SWINGS: &[&str] = &["sine", "cycloid", "rectangle"];
+
+/// The names of the fields that can be searched.
+pub fn searchable() -> impl Iterator<Item = &'static str> {
+    SEARCHABLE.iter().map(|(name, _)| *name)
+}
+
+/// A searched parameter: a number within bounds, or a choice among names. CMA-ES searches
+/// numbers; a choice of k names is the coordinate range [0, k], each name a unit cell of it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Domain {
+    Range { low: f64, high: f64, phase: bool },
+    Choice(Vec<String>),
+}
+
+/// One searched field (a dotted path into the scenario) and its domain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameter {
+    pub name: String,
+    pub domain: Domain,
+}
+
+impl Parameter {
+    /// The coordinate range CMA-ES searches.
+    pub fn bounds(&self) -> (f64, f64) {
+        match &self.domain {
+            Domain::Range { low, high, .. } => (*low, *high),
+            Domain::Choice(names) => (0.0, names.len() as f64),
+        }
+    }
+
+    /// The field's value at coordinate `x`.
+    pub fn value(&self, x: f64) -> toml::Value {
+        match &self.domain {
+            Domain::Range { phase: true, .. } => toml::Value::Float(x.rem_euclid(1.0)),
+            Domain::Range { .. } => toml::Value::Float(x),
+            Domain::Choice(names) => {
+                let k = (x.floor().max(0.0) as usize).min(names.len() - 1);
+                toml::Value::String(names[k].clone())
+            }
+        }
+    }
+
+    /// The coordinate of a value the scenario has (a choice's cell centre), inside the bounds;
+    /// None when the value is not one of the choices.
+    fn coordinate(&self, value: &toml::Value) -> Option<f64> {
+        let (low, high) = self.bounds();
+        match (&self.domain, value) {
+            (Domain::Choice(names), toml::Value::String(s)) => {
+                names.iter().position(|n| n == s).map(|k| k as f64 + 0.5)
+            }
+            (Domain::Range { .. }, v) => v
+                .as_float()
+                .or_else(|| v.as_integer().map(|i| i as f64))
+                .map(|v| v.clamp(low, high)),
+            _ => None,
+        }
+    }
+}
+
+/// The parameter `name` with the range or choices a file gave, checked against what the field
+/// accepts.
+fn parameter(name: &str, range: &Range) -> Result<Parameter, String> {
+    let Some(&(_, accepts)) = SEARCHABLE.iter().find(|(p, _)| *p == name) else {
+        return Err(format!(
+            "parameters.{name}: unknown parameter; expected one of {}",
+            searchable().collect::<Vec<_>>().join(", ")
+        ));
+    };
+    let domain = match (accepts, range) {
+        (Accepts::OneOf(known), Range::Choice(names)) => {
+            if names.len() < 2 {
+                return Err(format!(
+                    "parameters.{name}: expected at least two choices among {}",
+                    known.join(", ")
+                ));
+            }
+            for (k, n) in names.iter().enumerate() {
+                if !known.contains(&n.as_str()) {
+                    return Err(format!(
+                        "parameters.{name}: unknown choice {n:?}; expected some of {}",
+                        known.join(", ")
+                    ));
+                }
+                if names[..k].contains(n) {
+                    return Err(format!("parameters.{name}: {n:?} is listed twice"));
+                }
+            }
+            Domain::Choice(names.clone())
+        }
+        (Accepts::OneOf(known), Range::Bounds(_)) => {
+            return Err(format!(
+                "parameters.{name}: a choice; expected a list of names among {}, e.g. {:?}",
+                known.join(", "),
+                known
+            ));
+        }
+        (_, Range::Choice(_)) => {
+            return Err(format!(
+                "parameters.{name}: a number; expected bounds [low, high]"
+            ));
+        }
+        (accepts, &Range::Bounds([low, high])) => {
+            if !(low.is_finite() && high.is_finite() && low < high) {
+                return Err(format!(
+                    "parameters.{name}: expected [low, high] with low < high, got [{low}, {high}]"
+                ));
+            }
+            let (inside, expected) = match accepts {
+                Accepts::Positive => (low > 0.0, "values > 0"),
+                Accepts::Fraction => (low > 0.0 && high < 1.0, "values in (0, 1)"),
+                Accepts::Phase => (low >= 0.0 && high <= 1.0, "a cycle fraction in [0, 1]"),
+                _ => (true, ""),
+            };
+            if !inside {
+                return Err(format!(
+                    "parameters.{name}: [{low}, {high}] leaves what the field accepts: expected {expected}"
+                ));
+            }
+            Domain::Range {
+                low,
+                high,
+                phase: accepts == Accepts::Phase,
+            }
+        }
+    };
+    Ok(Parameter {
+        name: name.to_string(),
+        domain,
+    })
+}
+
+/// A parameter's range in a file: `[low, high]`, or a list of choices.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Range {
+    Bounds([f64; 2]),
+    Choice(Vec<String>),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OptimizeSpec {
+    #[serde(default)]
+    description: Option<String>,
+    /// A scenario file, or a scenario written inline as a table (its paths relative to this file).
+    scenario: toml::Value,
+    #[serde(default)]
+    duration: Option<f64>,
+    #[serde(default = "impulse")]
+    articulation: crate::sim::Articulation,
+    seeds: Vec<u32>,
+    /// Terrain seeds not searched on, on which the start and the best are checked after.
+    #[serde(default)]
+    check_seeds: Vec<u32>,
+    #[serde(default = "default_generations")]
+    generations: usize,
+    #[serde(default)]
+    population: Option<usize>,
+    #[serde(default = "default_seed")]
+    seed: u64,
+    parameters: BTreeMap<String, Range>,
+    objective: BTreeMap<String, f64>,
+    #[serde(default)]
+    constraints: toml::Table,
+}
+
+fn impulse() -> crate::sim::Articulation {
+    crate::sim::Articulation::Impulse
+}
+
+fn default_generations() -> usize {
+    10
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// An optimisation ready to run.
+pub struct Optimization {
+    pub file: PathBuf,
+    pub description: Option<String>,
+    /// The scenario's table, with the duration, articulation and constraints applied and its
+    /// gait inline; candidates change its parameters.
+    base: toml::Table,
+    scenario_path: PathBuf,
+    pub seeds: Vec<u32>,
+    pub check_seeds: Vec<u32>,
+    pub generations: usize,
+    pub population: Option<usize>,
+    pub seed: u64,
+    /// In the file's (sorted) order.
+    pub parameters: Vec<Parameter>,
+    pub objective: Vec<(String, f64)>,
+    /// The starting point: the scenario's own values (its gait's as fitted), inside the bounds.
+    pub start: Vec<f64>,
+}
+
+/// Reads an optimisation file; errors name the file and the field.
+pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
+    let fail = |message: String| ScenarioError {
+        file: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| fail(format!("cannot read the optimisation file: {e}")))?;
+    let spec: OptimizeSpec =
+        toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
+    if spec.seeds.is_empty() {
+        return Err(fail("seeds: expected at least one terrain seed".into()));
+    }
+    if spec.generations == 0 {
+        return Err(fail("generations: expected at least 1".into()));
+    }
+    if spec.population.is_some_and(|p| p < 2) {
+        return Err(fail("population: expected at least 2".into()));
+    }
+    if spec.parameters.is_empty() {
+        return Err(fail(
+            "parameters: expected at least one, e.g. \"gait.period\" = [0.6, 1.4]".into(),
+        ));
+    }
+    let parameters = spec
+        .parameters
+        .iter()
+        .map(|(name, range)| parameter(name, range))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(fail)?;
+    if spec.objective.is_empty() {
+        return Err(fail(
+            "objective: expected at least one metric and its weight, e.g. forward_distance = 1"
+                .into(),
+        ));
+    }
+    for (name, weight) in &spec.objective {
+        if !walk::TABLE.iter().any(|m| m.name == name) {
+            let known: Vec<&str> = walk::TABLE.iter().map(|m| m.name).collect();
+            return Err(fail(format!(
+                "objective.{name}: unknown metric; expected one of {}",
+                known.join(", ")
+            )));
+        }
+        if !weight.is_finite() || *weight == 0.0 {
+            return Err(fail(format!(
+                "objective.{name}: expected a finite, non-zero weight, got {weight}"
+            )));
+        }
+    }
+    if let Some(d) = spec.duration
+        && !(d.is_finite() && d > 0.0)
+    {
+        return Err(fail(format!(
+            "duration: expected a finite number > 0 s, got {d}"
+        )));
+    }
+    let (scenario_path, mut base) = match &spec.scenario {
+        toml::Value::String(file) => scenario::read_table(path, Path::new(file)).map_err(fail)?,
+        toml::Value::Table(table) => (path.to_path_buf(), table.clone()),
+        _ => {
+            return Err(fail(
+                "scenario: expected a scenario file's name or an inline table".into(),
+            ));
+        }
+    };
+    if base.contains_key("sweep") || base.get("kind").and_then(|k| k.as_str()) == Some("ball") {
+        return Err(fail(format!(
+            "scenario {}: expected one walk scenario (no [sweep], not a ball)",
+            scenario_path.display()
+        )));
+    }
+    if let Some(d) = spec.duration {
+        base.insert("duration".into(), toml::Value::Float(d));
+    }
+    base.insert(
+        "articulation".into(),
+        toml::Value::String(spec.articulation.name().into()),
+    );
+    base.insert(
+        "expect".into(),
+        toml::Value::Table(spec.constraints.clone()),
+    );
+    // the gait as an inline table, so candidates can change its fields
+    let gait_text = match base.get("gait") {
+        Some(toml::Value::String(file)) => {
+            let gait_path = scenario_path.parent().unwrap_or(Path::new("")).join(file);
+            std::fs::read_to_string(&gait_path).map_err(|e| {
+                fail(format!(
+                    "scenario's gait: cannot read {}: {e}",
+                    gait_path.display()
+                ))
+            })?
+        }
+        Some(_) => String::new(),
+        None => crate::scenario::builtin::TRIPOD.text.to_string(),
+    };
+    if !gait_text.is_empty() {
+        let gait: toml::Table = gait_text
+            .parse()
+            .map_err(|e: toml::de::Error| fail(format!("scenario's gait: {e}")))?;
+        base.insert("gait".into(), toml::Value::Table(gait));
+    }
+    let searched = |name: &str| parameters.iter().any(|p| p.name == name);
+    let commands = base.get("command").and_then(toml::Value::as_array);
+    if searched("command.forward") && commands.is_some_and(|c| c.len() > 1) {
+        return Err(fail(format!(
+            "parameters.command.forward: the scenario {} has {} [[command]]s; expected at most \
+             one, whose speed is searched",
+            scenario_path.display(),
+            commands.map_or(0, Vec::len)
+        )));
+    }
+    let commanded = searched("command.forward")
+        || commands.is_some_and(|c| c.iter().any(|c| c.get("forward").is_some()));
+    if searched("gait.stride_length") && commanded {
+        return Err(fail(
+            "parameters.gait.stride_length: the speed is commanded ([[command]] forward), and a \
+             stance's stride is that speed over the stance time; search command.forward or the \
+             timing instead"
+                .into(),
+        ));
+    }
+    // the start: the scenario's own values (resolved, so fitted lengths count), in the bounds
+    let reference = resolve(&base, &scenario_path, "start", spec.seeds[0])
+        .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
+    let start = start_point(&parameters, &base, &reference);
+    Ok(Optimization {
+        file: path.to_path_buf(),
+        description: spec.description,
+        base,
+        scenario_path,
+        seeds: spec.seeds,
+        check_seeds: spec.check_seeds,
+        generations: spec.generations,
+        population: spec.population,
+        seed: spec.seed,
+        parameters,
+        objective: spec.objective.into_iter().collect(),
+        start,
+    })
+}
+
+/// The starting point: each parameter's value in the resolved scenario (the gait as fitted, the
+/// servo gains as fitted, the commanded speed), clamped into its bounds; a choice the scenario's
+/// value is not among starts at the first choice.
+fn start_point(parameters: &[Parameter], base: &toml::Table, reference: &Scenario) -> Vec<f64> {
+    let mut values = toml::Table::new();
+    if let Some(gait) = reference.gait() {
+        if let Ok(v) = toml::Value::try_from(gait.to_spec()) {
+            values.insert("gait".into(), v);
+        }
+        let forward = base
+            .get("command")
+            .and_then(|c| c.get(0))
+            .and_then(|c| c.get("forward"))
+            .and_then(toml::Value::as_float)
+            .unwrap_or_else(|| gait.nominal_speed());
+        values.insert(
+            "command".into(),
+            toml::Value::Table(toml::Table::from_iter([(
+                "forward".to_string(),
+                toml::Value::Float(forward),
+            )])),
+        );
+    }
+    if let Some((gains, _)) = reference.drive() {
+        values.insert(
+            "servo".into(),
+            toml::Value::Table(toml::Table::from_iter([
+                ("stiffness".to_string(), toml::Value::Float(gains.stiffness)),
+                ("damping".to_string(), toml::Value::Float(gains.damping)),
+            ])),
+        );
+    }
+    parameters
+        .iter()
+        .map(|p| {
+            let (low, high) = p.bounds();
+            let mut at = Some(&values);
+            let mut value = None;
+            for (k, part) in p.name.split('.').enumerate() {
+                let v = at.and_then(|t| t.get(part));
+                if k == p.name.split('.').count() - 1 {
+                    value = v;
+                } else {
+                    at = v.and_then(toml::Value::as_table);
+                }
+            }
+            value
+                .and_then(|v| p.coordinate(v))
+                .unwrap_or(match p.domain {
+                    Domain::Choice(_) => 0.5,
+                    Domain::Range { .. } => 0.5 * (low + high),
+                })
+        })
+        .collect()
+}
+
+/// Sets the field at dotted `path` of a scenario table; `command.FIELD` is the first (only)
+/// [[command]]'s, made when the scenario has none (at 0 s, no ramp: the default command's).
+fn set(table: &mut toml::Table, path: &str, value: toml::Value) {
+    let (first, rest) = path.split_once('.').expect("parameters are dotted");
+    if first == "command" {
+        let list = table
+            .entry("command")
+            .or_insert_with(|| toml::Value::Array(Vec::new()));
+        if let Some(list) = list.as_array_mut() {
+            if list.is_empty() {
+                list.push(toml::Value::Table(toml::Table::from_iter([(
+                    "ramp".to_string(),
+                    toml::Value::Float(0.0),
+                )])));
+            }
+            if let Some(command) = list[0].as_table_mut() {
+                command.insert(rest.to_string(), value);
+            }
+        }
+        return;
+    }
+    let mut at = table;
+    let mut parts = path.split('.').peekable();
+    while let Some(part) = parts.next() {
+        if parts.peek().is_none() {
+            at.insert(part.to_string(), value);
+            return;
+        }
+        let next = at
+            .entry(part)
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if !next.is_table() {
+            *next = toml::Value::Table(toml::Table::new());
+        }
+        at = next.as_table_mut().expect("made a table");
+    }
+}
+
+/// The base table with `seed` and resolved as a scenario named `name`.
+fn resolve(
+    table: &toml::Table,
+    scenario_path: &Path,
+    name: &str,
+    seed: u32,
+) -> Result<Scenario, ScenarioError> {
+    let mut table = table.clone();
+    table.insert("seed".into(), toml::Value::Integer(seed.into()));
+    scenario::from_table(table, name.to_string(), scenario_path)
+}
+
+impl Optimization {
+    /// The scenario table of a candidate: its parameters laid over the base.
+    pub fn candidate_table(&self, x: &[f64]) -> toml::Table {
+        let mut table = self.base.clone();
+        for (p, &value) in self.parameters.iter().zip(x) {
+            set(&mut table, &p.name, p.value(value));
+        }
+        table
+    }
+
+    /// The candidate's parameters by name, as the scenario gets them (a choice by its name).
+    pub fn values(&self, x: &[f64]) -> serde_json::Map<String, serde_json::Value> {
+        self.parameters
+            .iter()
+            .zip(x)
+            .map(|(p, &v)| {
+                let value = match p.value(v) {
+                    toml::Value::String(s) => serde_json::json!(s),
+                    other => serde_json::json!(other.as_float()),
+                };
+                (p.name.clone(), value)
+            })
+            .collect()
+    }
+
+    /// The best candidate's gait, as a gait file's text.
+    pub fn gait_file(&self, x: &[f64]) -> String {
+        let table = self.candidate_table(x);
+        match table.get("gait") {
+            Some(toml::Value::Table(gait)) => toml::to_string(gait).unwrap_or_default(),
+            _ => String::new(),
+        }
+    }
+
+    /// Evaluates a candidate on every seed: its objective (the mean over seeds of Σ w·metric,
+    /// maximised) or why it failed, and each seed's metrics.
+    pub fn evaluate(&self, x: &[f64]) -> Evaluation {
+        self.evaluate_on(x, &self.seeds, None)
+    }
+
+    /// [`Self::evaluate`] on `seeds`, in `articulation` if given (else the search's).
+    pub fn evaluate_on(
+        &self,
+        x: &[f64],
+        seeds: &[u32],
+        articulation: Option<crate::sim::Articulation>,
+    ) -> Evaluation {
+        let runs: Vec<Result<HexapodMetrics, String>> = seeds
+            .par_iter()
+            .map(|&seed| {
+                let scenario = self
+                    .scenario(x, seed, articulation, "candidate")
+                    .map_err(|e| e.message)?;
+                judge(seed, &scenario.run(Outputs::default()))
+            })
+            .collect();
+        let mut metrics = Vec::new();
+        for run in runs {
+            match run {
+                Ok(m) => metrics.push(m),
+                Err(reason) => {
+                    return Evaluation {
+                        objective: None,
+                        failure: Some(reason),
+                        metrics,
+                    };
+                }
+            }
+        }
+        let objective = metrics.iter().map(|m| self.score(m)).sum::<f64>() / metrics.len() as f64;
+        Evaluation {
+            objective: Some(objective),
+            failure: None,
+            metrics,
+        }
+    }
+
+    /// The candidate `x` as a scenario named `name` on terrain seed `seed`, in `articulation` if
+    /// given (else the search's).
+    pub fn scenario(
+        &self,
+        x: &[f64],
+        seed: u32,
+        articulation: Option<crate::sim::Articulation>,
+        name: &str,
+    ) -> Result<Scenario, ScenarioError> {
+        let mut table = self.candidate_table(x);
+        if let Some(a) = articulation {
+            table.insert("articulation".into(), toml::Value::String(a.name().into()));
+        }
+        resolve(&table, &self.scenario_path, name, seed)
+    }
+}
+
+/// A candidate's run on `seed`: its metrics, or why it counts as failed (it could not run,
+/// diverged, broke a constraint, or Ctrl-C cut it short: [`INTERRUPTED`]).
+pub fn judge(seed: u32, report: &anyhow::Result<Report>) -> Result<HexapodMetrics, String> {
+    let report = report.as_ref().map_err(|e| format!("{e:#}"))?;
+    if let Some(failure) = &report.failure {
+        return Err(format!("seed {seed}: {failure}"));
+    }
+    if let Some(check) = report.checks.iter().find(|c| !c.passed) {
+        let value = check.value.map_or("none".into(), |v| format!("{v:.4}"));
+        return Err(format!(
+            "seed {seed}: constraint {} not met ({value})",
+            check.expectation
+        ));
+    }
+    match &report.metrics {
+        // stopped by Ctrl-C: not a result (the search stops and keeps the rest)
+        Metrics::Walk(m) if !m.complete => Err(INTERRUPTED.into()),
+        Metrics::Walk(m) => Ok((**m).clone()),
+        Metrics::Ball(_) => Err("not a walk".into()),
+    }
+}
+
+impl Optimization {
+    /// One run's Σ weight · metric.
+    pub fn score(&self, m: &HexapodMetrics) -> f64 {
+        self.objective
+            .iter()
+            .map(|(name, weight)| weight * metric_value(m, name))
+            .sum()
+    }
+}
+
+/// A metric's value (a per-foot list summed).
+pub fn metric_value(m: &HexapodMetrics, name: &str) -> f64 {
+    use crate::metrics::Value;
+    walk::TABLE
+        .iter()
+        .find(|t| t.name == name)
+        .map_or(f64::NAN, |t| match (t.value)(m) {
+            Value::One(v) => v,
+            Value::Each(vs) => vs.iter().sum(),
+            Value::Absent => f64::NAN,
+        })
+}
+
+/// The failure of an evaluation that Ctrl-C cut short.
+pub const INTERRUPTED: &str = "interrupted";
+
+/// One candidate's result.
+pub struct Evaluation {
+    /// Σ weight · metric, the mean over the seeds; None when it failed.
+    pub objective: Option<f64>,
+    pub failure: Option<String>,
+    pub metrics: Vec<HexapodMetrics>,
+}
+
+impl Evaluation {
+    /// Cut short by Ctrl-C: neither logged nor told to the optimiser.
+    pub fn interrupted(&self) -> bool {
+        self.failure.as_deref() == Some(INTERRUPTED)
+    }
+}
