@@ -10,7 +10,7 @@ use hexsim::record::search::Evaluated;
 use hexsim::sim::Articulation;
 use rayon::prelude::*;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Args)]
@@ -431,17 +431,9 @@ fn check(
     );
     let mut multibody = Vec::new();
     for &seed in &seeds {
-        if args.no_record {
-            let (a, b) = rayon::join(
-                || per_seed(opt, &opt.start, &[seed], Articulation::Multibody)[0],
-                || per_seed(opt, x, &[seed], Articulation::Multibody)[0],
-            );
-            multibody.push((a, b));
-        } else {
-            let (pair, path) = record_seed(opt, x, seed, &args.output, jobs)?;
-            multibody.push(pair);
-            written.push(path);
-        }
+        let (pair, path) = multibody_pair(opt, x, seed, args, jobs)?;
+        multibody.push(pair);
+        written.extend(path);
     }
     if hexsim::runner::interrupted() {
         return Ok(None);
@@ -460,33 +452,38 @@ fn check(
             "{label:30} {:>15}  {:>14}  {:>17}  {:>16}",
             cell(&start_impulse[k]),
             cell(&best_impulse[k]),
-            cell(&multibody[k].0),
-            cell(&multibody[k].1),
+            cell(&multibody[k].0.objective),
+            cell(&multibody[k].1.objective),
         );
         checks.push(serde_json::json!({
             "seed": seed,
             "searched": searched,
             "start_impulse": start_impulse[k],
             "best_impulse": best_impulse[k],
-            "start_multibody": multibody[k].0,
-            "best_multibody": multibody[k].1,
+            "start_multibody": multibody[k].0.objective,
+            "best_multibody": multibody[k].1.objective,
+            "start_multibody_constraints": multibody[k].0.constraints,
+            "best_multibody_constraints": multibody[k].1.constraints,
         }));
     }
     Ok(Some(checks))
 }
 
-/// The objectives of the start and the best on one seed (None: failed).
-type StartAndBest = (Option<f64>, Option<f64>);
+/// A check run: its objective (None: failed) and each constraint's measured value.
+struct Checked {
+    objective: Option<f64>,
+    constraints: serde_json::Map<String, serde_json::Value>,
+}
 
-/// The start and the best walking terrain seed `seed` in the multibody, recorded superposed to
-/// DIR/seed-S.rrd (their trajectories in DIR/trajectories/seed-S/); each one's objective.
-fn record_seed(
+/// The start and the best walking terrain seed `seed` in the multibody; unless --no-record,
+/// recorded superposed to DIR/seed-S.rrd, their trajectories kept in DIR/trajectories/seed-S/.
+fn multibody_pair(
     opt: &Optimization,
     x: &[f64],
     seed: u32,
-    dir: &Path,
+    args: &OptimizeArgs,
     jobs: usize,
-) -> Result<(StartAndBest, PathBuf)> {
+) -> Result<((Checked, Checked), Option<PathBuf>)> {
     let stem = opt
         .file
         .file_stem()
@@ -500,21 +497,39 @@ fn record_seed(
         description: opt.description.clone(),
         settings,
     };
-    let outcomes = compare::run(
-        &comparison,
-        &dir.join("trajectories").join(format!("seed-{seed}")),
-        jobs,
-    )?;
-    let objective = |k: usize| {
-        optimize::judge(seed, &outcomes[k].report)
-            .ok()
-            .map(|m| opt.score(&m))
+    let dir = if args.no_record {
+        std::env::temp_dir().join(format!("hexsim-optimize-{}-{seed}", std::process::id()))
+    } else {
+        args.output
+            .join("trajectories")
+            .join(format!("seed-{seed}"))
     };
+    let outcomes = compare::run(&comparison, &dir, jobs)?;
+    let checked = |k: usize| Checked {
+        objective: optimize::judge(seed, &outcomes[k].report)
+            .ok()
+            .map(|m| opt.score(&m)),
+        constraints: outcomes[k]
+            .report
+            .as_ref()
+            .map(|r| {
+                r.checks
+                    .iter()
+                    .map(|c| (c.expectation.clone(), serde_json::json!(c.value)))
+                    .collect()
+            })
+            .unwrap_or_default(),
+    };
+    let pair = (checked(0), checked(1));
+    if args.no_record {
+        let _ = std::fs::remove_dir_all(&dir);
+        return Ok((pair, None));
+    }
     let path = hexsim::record::compare::write_titled(
-        &dir.join(format!("seed-{seed}.rrd")),
+        &args.output.join(format!("seed-{seed}.rrd")),
         &format!("start and best on seed {seed}"),
         &comparison,
         &outcomes,
     )?;
-    Ok(((objective(0), objective(1)), path))
+    Ok((pair, Some(path)))
 }

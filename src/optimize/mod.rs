@@ -12,6 +12,9 @@
 //! [parameters]                                     # searched, within [low, high]
 //! "gait.period" = [0.6, 1.4]
 //! "gait.duty_factor" = [0.5, 0.75]
+//! "gait.phase_offsets.rf" = [0.3, 0.7]             # a cycle fraction, taken modulo 1
+//! "gait.swing" = ["sine", "cycloid"]               # a choice among names
+//! "command.forward" = [0.05, 0.2]                  # the commanded speed (m/s)
 //! [objective]                                      # maximised: Σ weight · metric (mean over seeds)
 //! forward_distance = 1.0
 //! [constraints]                                    # the scenario's [expect] keys
@@ -20,7 +23,8 @@
 //!
 //! Each candidate is the scenario with its parameters laid over it (the gait written inline); a
 //! candidate that breaks a constraint, diverges or cannot stand on any seed ranks below every
-//! one that does not, and the search goes on. Every evaluation is a line of the JSON Lines log.
+//! one that does not, and the search goes on. Every evaluation is a line of the JSON Lines log
+//! (`log`), which is also what a resumed or sharded search replays.
 
 pub mod log;
 
@@ -541,13 +545,27 @@ impl Optimization {
             .collect()
     }
 
-    /// The best candidate's gait, as a gait file's text.
+    /// The best candidate's gait, as a gait file's text; the searched values that are not the
+    /// gait's (servo gains, the commanded speed) head it as comments saying where they go.
     pub fn gait_file(&self, x: &[f64]) -> String {
         let table = self.candidate_table(x);
-        match table.get("gait") {
-            Some(toml::Value::Table(gait)) => toml::to_string(gait).unwrap_or_default(),
-            _ => String::new(),
+        let mut text = String::new();
+        for (p, &v) in self.parameters.iter().zip(x) {
+            let value = p.value(v);
+            match p.name.split_once('.') {
+                Some(("servo", field)) => {
+                    text += &format!("# and the scenario's [servo] {field} = {value}\n")
+                }
+                Some(("command", field)) => {
+                    text += &format!("# and the scenario's [[command]] {field} = {value}\n")
+                }
+                _ => {}
+            }
         }
+        if let Some(toml::Value::Table(gait)) = table.get("gait") {
+            text += &toml::to_string(gait).unwrap_or_default();
+        }
+        text
     }
 
     /// Evaluates a candidate on every seed: its objective (the mean over seeds of Σ w·metric,
