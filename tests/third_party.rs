@@ -70,6 +70,18 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
             "{name} walked {forward:.3} m of {nominal:.3}"
         );
         assert!(heading.abs() < 10.0, "{name} turned {heading:.1}°");
+        // the stance feet hold: Kraby's light knees at hex18's 1 ms step made each foot slide
+        // 0.6–0.95 m in 8 s (see scenario::resolve::SERVO_STEP_LIMIT)
+        let slip: Vec<f64> = flat["foot_slip"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert!(
+            slip.iter().all(|&s| s < 0.1),
+            "{name}: feet slid {slip:.3?} m over 10 s on flat ground"
+        );
         assert!(stance["least_joint_room_deg"].as_f64().unwrap() > 0.0);
         // the body walks at the stance height it was given, measured from the hips' plane
         // whatever the base link's origin (Kraby's is on the ground under its body)
@@ -131,4 +143,33 @@ fn the_robot_command_shows_the_walking_direction_and_merged_links() {
     ] {
         assert!(stdout.contains(expected), "no {expected:?} in {stdout}");
     }
+}
+
+/// A time step too large for a robot's lightest servo is refused, naming the joint and the
+/// largest stable step; left out, the step is chosen smaller and a warning says why.
+#[test]
+fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
+    let kraby = "tests/data/third_party/kraby/hexapod.urdf";
+    let out = hexsim()
+        .args(["run", "--robot", kraby, "--dt", "0.001", "--no-record"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("dt = 0.001 s is too large")
+            && stderr.contains("`servomotor_")
+            && stderr.contains("dt ≤ 3.85e-4 s"),
+        "{stderr}"
+    );
+    let out = hexsim()
+        .args(["run", "--robot", kraby, "--duration", "0.1", "--no-record"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("dt: 0.333 ms, not the default 1 ms"),
+        "{stderr}"
+    );
 }

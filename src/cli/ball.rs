@@ -86,7 +86,7 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
         terrain: args.terrain.clone().map(FileOr::File),
         seed: None,
         duration: args.duration,
-        dt: args.dt,
+        dt: Some(args.dt),
         contact: args.contact.spec(),
         allow_unstable_dt: args.allow_unstable_dt,
         robot: None,

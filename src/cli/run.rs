@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::{Args, Parser};
 use hexsim::scenario::spec::{
-    CommandSpec, DEFAULT_DT, DEFAULT_SETTLE, RecordSpec, ServoSpec, StartSpec, WALK_LOG_RATE,
+    CommandSpec, DEFAULT_SETTLE, RecordSpec, ServoSpec, StartSpec, WALK_LOG_RATE,
 };
 use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Scenario, ScenarioSpec};
 use hexsim::sim::Articulation;
@@ -34,9 +34,10 @@ pub struct RunArgs {
     /// Keep the body level on slopes: raise or lower each foot's path by the terrain under it.
     #[arg(long)]
     follow_terrain: bool,
-    /// Time step (s).
-    #[arg(long, default_value_t = DEFAULT_DT)]
-    dt: f64,
+    /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo needs a
+    /// smaller step to be stable (a warning says so).
+    #[arg(long)]
+    dt: Option<f64>,
     /// Forward speed (m/s). Default: the gait's nominal stride / (duty · period).
     #[arg(long, allow_negative_numbers = true)]
     speed: Option<f64>,

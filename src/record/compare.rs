@@ -115,7 +115,7 @@ pub fn write_titled(
         .first()
         .context("a comparison has settings")?;
     let robot = first.robot().map(|r| std::sync::Arc::new(r.clone()));
-    let dt = first.spec.dt;
+    let dt = first.spec.dt();
     let name = comparison
         .file
         .file_stem()

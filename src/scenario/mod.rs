@@ -263,7 +263,7 @@ impl Scenario {
             Setup::Walk(w) => w.settle + self.spec.duration,
             Setup::Ball(_) => self.spec.duration,
         };
-        (time / self.spec.dt).round() as u64
+        (time / self.spec.dt()).round() as u64
     }
 
     /// Builds the terrain (generators run here; a file's heights are read here).
@@ -317,7 +317,7 @@ impl Scenario {
                     terrain: grid,
                     terrain_name: self.terrain.name.clone(),
                     contact: self.contact,
-                    dt: spec.dt,
+                    dt: spec.dt(),
                     duration: spec.duration,
                     log_rate: self.log_rate,
                     outputs,

@@ -3,7 +3,7 @@
 //! covers its fields and the content of every file it uses.
 
 use super::spec::{
-    BALL_LOG_RATE, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, ServoSpec, WALK_LOG_RATE,
+    BALL_LOG_RATE, DEFAULT_DT, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, ServoSpec, WALK_LOG_RATE,
 };
 use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
 use crate::contact::ContactModel;
@@ -24,7 +24,11 @@ fn read_bytes(path: &Path) -> Vec<u8> {
 impl Scenario {
     /// Checks the spec and loads what it refers to. `origin` is the scenario's file: relative paths
     /// resolve against its folder, and errors name it.
-    pub fn resolve(spec: ScenarioSpec, name: String, origin: &Path) -> Result<Self, ScenarioError> {
+    pub fn resolve(
+        mut spec: ScenarioSpec,
+        name: String,
+        origin: &Path,
+    ) -> Result<Self, ScenarioError> {
         let fail = |message: String| ScenarioError {
             file: origin.to_path_buf(),
             message,
@@ -33,7 +37,12 @@ impl Scenario {
         check_common(&spec, &name).map_err(fail)?;
         let contact = spec.contact.model();
         let mut hasher = Sha256::new();
-        hasher.update(serde_json::to_vec(&spec).expect("a spec is plain data"));
+        // hashed with its step, so a default step and the same step given hash alike
+        let hashed = ScenarioSpec {
+            dt: Some(spec.dt()),
+            ..spec.clone()
+        };
+        hasher.update(serde_json::to_vec(&hashed).expect("a spec is plain data"));
         let terrain = resolve_terrain(&spec, &name, origin, &mut hasher).map_err(fail)?;
         let seed = terrain.spec.seed();
         let mut warnings = Vec::new();
@@ -43,6 +52,10 @@ impl Scenario {
                 resolve_walk(&spec, &contact, base, &mut hasher, &mut warnings).map_err(fail)?,
             )),
         };
+        if let Setup::Walk(w) = &setup {
+            // the step the walk chose (smaller than the default for a robot with light legs)
+            spec.dt = Some(w.settings.dt);
+        }
         let hash: String = hasher.finalize()[..8]
             .iter()
             .map(|b| format!("{b:02x}"))
@@ -74,11 +87,9 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
             "name: expected a non-empty name without slashes, got {name:?}"
         ));
     }
-    if !(spec.dt.is_finite() && spec.dt > 0.0 && spec.dt <= 0.01) {
-        return Err(format!(
-            "dt: expected a time step in (0, 0.01] s, got {}",
-            spec.dt
-        ));
+    let dt = spec.dt();
+    if !(dt.is_finite() && dt > 0.0 && dt <= 0.01) {
+        return Err(format!("dt: expected a time step in (0, 0.01] s, got {dt}"));
     }
     if !(spec.duration.is_finite() && spec.duration >= 0.0) {
         return Err(format!(
@@ -183,10 +194,10 @@ fn check_stable_dt(
     what: &str,
 ) -> Result<(), String> {
     let limit = contact.normal.stable_time_step(mass, radius * 0.1);
-    if spec.dt >= limit && !spec.allow_unstable_dt {
+    if spec.dt() >= limit && !spec.allow_unstable_dt {
         return Err(format!(
             "dt = {} s is too large for the contact spring on {what}: the explicit spring needs dt < {limit:.2e} s (2/√(k/m)); reduce dt or the stiffness (or set allow_unstable_dt = true to run it anyway)",
-            spec.dt
+            spec.dt()
         ));
     }
     Ok(())
@@ -271,6 +282,7 @@ fn resolve_walk(
         return Err("pgs_iterations: expected at least 1".into());
     }
     let gains = resolve_servo(spec.servo.unwrap_or_default(), &robot, &gait.standing_pose)?;
+    let dt = servo_time_step(spec, &robot, &gait.standing_pose, gains, warnings)?;
     let commands = resolve_commands(spec, &gait.gait)?;
     if let Some(start) = spec.start
         && ![start.x, start.y, Some(start.heading_deg)]
@@ -286,7 +298,7 @@ fn resolve_walk(
         commands,
         settings: HexapodSettings {
             articulation: spec.articulation.unwrap_or_default(),
-            dt: spec.dt,
+            dt,
             solver_iterations: spec.solver_iterations.unwrap_or(DEFAULT_SOLVER_ITERATIONS),
             pgs_iterations: spec.pgs_iterations,
             gains,
@@ -295,6 +307,62 @@ fn resolve_walk(
         follow_terrain: spec.follow_terrain.unwrap_or(false),
         start: spec.start.unwrap_or_default(),
     })
+}
+
+/// The largest ω·dt a servo tolerates, ω = √(k/I) on the lightest joint (I: the inertia of the
+/// links outboard of it about its axis). Above it the knee's fast mode and the step-explicit
+/// contact force feed each other: the stance feet's load alternates step to step and they slide.
+/// Measured on Kraby (tibia I = 1.85e-5 kg·m², k = 20 N·m/rad, ω = 1040 rad/s): at ω·dt = 1.04
+/// (1 ms) each foot slides 0.6–0.95 m over an 8 s walk on flat ground, at 0.52 (0.5 ms) still
+/// 0.7–1.3 m, at 0.42 (0.4 ms) 0.02–0.06 m like the other robots; hex18's is 0.28, the other
+/// third-party robots' 0.20–0.37.
+pub const SERVO_STEP_LIMIT: f64 = 0.4;
+
+/// The time step of a walk: as given — refused when the lightest joint's servo is too fast for
+/// it ([`SERVO_STEP_LIMIT`]) — else the default, or 1 ms / n with the least n the servo allows
+/// (said in a warning).
+fn servo_time_step(
+    spec: &ScenarioSpec,
+    robot: &RobotModel,
+    pose: &[f64],
+    gains: ServoGains,
+    warnings: &mut Vec<String>,
+) -> Result<f64, String> {
+    let inertias = crate::robot::servo::outboard_inertias(robot, pose);
+    let Some((joint, inertia)) = robot
+        .legs
+        .iter()
+        .flat_map(|leg| leg.joints.iter().map(|&j| (j, inertias[j])))
+        .filter(|(_, i)| *i > 0.0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+    else {
+        return Ok(spec.dt());
+    };
+    let omega = (gains.stiffness / inertia).sqrt();
+    let limit = SERVO_STEP_LIMIT / omega;
+    let name = &robot.joints[joint].name;
+    let why = format!(
+        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {} N·m/rad: ω = {omega:.0} rad/s) \
+         needs ω·dt ≤ {SERVO_STEP_LIMIT}",
+        gains.stiffness
+    );
+    match spec.dt {
+        Some(dt) if dt > limit && !spec.allow_unstable_dt => Err(format!(
+            "dt = {dt} s is too large: {why}, dt ≤ {limit:.2e} s; reduce dt or the servo \
+             stiffness (or set allow_unstable_dt = true to run it anyway)"
+        )),
+        Some(dt) => Ok(dt),
+        None if DEFAULT_DT <= limit => Ok(DEFAULT_DT),
+        None => {
+            let n = (DEFAULT_DT / limit).ceil();
+            let dt = DEFAULT_DT / n;
+            warnings.push(format!(
+                "dt: {:.3} ms, not the default 1 ms: {why} (set dt to choose another)",
+                dt * 1e3
+            ));
+            Ok(dt)
+        }
+    }
 }
 
 /// The servo gains: as given, else fitted to the robot standing in `pose` (the gait's).

@@ -90,8 +90,10 @@ pub struct ScenarioSpec {
     pub seed: Option<u32>,
     /// Seconds walked after settling (walk) or simulated (ball).
     pub duration: f64,
-    #[serde(default = "default_dt")]
-    pub dt: f64,
+    /// The time step (s). Default: [`DEFAULT_DT`], or smaller where a walking robot's lightest
+    /// servo needs it to be stable (see `resolve`).
+    #[serde(default)]
+    pub dt: Option<f64>,
     #[serde(default)]
     pub contact: ContactSpec,
     /// Run even when dt is above the contact spring's stability limit (to study the instability).
@@ -140,13 +142,17 @@ pub struct ScenarioSpec {
     pub tolerance: BTreeMap<String, Tolerance>,
 }
 
-fn default_dt() -> f64 {
-    DEFAULT_DT
-}
-
 /// The defaults of unset fields, in one place (the command line's options take theirs from here).
 /// Time step (s).
 pub const DEFAULT_DT: f64 = 1e-3;
+
+impl ScenarioSpec {
+    /// The time step: as given, else the default (a walk's resolved scenario holds the step it
+    /// chose, see `resolve`).
+    pub fn dt(&self) -> f64 {
+        self.dt.unwrap_or(DEFAULT_DT)
+    }
+}
 /// Seconds a walk stands before the gait starts.
 pub const DEFAULT_SETTLE: f64 = 1.0;
 /// Samples per second in a walk's recording and trajectory.
