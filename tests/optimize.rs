@@ -76,7 +76,7 @@ fn a_tiny_search_runs_end_to_end() {
         .fold(f64::NEG_INFINITY, f64::max);
     assert_eq!(best, all_best);
     // the start and the best checked on the searched and the unsearched seed, both articulations
-    let per_seed = summary["per_seed"].as_array().unwrap();
+    let per_seed = summary["per_terrain"].as_array().unwrap();
     assert_eq!(per_seed.len(), 2);
     assert_eq!(per_seed[1]["searched"], false);
     for key in [
@@ -107,7 +107,7 @@ fn a_tiny_search_runs_end_to_end() {
     assert!(search.at(false, "summary").is_some());
     // each seed's: the start and the best walking it, superposed
     for seed in [3, 4] {
-        let walk = read_back(&out_dir.join(format!("seed-{seed}.rrd"))).unwrap();
+        let walk = read_back(&out_dir.join(format!("natural-seed-{seed}.rrd"))).unwrap();
         for name in ["start", "best"] {
             let links = walk
                 .under(false, &format!("world/{name}/robot"))
@@ -170,6 +170,17 @@ fn a_broken_specification_says_where() {
         (
             spec("", Some(("seeds = [3]", "seeds = []"))),
             "seeds: expected at least one terrain seed",
+        ),
+        (
+            spec("", Some(("seeds = [3]", "seeds = [3]\nterrains = []"))),
+            "terrains: expected at least one terrain file",
+        ),
+        (
+            spec(
+                "",
+                Some(("seeds = [3]", "seeds = [3]\nterrains = [\"nowhere.toml\"]")),
+            ),
+            "terrains: nowhere.toml: ",
         ),
         (
             spec("", Some(("[0.8, 1.2]", "[\"sine\", \"cycloid\"]"))),
@@ -337,6 +348,7 @@ fn an_interrupted_search_resumes_to_the_same_result() {
 fn a_sharded_search_joins_to_the_same_log() {
     let dir = scratch("optimize-shards");
     let file = dir.join("sharded.toml");
+    let terrains = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains");
     let searched = concat!(
         "\"gait.period\" = [0.8, 1.2]\n",
         "\"gait.swing\" = [\"sine\", \"cycloid\", \"rectangle\"]\n",
@@ -350,7 +362,15 @@ fn a_sharded_search_joins_to_the_same_log() {
         )),
     )
     .replace("generations = 1", "generations = 2")
-    .replace("population = 2", "population = 3");
+    .replace("population = 2", "population = 3")
+    .replace(
+        "seeds = [3]",
+        &format!(
+            "seeds = [3]\nterrains = [{:?}, {:?}]",
+            terrains.join("natural.toml"),
+            terrains.join("flat.toml")
+        ),
+    );
     std::fs::write(&file, text).unwrap();
     let run = |out: &std::path::Path, extra: &[&str]| {
         let o = hexsim()
@@ -380,6 +400,14 @@ fn a_sharded_search_joins_to_the_same_log() {
         .collect();
     assert_eq!(lines.len(), 1 + 2 * 3);
     for line in &lines {
+        // each candidate walks the natural terrain's seed and the flat ground (no seed: once)
+        let walked: Vec<&str> = line["metrics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["terrain"].as_str().unwrap())
+            .collect();
+        assert_eq!(walked, ["natural seed 3", "flat"], "{line}");
         let p = &line["parameters"];
         let swing = p["gait.swing"].as_str().unwrap();
         assert!(["sine", "cycloid", "rectangle"].contains(&swing), "{line}");

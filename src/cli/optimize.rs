@@ -5,7 +5,7 @@ use clap::Args;
 use fcmaes_core::{Cmaes, CmaesParams, Fitness};
 use hexsim::batch::Shard;
 use hexsim::compare::{self, Comparison};
-use hexsim::optimize::{self, Evaluation, Optimization, log};
+use hexsim::optimize::{self, Case, Evaluation, Optimization, log};
 use hexsim::record::search::Evaluated;
 use hexsim::sim::Articulation;
 use rayon::prelude::*;
@@ -20,7 +20,7 @@ pub struct OptimizeArgs {
     file: PathBuf,
     /// Folder for the log of every evaluation (evaluations.jsonl), the best gait
     /// (best_gait.toml), the summary (summary.json), the search's recording (search.rrd) and one
-    /// of the start and the best walking each terrain seed (seed-S.rrd).
+    /// of the start and the best walking each terrain and seed (TERRAIN-seed-S.rrd).
     #[arg(long, default_value = "optimize")]
     output: PathBuf,
     /// Worker threads. Default: all cores.
@@ -145,12 +145,16 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     if !args.no_record {
         let failed = summary["failed"].as_u64().unwrap_or(0);
         let text = format!(
-            "# {}\n\n{}\n\n{}\n\n{} evaluations ({failed} failed) on seeds {:?}.\n",
+            "# {}\n\n{}\n\n{}\n\n{} evaluations ({failed} failed) on {}.\n",
             args.file.display(),
             opt.description.as_deref().unwrap_or(""),
             table,
             searched.history.len(),
-            opt.seeds,
+            opt.searched()
+                .iter()
+                .map(|c| c.label())
+                .collect::<Vec<_>>()
+                .join(", "),
         );
         written.push(hexsim::record::search::write(
             &args.output.join("search.rrd"),
@@ -168,7 +172,7 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         // the checks were cut short: their runs are not results
         return Ok(ExitCode::from(130));
     };
-    summary["per_seed"] = serde_json::Value::Array(checks);
+    summary["per_terrain"] = serde_json::Value::Array(checks);
     std::fs::write(
         &summary_path,
         serde_json::to_string_pretty(&summary)? + "\n",
@@ -395,22 +399,23 @@ fn report_shard(
     ExitCode::SUCCESS
 }
 
-/// Each seed's objective for the candidate `x` in `articulation` (None where it failed).
-fn per_seed(
+/// The objective of candidate `x` on each of `cases` in `articulation` (None where it failed).
+fn per_case(
     opt: &Optimization,
     x: &[f64],
-    seeds: &[u32],
+    cases: &[&Case],
     articulation: Articulation,
 ) -> Vec<Option<f64>> {
-    seeds
+    cases
         .par_iter()
-        .map(|&s| opt.evaluate_on(x, &[s], Some(articulation)).objective)
+        .map(|&c| opt.evaluate_on(x, &[c], Some(articulation)).objective)
         .collect()
 }
 
-/// The start and the best on every seed, searched and not, in both articulations — what the
-/// search found, and how much of it the exact (multibody) joints keep — the multibody runs
-/// recorded, start and best superposed, one recording per seed. None when Ctrl-C cut them short.
+/// The start and the best on every terrain and seed, searched and not, in both articulations —
+/// what the search found, and how much of it the exact (multibody) joints keep — the multibody
+/// runs recorded, start and best superposed, one recording each. None when Ctrl-C cut them
+/// short.
 fn check(
     opt: &Optimization,
     x: &[f64],
@@ -418,20 +423,14 @@ fn check(
     jobs: usize,
     written: &mut Vec<PathBuf>,
 ) -> Result<Option<Vec<serde_json::Value>>> {
-    let all_seeds: Vec<(u32, bool)> = opt
-        .seeds
-        .iter()
-        .map(|&s| (s, true))
-        .chain(opt.check_seeds.iter().map(|&s| (s, false)))
-        .collect();
-    let seeds: Vec<u32> = all_seeds.iter().map(|(s, _)| *s).collect();
+    let cases: Vec<&Case> = opt.cases.iter().collect();
     let (start_impulse, best_impulse) = rayon::join(
-        || per_seed(opt, &opt.start, &seeds, Articulation::Impulse),
-        || per_seed(opt, x, &seeds, Articulation::Impulse),
+        || per_case(opt, &opt.start, &cases, Articulation::Impulse),
+        || per_case(opt, x, &cases, Articulation::Impulse),
     );
     let mut multibody = Vec::new();
-    for &seed in &seeds {
-        let (pair, path) = multibody_pair(opt, x, seed, args, jobs)?;
+    for case in &cases {
+        let (pair, path) = multibody_pair(opt, x, case, args, jobs)?;
         multibody.push(pair);
         written.extend(path);
     }
@@ -439,14 +438,15 @@ fn check(
         return Ok(None);
     }
     println!(
-        "objective per seed             start (impulse)  best (impulse)  start (multibody)  best (multibody)"
+        "objective                      start (impulse)  best (impulse)  start (multibody)  best (multibody)"
     );
     let cell = |v: &Option<f64>| v.map_or("failed".to_string(), |v| format!("{v:.4}"));
     let mut checks = Vec::new();
-    for (k, (seed, searched)) in all_seeds.iter().enumerate() {
+    for (k, case) in cases.iter().enumerate() {
         let label = format!(
-            "seed {seed}{}",
-            if *searched { "" } else { " (not searched)" }
+            "{}{}",
+            case.label(),
+            if case.searched { "" } else { " (not searched)" }
         );
         println!(
             "{label:30} {:>15}  {:>14}  {:>17}  {:>16}",
@@ -456,8 +456,9 @@ fn check(
             cell(&multibody[k].1.objective),
         );
         checks.push(serde_json::json!({
-            "seed": seed,
-            "searched": searched,
+            "terrain": case.terrain_name,
+            "seed": case.seeded.then_some(case.seed),
+            "searched": case.searched,
             "start_impulse": start_impulse[k],
             "best_impulse": best_impulse[k],
             "start_multibody": multibody[k].0.objective,
@@ -475,12 +476,12 @@ struct Checked {
     constraints: serde_json::Map<String, serde_json::Value>,
 }
 
-/// The start and the best walking terrain seed `seed` in the multibody; unless --no-record,
-/// recorded superposed to DIR/seed-S.rrd, their trajectories kept in DIR/trajectories/seed-S/.
+/// The start and the best walking `case` in the multibody; unless --no-record, recorded
+/// superposed to DIR/TERRAIN-seed-S.rrd, their trajectories kept in DIR/trajectories/.
 fn multibody_pair(
     opt: &Optimization,
     x: &[f64],
-    seed: u32,
+    case: &Case,
     args: &OptimizeArgs,
     jobs: usize,
 ) -> Result<((Checked, Checked), Option<PathBuf>)> {
@@ -490,23 +491,25 @@ fn multibody_pair(
         .map_or("optimize".into(), |s| s.to_string_lossy().into_owned());
     let settings = [("start", &opt.start[..]), ("best", x)]
         .into_iter()
-        .map(|(name, x)| opt.scenario(x, seed, Some(Articulation::Multibody), name))
+        .map(|(name, x)| opt.scenario(x, case, Some(Articulation::Multibody), name))
         .collect::<Result<Vec<_>, _>>()?;
     let comparison = Comparison {
-        file: PathBuf::from(format!("{stem} seed {seed}")),
+        file: PathBuf::from(format!("{stem} {}", case.label())),
         description: opt.description.clone(),
         settings,
     };
     let dir = if args.no_record {
-        std::env::temp_dir().join(format!("hexsim-optimize-{}-{seed}", std::process::id()))
+        std::env::temp_dir().join(format!(
+            "hexsim-optimize-{}-{}",
+            std::process::id(),
+            case.file_stem()
+        ))
     } else {
-        args.output
-            .join("trajectories")
-            .join(format!("seed-{seed}"))
+        args.output.join("trajectories").join(case.file_stem())
     };
     let outcomes = compare::run(&comparison, &dir, jobs)?;
     let checked = |k: usize| Checked {
-        objective: optimize::judge(seed, &outcomes[k].report)
+        objective: optimize::judge(case, &outcomes[k].report)
             .ok()
             .map(|m| opt.score(&m)),
         constraints: outcomes[k]
@@ -526,8 +529,8 @@ fn multibody_pair(
         return Ok((pair, None));
     }
     let path = hexsim::record::compare::write_titled(
-        &args.output.join(format!("seed-{seed}.rrd")),
-        &format!("start and best on seed {seed}"),
+        &args.output.join(format!("{}.rrd", case.file_stem())),
+        &format!("start and best on {}", case.label()),
         &comparison,
         &outcomes,
     )?;

@@ -19,7 +19,7 @@ pub fn shard_file(dir: &Path, shard: Shard) -> PathBuf {
 
 /// One evaluation's log line: the parameters as the scenario got them (a choice by its name),
 /// the search's coordinates `x` (what a resumed search matches), the objective or why it failed,
-/// and the objective's metrics on each seed.
+/// and the objective's metrics on each terrain and seed.
 pub fn line(
     opt: &Optimization,
     generation: usize,
@@ -27,20 +27,19 @@ pub fn line(
     x: &[f64],
     e: &Evaluation,
 ) -> String {
-    let metrics: Vec<serde_json::Value> = e
-        .metrics
+    let metrics: Vec<serde_json::Value> = opt
+        .searched()
         .iter()
-        .map(|m| {
-            let named: serde_json::Map<String, serde_json::Value> = opt
-                .objective
-                .iter()
-                .map(|(name, _)| {
-                    (
-                        name.clone(),
-                        serde_json::json!(super::metric_value(m, name)),
-                    )
-                })
-                .collect();
+        .zip(&e.metrics)
+        .map(|(case, m)| {
+            let mut named = serde_json::Map::new();
+            named.insert("terrain".into(), serde_json::json!(case.label()));
+            for (name, _) in &opt.objective {
+                named.insert(
+                    name.clone(),
+                    serde_json::json!(super::metric_value(m, name)),
+                );
+            }
             serde_json::Value::Object(named)
         })
         .collect();
@@ -52,7 +51,7 @@ pub fn line(
         "objective": e.objective,
         "status": if e.failure.is_some() { "failed" } else { "ok" },
         "failure": e.failure,
-        "metrics_per_seed": metrics,
+        "metrics": metrics,
     })
     .to_string()
 }

@@ -6,7 +6,8 @@
 //! scenario = "../scenarios/natural_tripod.toml"   # robot, gait, terrain, contact, start
 //! duration = 8.0                                   # optional: overrides the scenario's
 //! articulation = "impulse"                         # default: impulse joints, 4× faster
-//! seeds = [11, 12, 13]                             # terrain seeds every candidate walks
+//! terrains = ["../terrains/natural.toml", "../terrains/slope.toml"]  # default: the scenario's
+//! seeds = [11, 12, 13]                             # every terrain with every seed (once if unseeded)
 //! generations = 12
 //! seed = 1                                         # the search's own seed
 //! [parameters]                                     # searched, within [low, high]
@@ -224,6 +225,10 @@ struct OptimizeSpec {
     #[serde(default = "impulse")]
     articulation: crate::sim::Articulation,
     seeds: Vec<u32>,
+    /// Terrain files (relative to this file) each candidate walks, each with every seed (once
+    /// if it has no seed); default: the scenario's terrain.
+    #[serde(default)]
+    terrains: Option<Vec<PathBuf>>,
     /// Terrain seeds not searched on, on which the start and the best are checked after.
     #[serde(default)]
     check_seeds: Vec<u32>,
@@ -260,7 +265,8 @@ pub struct Optimization {
     base: toml::Table,
     scenario_path: PathBuf,
     pub seeds: Vec<u32>,
-    pub check_seeds: Vec<u32>,
+    /// Every (terrain, seed) walked: the searched ones first, then the check seeds'.
+    pub cases: Vec<Case>,
     pub generations: usize,
     pub population: Option<usize>,
     pub seed: u64,
@@ -283,6 +289,11 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
     if spec.seeds.is_empty() {
         return Err(fail("seeds: expected at least one terrain seed".into()));
+    }
+    if spec.terrains.as_ref().is_some_and(Vec::is_empty) {
+        return Err(fail(
+            "terrains: expected at least one terrain file (or leave it out: the scenario's)".into(),
+        ));
     }
     if spec.generations == 0 {
         return Err(fail("generations: expected at least 1".into()));
@@ -397,6 +408,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     // the start: the scenario's own values (resolved, so fitted lengths count), in the bounds
     let reference = resolve(&base, &scenario_path, "start", spec.seeds[0])
         .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
+    let cases = cases(&spec, path, &base, &scenario_path, &reference).map_err(fail)?;
     let start = start_point(&parameters, &base, &reference);
     Ok(Optimization {
         file: path.to_path_buf(),
@@ -404,7 +416,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         base,
         scenario_path,
         seeds: spec.seeds,
-        check_seeds: spec.check_seeds,
+        cases,
         generations: spec.generations,
         population: spec.population,
         seed: spec.seed,
@@ -412,6 +424,107 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         objective: spec.objective.into_iter().collect(),
         start,
     })
+}
+
+/// One walk of each candidate: a terrain and its seed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Case {
+    /// The terrain file (absolute), or None for the scenario's own terrain.
+    pub terrain: Option<PathBuf>,
+    /// The terrain's name (its file's stem).
+    pub terrain_name: String,
+    pub seed: u32,
+    /// Whether the terrain has a seed (natural, rough); one without is walked once.
+    pub seeded: bool,
+    /// Searched on, or a check after the search (`check_seeds`).
+    pub searched: bool,
+}
+
+impl Case {
+    /// "natural seed 11", or "bell" for a terrain without a seed.
+    pub fn label(&self) -> String {
+        if self.seeded {
+            format!("{} seed {}", self.terrain_name, self.seed)
+        } else {
+            self.terrain_name.clone()
+        }
+    }
+
+    /// A file name for its outputs: "natural-seed-11", "bell".
+    pub fn file_stem(&self) -> String {
+        self.label().replace(' ', "-")
+    }
+}
+
+/// A terrain's short name: its file's stem ("natural" for "../terrains/natural.toml").
+fn stem(name: &str) -> String {
+    Path::new(name)
+        .file_stem()
+        .map_or(name.to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Every terrain × seed of the specification (a terrain without a seed once, searched).
+fn cases(
+    spec: &OptimizeSpec,
+    path: &Path,
+    base: &toml::Table,
+    scenario_path: &Path,
+    reference: &Scenario,
+) -> Result<Vec<Case>, String> {
+    let terrains: Vec<(Option<PathBuf>, String, bool)> = match &spec.terrains {
+        None => vec![(
+            None,
+            stem(reference.terrain_name()),
+            reference.seed.is_some(),
+        )],
+        Some(files) => files
+            .iter()
+            .map(|file| {
+                let absolute =
+                    std::path::absolute(path.parent().unwrap_or(Path::new("")).join(file))
+                        .map_err(|e| format!("terrains: {}: {e}", file.display()))?;
+                let mut table = base.clone();
+                table.insert(
+                    "terrain".into(),
+                    toml::Value::String(absolute.to_string_lossy().into_owned()),
+                );
+                let scenario = resolve(&table, scenario_path, "start", spec.seeds[0])
+                    .map_err(|e| format!("terrains: {}: {}", file.display(), e.message))?;
+                Ok((
+                    Some(absolute),
+                    stem(scenario.terrain_name()),
+                    scenario.seed.is_some(),
+                ))
+            })
+            .collect::<Result<_, String>>()?,
+    };
+    let mut cases = Vec::new();
+    for searched in [true, false] {
+        let seeds = if searched {
+            &spec.seeds
+        } else {
+            &spec.check_seeds
+        };
+        for (terrain, name, seeded) in &terrains {
+            let seeds = if *seeded {
+                &seeds[..]
+            } else if searched {
+                &spec.seeds[..1]
+            } else {
+                &[]
+            };
+            for &seed in seeds {
+                cases.push(Case {
+                    terrain: terrain.clone(),
+                    terrain_name: name.clone(),
+                    seed,
+                    seeded: *seeded,
+                    searched,
+                });
+            }
+        }
+    }
+    Ok(cases)
 }
 
 /// The starting point: each parameter's value in the resolved scenario (the gait as fitted, the
@@ -568,26 +681,31 @@ impl Optimization {
         text
     }
 
-    /// Evaluates a candidate on every seed: its objective (the mean over seeds of Σ w·metric,
-    /// maximised) or why it failed, and each seed's metrics.
-    pub fn evaluate(&self, x: &[f64]) -> Evaluation {
-        self.evaluate_on(x, &self.seeds, None)
+    /// The terrains and seeds searched on.
+    pub fn searched(&self) -> Vec<&Case> {
+        self.cases.iter().filter(|c| c.searched).collect()
     }
 
-    /// [`Self::evaluate`] on `seeds`, in `articulation` if given (else the search's).
+    /// Evaluates a candidate on every searched terrain and seed: its objective (the mean over
+    /// them of Σ w·metric, maximised) or why it failed, and each one's metrics.
+    pub fn evaluate(&self, x: &[f64]) -> Evaluation {
+        self.evaluate_on(x, &self.searched(), None)
+    }
+
+    /// [`Self::evaluate`] on `cases`, in `articulation` if given (else the search's).
     pub fn evaluate_on(
         &self,
         x: &[f64],
-        seeds: &[u32],
+        cases: &[&Case],
         articulation: Option<crate::sim::Articulation>,
     ) -> Evaluation {
-        let runs: Vec<Result<HexapodMetrics, String>> = seeds
+        let runs: Vec<Result<HexapodMetrics, String>> = cases
             .par_iter()
-            .map(|&seed| {
+            .map(|case| {
                 let scenario = self
-                    .scenario(x, seed, articulation, "candidate")
+                    .scenario(x, case, articulation, "candidate")
                     .map_err(|e| e.message)?;
-                judge(seed, &scenario.run(Outputs::default()))
+                judge(case, &scenario.run(Outputs::default()))
             })
             .collect();
         let mut metrics = Vec::new();
@@ -611,12 +729,12 @@ impl Optimization {
         }
     }
 
-    /// The candidate `x` as a scenario named `name` on terrain seed `seed`, in `articulation` if
-    /// given (else the search's).
+    /// The candidate `x` as a scenario named `name` walking `case`, in `articulation` if given
+    /// (else the search's).
     pub fn scenario(
         &self,
         x: &[f64],
-        seed: u32,
+        case: &Case,
         articulation: Option<crate::sim::Articulation>,
         name: &str,
     ) -> Result<Scenario, ScenarioError> {
@@ -624,21 +742,28 @@ impl Optimization {
         if let Some(a) = articulation {
             table.insert("articulation".into(), toml::Value::String(a.name().into()));
         }
-        resolve(&table, &self.scenario_path, name, seed)
+        if let Some(terrain) = &case.terrain {
+            table.insert(
+                "terrain".into(),
+                toml::Value::String(terrain.to_string_lossy().into_owned()),
+            );
+        }
+        resolve(&table, &self.scenario_path, name, case.seed)
     }
 }
 
-/// A candidate's run on `seed`: its metrics, or why it counts as failed (it could not run,
+/// A candidate's walk of `case`: its metrics, or why it counts as failed (it could not run,
 /// diverged, broke a constraint, or Ctrl-C cut it short: [`INTERRUPTED`]).
-pub fn judge(seed: u32, report: &anyhow::Result<Report>) -> Result<HexapodMetrics, String> {
-    let report = report.as_ref().map_err(|e| format!("{e:#}"))?;
+pub fn judge(case: &Case, report: &anyhow::Result<Report>) -> Result<HexapodMetrics, String> {
+    let label = case.label();
+    let report = report.as_ref().map_err(|e| format!("{label}: {e:#}"))?;
     if let Some(failure) = &report.failure {
-        return Err(format!("seed {seed}: {failure}"));
+        return Err(format!("{label}: {failure}"));
     }
     if let Some(check) = report.checks.iter().find(|c| !c.passed) {
         let value = check.value.map_or("none".into(), |v| format!("{v:.4}"));
         return Err(format!(
-            "seed {seed}: constraint {} not met ({value})",
+            "{label}: constraint {} not met ({value})",
             check.expectation
         ));
     }
@@ -678,7 +803,7 @@ pub const INTERRUPTED: &str = "interrupted";
 
 /// One candidate's result.
 pub struct Evaluation {
-    /// Σ weight · metric, the mean over the seeds; None when it failed.
+    /// Σ weight · metric, the mean over the terrains and seeds; None when it failed.
     pub objective: Option<f64>,
     pub failure: Option<String>,
     pub metrics: Vec<HexapodMetrics>,
