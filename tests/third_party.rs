@@ -172,4 +172,16 @@ fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
         stderr.contains("dt: 0.333 ms, not the default 1 ms"),
         "{stderr}"
     );
+    // the impulse joints' servo is explicit in the step: smaller still
+    let out = hexsim()
+        .args(["run", "--robot", kraby, "--articulation", "impulse"])
+        .args(["--duration", "0.1", "--no-record"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("dt: 0.167 ms, not the default 1 ms: the impulse joints' explicit servo"),
+        "{stderr}"
+    );
 }

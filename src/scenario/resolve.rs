@@ -318,9 +318,16 @@ fn resolve_walk(
 /// third-party robots' 0.20–0.37.
 pub const SERVO_STEP_LIMIT: f64 = 0.4;
 
+/// The largest (k·dt + d)·dt / I of the impulse joints' servo, whose torque is explicit in the
+/// step, τ = k·(q* − q) − (k·dt + d)·q̇ (`sim::articulation`): each step multiplies the joint's
+/// speed by about 1 − that, which must stay well above 0 or the joint rings. hex18's is 0.27 at
+/// 1 ms. Measured on Kraby with impulse joints, per foot over a 4 s walk on flat ground: at 0.333
+/// ms (1.02) 0.42–0.54 m of slide, at 0.2 ms (0.58) 0.14–0.20 m, at 0.15 ms (0.43) 0.08–0.11 m.
+pub const EXPLICIT_SERVO_LIMIT: f64 = 0.5;
+
 /// The time step of a walk: as given — refused when the lightest joint's servo is too fast for
-/// it ([`SERVO_STEP_LIMIT`]) — else the default, or 1 ms / n with the least n the servo allows
-/// (said in a warning).
+/// it ([`SERVO_STEP_LIMIT`], and [`EXPLICIT_SERVO_LIMIT`] for impulse joints) — else the
+/// default, or 1 ms / n with the least n the servo allows (said in a warning).
 fn servo_time_step(
     spec: &ScenarioSpec,
     robot: &RobotModel,
@@ -338,14 +345,26 @@ fn servo_time_step(
     else {
         return Ok(spec.dt());
     };
-    let omega = (gains.stiffness / inertia).sqrt();
-    let limit = SERVO_STEP_LIMIT / omega;
+    let (k, d) = (gains.stiffness, gains.damping);
+    let omega = (k / inertia).sqrt();
     let name = &robot.joints[joint].name;
-    let why = format!(
-        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {} N·m/rad: ω = {omega:.0} rad/s) \
-         needs ω·dt ≤ {SERVO_STEP_LIMIT}",
-        gains.stiffness
+    let mut limit = SERVO_STEP_LIMIT / omega;
+    let mut why = format!(
+        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {k} N·m/rad: ω = {omega:.0} rad/s) \
+         needs ω·dt ≤ {SERVO_STEP_LIMIT}"
     );
+    if spec.articulation.unwrap_or_default() == crate::sim::Articulation::Impulse {
+        // the root of k·dt² + d·dt = limit·I
+        let explicit = (-d + (d * d + 4.0 * k * EXPLICIT_SERVO_LIMIT * inertia).sqrt()) / (2.0 * k);
+        if explicit < limit {
+            limit = explicit;
+            why = format!(
+                "the impulse joints' explicit servo on `{name}` ({inertia:.2e} kg·m² outboard, \
+                 {k} N·m/rad, {d} N·m·s/rad) needs (k·dt + d)·dt/I ≤ {EXPLICIT_SERVO_LIMIT} \
+                 (the multibody articulation's implicit servo allows a larger step)"
+            );
+        }
+    }
     match spec.dt {
         Some(dt) if dt > limit && !spec.allow_unstable_dt => Err(format!(
             "dt = {dt} s is too large: {why}, dt ≤ {limit:.2e} s; reduce dt or the servo \
