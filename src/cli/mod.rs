@@ -50,8 +50,8 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(merge::MergeArgs),
-    /// Search gait and servo parameters for the best walk on a set of terrain seeds (CMA-ES),
-    /// and write the best gait as a gait file.
+    /// Search gait and servo parameters for the best walk on a set of terrains and seeds
+    /// (CMA-ES), and write the best gait as a gait file.
     Optimize(optimize::OptimizeArgs),
     /// Show what hexsim makes of a robot: its legs, walking direction, masses, and the torque
     /// each servo holds standing in a gait's pose.

@@ -15,8 +15,8 @@ use std::process::ExitCode;
 
 #[derive(Args)]
 pub struct OptimizeArgs {
-    /// Optimisation file (TOML): the scenario, the parameters and their bounds, the terrain
-    /// seeds, the objective and the constraints (see optimizations/).
+    /// Optimisation file (TOML): the scenario, the parameters and their bounds (or choices), the
+    /// terrains and seeds, the objective and the constraints (see optimizations/).
     file: PathBuf,
     /// Folder for the log of every evaluation (evaluations.jsonl), the best gait
     /// (best_gait.toml), the summary (summary.json), the search's recording (search.rrd) and one
