@@ -105,6 +105,8 @@ fn a_tiny_search_runs_end_to_end() {
         assert!(p.is_some_and(|p| p.rows == 3), "{name}: {p:?}");
     }
     assert!(search.at(false, "summary").is_some());
+    let failures = search.at(false, "plots/failures/failed");
+    assert!(failures.is_some_and(|f| f.rows == 3), "{failures:?}");
     // each seed's: the start and the best walking it, superposed
     for seed in [3, 4] {
         let walk = read_back(&out_dir.join(format!("natural-seed-{seed}.rrd"))).unwrap();

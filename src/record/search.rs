@@ -1,7 +1,7 @@
 //! The recording of a gait search (`hexsim optimize`): over the evaluations (the `evaluation`
 //! timeline), every candidate's objective and the best so far, and where each parameter was
 //! sampled within its bounds — CMA-ES narrowing onto the best reads as the points converging —
-//! beside a table of the start against the best.
+//! and how many candidates failed, beside a table of the start against the best.
 
 use super::blueprint::{Layout, View};
 use super::rerun::Recording;
@@ -34,8 +34,9 @@ fn layout() -> Layout {
                         "plots/parameters",
                     )
                     .into(),
+                    View::time_series("failed candidates so far", "plots/failures").into(),
                 ],
-                vec![0.5, 0.5],
+                vec![0.42, 0.42, 0.16],
             ),
             View::text_document("start and best", "summary").into(),
         ],
@@ -85,9 +86,18 @@ pub fn write(
                 .with_marker_sizes([2.0]),
         )?;
     }
+    rec.log_static(
+        "plots/failures/failed",
+        &rerun::SeriesLines::new()
+            .with_names(["failed"])
+            .with_colors([[150, 150, 150]]),
+    )?;
     let mut best = f64::NEG_INFINITY;
+    let mut failed = 0;
     for (n, e) in history.iter().enumerate() {
         recording.set_sequence(TIMELINE, n as i64);
+        failed += usize::from(e.objective.is_none());
+        recording.scalars("plots/failures/failed", &[failed as f64])?;
         if let Some(o) = e.objective {
             recording.scalars("plots/objective/evaluations", &[o])?;
             best = best.max(o);
