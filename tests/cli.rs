@@ -480,3 +480,32 @@ fn bench_measures_both_articulations_and_says_what_it_measured() {
     assert_eq!(batch["threads"], 2);
     assert_eq!(batch["steps"], 2 * 1300, "two worlds of 1.3 s at 1 ms");
 }
+
+/// `joint_limit_time` (and its `max_joint_limit_s` expectation): hex18's tripod at its nominal
+/// speed keeps every joint off its stops; asked for 0.4 m/s, its strides outrun the legs and a
+/// joint stays pressed against a limit for a good part of a step.
+#[test]
+fn time_at_a_joint_limit_is_measured() {
+    let dir = scratch("joint_limit");
+    let run = |speed: Option<&str>, name: &str| {
+        let json = dir.join(name);
+        let mut cmd = hexsim();
+        cmd.args(["run", "--no-record", "--duration", "4", "--metrics"])
+            .arg(&json);
+        if let Some(v) = speed {
+            cmd.args(["--speed", v]);
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        m["joint_limit_time"].as_f64().unwrap()
+    };
+    assert_eq!(run(None, "nominal.json"), 0.0);
+    let fast = run(Some("0.4"), "fast.json");
+    assert!(fast > 0.1, "{fast} s at a limit");
+}

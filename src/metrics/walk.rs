@@ -43,6 +43,9 @@ pub struct HexapodMetrics {
     pub cost_of_transport: f64,
     /// Steps in which some leg's target was out of reach and was clamped.
     pub clamped_ik_steps: u64,
+    /// The longest time any joint stayed within [`NEAR_LIMIT`] of a URDF limit over the walk (s):
+    /// a servo pressed against its stop (a gait asking for more than the leg has).
+    pub joint_limit_time: f64,
     /// Impulse joints: the largest distance between a joint's two anchors (m) and rotation about
     /// a locked axis (deg) over the run; zero for the multibody.
     pub max_joint_drift: f64,
@@ -122,15 +125,24 @@ struct Accumulators {
     force_sum: [f64; 6],
     dt: f64,
     mass: f64,
+    /// Each joint's URDF limits (rad), and the steps it has stayed near one.
+    limits: Vec<(f64, f64)>,
+    near_limit_steps: Vec<u64>,
 }
 
+/// How close to a limit a joint counts as at it (1°).
+pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
+
 impl HexapodMetrics {
-    /// Metrics of a walk at step `dt` of a robot of `mass`; written to `output` at the end.
-    pub fn new(dt: f64, mass: f64, output: Option<PathBuf>) -> Self {
+    /// Metrics of a walk at step `dt` of a robot of `mass` whose joints have `limits` (lower,
+    /// upper, rad); written to `output` at the end.
+    pub fn new(dt: f64, mass: f64, limits: Vec<(f64, f64)>, output: Option<PathBuf>) -> Self {
         HexapodMetrics {
             acc: Accumulators {
                 dt,
                 mass,
+                near_limit_steps: vec![0; limits.len()],
+                limits,
                 ..Default::default()
             },
             output,
@@ -202,6 +214,19 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             }
             self.stance_fraction[k] = a.stance_steps[k] as f64 / n;
             self.mean_normal_force[k] = a.force_sum[k] / n;
+        }
+        for ((q, &(lower, upper)), steps) in r
+            .joint_angles
+            .iter()
+            .zip(&a.limits)
+            .zip(&mut a.near_limit_steps)
+        {
+            if q - lower < NEAR_LIMIT || upper - q < NEAR_LIMIT {
+                *steps += 1;
+                self.joint_limit_time = self.joint_limit_time.max(*steps as f64 * dt);
+            } else {
+                *steps = 0;
+            }
         }
         let power: f64 = r
             .joint_torques
@@ -433,6 +458,15 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         better: Better::Lower,
         bounds: &[],
         value: |m| Value::One(m.clamped_ik_steps as f64),
+    },
+    Metric {
+        name: "joint_limit_time",
+        unit: "s",
+        what: "longest time a joint stayed within 1° of a URDF limit (pressed against its stop)",
+        noise: Some(0.05),
+        better: Better::Lower,
+        bounds: &[Bound::max("max_joint_limit_s")],
+        value: |m| Value::One(m.joint_limit_time),
     },
     Metric {
         name: "max_joint_drift",

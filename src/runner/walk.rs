@@ -130,8 +130,16 @@ impl WalkRun {
             observers.push(Box::new(Progress::new(progress)));
         }
         // last: its file is written once the others are complete
-        let mut metrics =
-            HexapodMetrics::new(dt, self.robot.total_mass(), self.outputs.metrics.clone());
+        let mut metrics = HexapodMetrics::new(
+            dt,
+            self.robot.total_mass(),
+            self.robot
+                .joints
+                .iter()
+                .map(|j| (j.lower, j.upper))
+                .collect(),
+            self.outputs.metrics.clone(),
+        );
         metrics.stance = StanceMetrics::of(&self.gait, &self.robot);
 
         let steps = ((self.settle_time + self.duration) / dt).round() as u64;
