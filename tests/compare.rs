@@ -2,7 +2,7 @@
 //! table and JSON, the superposed recording, and clear errors for a broken comparison file.
 
 mod common;
-use common::{hexsim, scratch};
+use common::{assert_input_error, hexsim, scratch};
 use hexsim::record::rerun::read_back;
 
 /// The shipped ball comparison runs every setting, reports each one's metrics and draws each
@@ -129,19 +129,12 @@ fn a_broken_comparison_says_where() {
         let file = dir.join(format!("case_{k}.toml"));
         let text = text.replace("SCENARIOS", &scenarios.to_string_lossy());
         std::fs::write(&file, text).unwrap();
-        let out = hexsim()
-            .arg("compare")
+        let mut cmd = hexsim();
+        cmd.arg("compare")
             .arg(&file)
             .arg("--record")
-            .arg(dir.join("x.rrd"))
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "case {k}: {stderr}");
-        assert!(stderr.contains(&format!("case_{k}.toml")), "{stderr}");
-        for e in expected {
-            assert!(stderr.contains(e), "case {k}: no {e:?} in {stderr}");
-        }
+            .arg(dir.join("x.rrd"));
+        assert_input_error(cmd, &file, expected);
     }
 }
 

@@ -270,7 +270,6 @@ fn search(
             );
             searched.best = start.objective.map(|o| (o, opt.start.clone()));
             searched.history.push(Evaluated {
-                generation: 0,
                 x: opt.start.clone(),
                 objective: start.objective,
             });
@@ -317,7 +316,6 @@ fn search(
             // CMA-ES minimises; a failed candidate ranks below every one that ran
             ys.push(e.objective.map_or(f64::MAX, |o| -o));
             searched.history.push(Evaluated {
-                generation,
                 x: x.clone(),
                 objective: e.objective,
             });
@@ -485,16 +483,12 @@ fn multibody_pair(
     args: &OptimizeArgs,
     jobs: usize,
 ) -> Result<((Checked, Checked), Option<PathBuf>)> {
-    let stem = opt
-        .file
-        .file_stem()
-        .map_or("optimize".into(), |s| s.to_string_lossy().into_owned());
     let settings = [("start", &opt.start[..]), ("best", x)]
         .into_iter()
         .map(|(name, x)| opt.scenario(x, case, Some(Articulation::Multibody), name))
         .collect::<Result<Vec<_>, _>>()?;
     let comparison = Comparison {
-        file: PathBuf::from(format!("{stem} {}", case.label())),
+        file: PathBuf::from(format!("{} {}", opt.name(), case.label())),
         description: opt.description.clone(),
         settings,
     };

@@ -198,6 +198,25 @@ mod tests {
                 frame: self.frames[i],
             }
         }
+
+        /// Two contacts on this body, from rest, solved together: both must touch.
+        fn respond_pair(
+            &self,
+            model: &ContactModel,
+            contacts: &[JointContact; 2],
+        ) -> [ContactForce; 2] {
+            let mut states = [ContactState::default(); 2];
+            let mut out = [None; 2];
+            respond_jointly(
+                model,
+                contacts,
+                |i, j| self.mobility(i, j),
+                DT,
+                &mut states,
+                &mut out,
+            );
+            out.map(|f| f.unwrap())
+        }
     }
 
     fn tilted(nx: f64, ny: f64) -> GroundFrame {
@@ -300,17 +319,7 @@ mod tests {
             geometry: &geometries[i],
             velocity: velocities[i],
         });
-        let mut states = [ContactState::default(); 2];
-        let mut out = [None; 2];
-        respond_jointly(
-            &model,
-            &contacts,
-            |i, j| body.mobility(i, j),
-            DT,
-            &mut states,
-            &mut out,
-        );
-        let forces = out.map(|f| f.unwrap());
+        let forces = body.respond_pair(&model, &contacts);
         assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
         // against a dense solve of the module's equation, F_S = F_prev − T⁻¹·(u + W_n·ΔN), with
         // u, ΔN and F_prev from each contact's own `begin`
@@ -406,17 +415,7 @@ mod tests {
             geometry: &geometry,
             velocity,
         });
-        let mut states = [ContactState::default(); 2];
-        let mut out = [None; 2];
-        respond_jointly(
-            &model,
-            &contacts,
-            |i, j| body.mobility(i, j),
-            DT,
-            &mut states,
-            &mut out,
-        );
-        let forces = out.map(|f| f.unwrap());
+        let forces = body.respond_pair(&model, &contacts);
         assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
         // the pair's friction stops the point as one contact with the pair's normal impulse would
         let total = forces[0].friction + forces[1].friction;

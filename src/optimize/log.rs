@@ -121,14 +121,6 @@ impl Logged {
     pub fn get(&self, generation: usize, index: usize, x: &[f64]) -> Option<&Entry> {
         self.0.get(&(generation, index)).filter(|e| same(&e.x, x))
     }
-
-    pub fn len(&self) -> usize {
-        self.0.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
 }
 
 fn parse(line: &str, opt: &Optimization, in_main: bool) -> Option<((usize, usize), Entry)> {

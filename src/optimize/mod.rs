@@ -92,7 +92,6 @@ pub struct Optimization {
     /// gait inline; candidates change its parameters.
     base: toml::Table,
     scenario_path: PathBuf,
-    pub seeds: Vec<u32>,
     /// Every (terrain, seed) walked: the searched ones first, then the check seeds'.
     pub cases: Vec<Case>,
     pub generations: usize,
@@ -243,7 +242,6 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         description: spec.description,
         base,
         scenario_path,
-        seeds: spec.seeds,
         cases,
         generations: spec.generations,
         population: spec.population,
@@ -368,6 +366,11 @@ fn resolve(
 }
 
 impl Optimization {
+    /// The optimisation file's stem, naming its recordings.
+    pub fn name(&self) -> String {
+        stem(&self.file.to_string_lossy())
+    }
+
     /// The scenario table of a candidate: its parameters laid over the base.
     pub fn candidate_table(&self, x: &[f64]) -> toml::Table {
         let mut table = self.base.clone();

@@ -220,17 +220,12 @@ pub(super) fn start_point(
         .iter()
         .map(|p| {
             let (low, high) = p.bounds();
-            let mut at = Some(&values);
-            let mut value = None;
-            for (k, part) in p.name.split('.').enumerate() {
-                let v = at.and_then(|t| t.get(part));
-                if k == p.name.split('.').count() - 1 {
-                    value = v;
-                } else {
-                    at = v.and_then(toml::Value::as_table);
-                }
-            }
-            value
+            let (tables, field) = p.name.rsplit_once('.').expect("parameters are dotted");
+            let table = tables
+                .split('.')
+                .try_fold(&values, |t, part| t.get(part)?.as_table());
+            table
+                .and_then(|t| t.get(field))
                 .and_then(|v| p.coordinate(v))
                 .unwrap_or(match p.domain {
                     Domain::Choice(_) => 0.5,

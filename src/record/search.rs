@@ -14,7 +14,6 @@ pub const TIMELINE: &str = "evaluation";
 
 /// One evaluation, as the search told it.
 pub struct Evaluated {
-    pub generation: usize,
     pub x: Vec<f64>,
     /// None when it failed.
     pub objective: Option<f64>,
@@ -56,11 +55,7 @@ pub fn write(
     history: &[Evaluated],
     summary: &str,
 ) -> Result<PathBuf> {
-    let name = opt
-        .file
-        .file_stem()
-        .map_or("search".into(), |s| s.to_string_lossy().into_owned());
-    let recording = Recording::create_sequence(path, name, TIMELINE, &layout())?;
+    let recording = Recording::create_sequence(path, opt.name(), TIMELINE, &layout())?;
     let rec = recording.stream();
     rec.log_static("summary", &rerun::TextDocument::from_markdown(summary))?;
     rec.log_static(

@@ -24,6 +24,19 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// Runs `cmd` (given the input file `file`) and checks that it is an input error: exit 2, the
+/// message naming the file and saying each of `expected`.
+pub fn assert_input_error(mut cmd: std::process::Command, file: &Path, expected: &[&str]) {
+    let out = cmd.output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let name = file.file_name().unwrap().to_string_lossy();
+    assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
+    assert!(stderr.contains(name.as_ref()), "{stderr}");
+    for e in expected {
+        assert!(stderr.contains(e), "{name}: no {e:?} in {stderr}");
+    }
+}
+
 pub fn project_file(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
 }
