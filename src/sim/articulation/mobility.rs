@@ -1,6 +1,7 @@
-//! The contact mobility of the articulated robot, W = A·M⁻¹·Aᵀ, from rapier's LU factors of its
-//! mass matrix M (P·M = L·U) and the contacts' axis Jacobians A (one row per contact and ground
-//! axis, one column per degree of freedom).
+//! The contact mobility of the articulated robot, W = A·M⁻¹·Aᵀ, from rapier's factors of its mass
+//! matrix M (M = U·L along the tree of degrees of freedom, `rapier3d::prelude::TreeLu`: no
+//! fill-in, a degree of freedom couples only with its ancestors) and the contacts' axis Jacobians A
+//! (one row per contact and ground axis, one column per degree of freedom).
 //!
 //! Why its own code: W is needed every step a foot touches, and nalgebra's generic solve on
 //! dynamic matrices (one right-hand side at a time, bounds-checked views) cost more than the rest
@@ -9,7 +10,7 @@
 //! allocates.
 
 use glam::Vec4;
-use rapier3d::na;
+use rapier3d::prelude::{NO_PARENT, TreeLu};
 
 /// Degrees of freedom of the hexapod's multibody: the free root and 18 joints (the robot loader
 /// requires six legs of three joints).
@@ -52,22 +53,15 @@ impl Mobility {
         self.jacobian[dof][axis / LANE][axis % LANE] = value;
     }
 
-    /// W = A·M⁻¹·Aᵀ for the first `axes` contact axes, given M's LU factors; `w(a, b)` then reads
-    /// an entry. Returns false if the factors are not [`DOFS`] square.
-    pub fn compute(&mut self, lu: &na::LU<f32, na::Dyn, na::Dyn>, axes: usize) -> bool {
-        let packed = lu.lu_internal();
-        if packed.nrows() != DOFS || packed.ncols() != DOFS {
+    /// W = A·M⁻¹·Aᵀ for the first `axes` contact axes, given M's tree factors; `w(a, b)` then
+    /// reads an entry. Returns false if the factors are not [`DOFS`] square.
+    pub fn compute(&mut self, factors: &TreeLu, axes: usize) -> bool {
+        if factors.dim() != DOFS {
             return false;
         }
         debug_assert!(axes <= MAX_AXES);
-        // P·Aᵀ: rapier's LU pivots rows; applying its swaps to the row indices gives the order
-        let mut order = na::SVector::<usize, DOFS>::from_fn(|i, _| i);
-        lu.p().permute_rows(&mut order);
-        for (row, &from) in self.solved.iter_mut().zip(order.iter()) {
-            *row = self.jacobian[from];
-        }
+        self.solved = self.jacobian;
         // one monomorphised solve per width, so every row operation is a fixed run of registers
-        let factors = packed.as_slice();
         match axes.div_ceil(LANE) {
             0 => {}
             1 => self.solve::<1>(factors, axes),
@@ -79,35 +73,40 @@ impl Mobility {
         true
     }
 
-    /// M⁻¹·(P·Aᵀ) in place from the packed column-major factors, then W = A·X; `C` chunks of lanes.
-    fn solve<const C: usize>(&mut self, factors: &[f32], axes: usize) {
+    /// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of
+    /// freedom and its ancestors), then W = A·X; `C` chunks of lanes.
+    fn solve<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
+        let parents = factors.parents();
+        let a = factors.factors().as_slice();
         let x = &mut self.solved;
-        // L·Y = P·Aᵀ (unit diagonal), forward, column by column of L
-        for k in 0..DOFS {
-            let column = &factors[k * DOFS..(k + 1) * DOFS];
-            let (done, rest) = x.split_at_mut(k + 1);
-            let yk = done[k];
-            for (yi, &l) in rest.iter_mut().zip(&column[k + 1..]) {
+        // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
+        for k in (0..DOFS).rev() {
+            let yk = x[k];
+            let mut i = parents[k];
+            while i != NO_PARENT {
+                let u = a[i + k * DOFS];
                 for c in 0..C {
-                    yi[c] -= yk[c] * l;
+                    x[i][c] -= yk[c] * u;
                 }
+                i = parents[i];
             }
         }
-        // U·X = Y, backward, column by column of U
-        for k in (0..DOFS).rev() {
-            let column = &factors[k * DOFS..(k + 1) * DOFS];
-            let inverse = 1.0 / column[k];
-            let (above, rest) = x.split_at_mut(k);
-            let xk = &mut rest[0];
-            for v in &mut xk[..C] {
+        // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
+        for k in 0..DOFS {
+            let mut row = x[k];
+            let mut j = parents[k];
+            while j != NO_PARENT {
+                let l = a[k + j * DOFS];
+                for c in 0..C {
+                    row[c] -= x[j][c] * l;
+                }
+                j = parents[j];
+            }
+            let inverse = 1.0 / a[k + k * DOFS];
+            for v in &mut row[..C] {
                 *v *= inverse;
             }
-            let xk = *xk;
-            for (xi, &u) in above.iter_mut().zip(&column[..k]) {
-                for c in 0..C {
-                    xi[c] -= xk[c] * u;
-                }
-            }
+            x[k] = row;
         }
         // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg)
         for row in &mut self.product[..axes] {
@@ -135,24 +134,50 @@ impl Mobility {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rapier3d::na;
 
-    /// A symmetric positive-definite matrix that needs pivoting (small leading diagonal).
-    fn mass() -> na::DMatrix<f32> {
+    /// The hexapod's tree of degrees of freedom: the free base's six in a chain, then six legs
+    /// of three hanging from its last.
+    fn parents() -> Vec<usize> {
+        let mut parents: Vec<usize> = (0..6usize).map(|d| d.wrapping_sub(1)).collect();
+        parents[0] = NO_PARENT;
+        for _leg in 0..6 {
+            parents.extend([5, parents.len(), parents.len() + 1]);
+        }
+        parents
+    }
+
+    fn on_one_path(parents: &[usize], i: usize, j: usize) -> bool {
+        let (low, mut high) = (i.min(j), i.max(j));
+        while high != NO_PARENT && high > low {
+            high = parents[high];
+        }
+        high == low
+    }
+
+    /// A symmetric positive-definite matrix with the tree's pattern (as a mass matrix has).
+    fn mass(parents: &[usize]) -> na::DMatrix<f32> {
         let mut m = na::DMatrix::<f32>::from_fn(DOFS, DOFS, |i, j| {
+            if !on_one_path(parents, i, j) {
+                return 0.0;
+            }
             let x = ((i * 7 + j * 13) % 11) as f32 / 11.0 - 0.5;
             let y = ((j * 7 + i * 13) % 11) as f32 / 11.0 - 0.5;
             0.3 * (x + y)
         });
         for i in 0..DOFS {
-            m[(i, i)] += if i == 0 { 0.05 } else { 4.0 };
+            m[(i, i)] += if i == 0 { 0.5 } else { 4.0 };
         }
         m
     }
 
     #[test]
     fn matches_a_dense_solve() {
-        let m = mass();
-        let lu = m.clone().lu();
+        let parents = parents();
+        assert_eq!(parents.len(), DOFS);
+        let m = mass(&parents);
+        let mut factors = TreeLu::default();
+        factors.factorize(&m, &parents);
         let axes = 11;
         let a = na::DMatrix::<f32>::from_fn(axes, DOFS, |r, d| {
             // sparse like a foot's row: the root's six and three more
@@ -168,7 +193,7 @@ mod tests {
                 mobility.set(d, r, a[(r, d)]);
             }
         }
-        assert!(mobility.compute(&lu, axes));
+        assert!(mobility.compute(&factors, axes));
         let expected = &a * m.try_inverse().expect("invertible") * a.transpose();
         let scale = expected.amax();
         for r in 0..axes {
@@ -181,7 +206,11 @@ mod tests {
 
     #[test]
     fn rejects_factors_of_another_size() {
-        let lu = na::DMatrix::<f32>::identity(6, 6).lu();
-        assert!(!Mobility::default().compute(&lu, 3));
+        let mut factors = TreeLu::default();
+        factors.factorize(
+            &na::DMatrix::<f32>::identity(6, 6),
+            &[NO_PARENT, 0, 1, 2, 3, 4],
+        );
+        assert!(!Mobility::default().compute(&factors, 3));
     }
 }

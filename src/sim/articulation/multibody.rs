@@ -214,7 +214,7 @@ impl Joints for MultibodyRobot {
             return;
         }
         assert!(
-            self.scratch.compute(mb.inv_augmented_mass(), 3 * n),
+            self.scratch.compute(mb.augmented_mass_factors(), 3 * n),
             "the mass matrix is factorised from the start, {DOFS} degrees of freedom"
         );
         for i in 0..n {

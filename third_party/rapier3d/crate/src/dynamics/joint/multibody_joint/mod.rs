@@ -12,6 +12,8 @@ pub use self::multibody_joint_set::{MultibodyJointSet, MultibodyLinkId};
 #[cfg(feature = "alloc")]
 pub use self::multibody_link::MultibodyLink;
 #[cfg(feature = "alloc")]
+pub use self::tree_lu::{NO_PARENT, TreeLu};
+#[cfg(feature = "alloc")]
 pub use self::unit_multibody_joint::{
     unit_joint_friction_constraint, unit_joint_limit_constraint, unit_joint_motor_constraint,
 };
@@ -30,6 +32,8 @@ mod multibody_workspace;
 mod multibody_ik;
 #[cfg(feature = "alloc")]
 mod multibody_joint;
+#[cfg(feature = "alloc")]
+mod tree_lu;
 #[cfg(feature = "alloc")]
 mod unit_multibody_joint;
 

@@ -1,5 +1,6 @@
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
 use super::multibody_workspace::MultibodyWorkspace;
+use super::tree_lu::TreeLu;
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
 use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
@@ -34,6 +35,13 @@ impl Force {
         unsafe { core::mem::transmute(self) }
     }
 }
+
+/// A value computed on first use: `std`'s `OnceLock` (shared between threads), else `core`'s
+/// `OnceCell`.
+#[cfg(feature = "std")]
+type LazyLu = std::sync::OnceLock<LU<Real, Dyn, Dyn>>;
+#[cfg(not(feature = "std"))]
+type LazyLu = core::cell::OnceCell<LU<Real, Dyn, Dyn>>;
 
 /// The dot product of two spatial vectors, written out so that it compiles to a few
 /// multiply-adds (the mass matrix assembly's inner loop).
@@ -95,13 +103,17 @@ pub struct Multibody {
     //       move dofs from/to a format that matches the augmented mass.
     // TODO: use sparse matrices?
     augmented_mass: DMatrix<Real>,
-    inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    /// The factors of `augmented_mass` (leading block of the non-kinematic degrees of freedom).
+    mass_factors: TreeLu,
+    /// `augmented_mass`'s dense LU, computed only if [`Self::inv_augmented_mass`] asks for it.
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    inv_augmented_mass: LazyLu,
     // The indexing sequence for moving all kinematics degrees of
     // freedoms to the end of the generalized coordinates vector.
     augmented_mass_indices: IndexSequence,
 
     acc_augmented_mass: DMatrix<Real>,
-    acc_inv_augmented_mass: LU<Real, Dyn, Dyn>,
+    acc_mass_factors: TreeLu,
 
     ndofs: usize,
     pub(crate) root_is_dynamic: bool,
@@ -139,9 +151,10 @@ impl Multibody {
             accelerations: DVector::zeros(0),
             body_jacobians: Vec::new(),
             augmented_mass: DMatrix::zeros(0, 0),
-            inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            mass_factors: TreeLu::default(),
+            inv_augmented_mass: LazyLu::default(),
             acc_augmented_mass: DMatrix::zeros(0, 0),
-            acc_inv_augmented_mass: LU::new(DMatrix::zeros(0, 0)),
+            acc_mass_factors: TreeLu::default(),
             augmented_mass_indices: IndexSequence::new(),
             ndofs: 0,
             solver_id: 0,
@@ -341,9 +354,36 @@ impl Multibody {
         self.self_contacts_enabled = enabled;
     }
 
-    /// The inverse augmented mass matrix of this multibody.
+    /// The inverse augmented mass matrix of this multibody, as a dense LU factorisation.
+    ///
+    /// rapier itself solves with [`Self::augmented_mass_factors`]; this dense LU is computed from
+    /// the same matrix on the first call after each mass matrix update.
     pub fn inv_augmented_mass(&self) -> &LU<Real, Dyn, Dyn> {
-        &self.inv_augmented_mass
+        self.inv_augmented_mass.get_or_init(|| {
+            let n = self.mass_factors.dim();
+            LU::new(self.augmented_mass.view((0, 0), (n, n)).into_owned())
+        })
+    }
+
+    /// The factors of the augmented mass matrix ([`TreeLu`]), in the order of the generalized
+    /// coordinates with the kinematic degrees of freedom removed (without kinematic joints: the
+    /// generalized coordinates' order).
+    pub fn augmented_mass_factors(&self) -> &TreeLu {
+        &self.mass_factors
+    }
+
+    /// Solves `M·x = b` in place for each column of `b` (`ndofs` rows, in the order of the
+    /// generalized coordinates), `M` the augmented mass matrix; a kinematic degree of freedom's
+    /// entry of `x` is zero.
+    pub fn solve_augmented_mass_mut<C: na::Dim, S: StorageMut<Real, Dyn, C>>(
+        &self,
+        b: &mut na::Matrix<Real, Dyn, C, S>,
+    ) {
+        let factors = &self.mass_factors;
+        self.augmented_mass_indices
+            .with_rearranged_rows_mut(b, |b| {
+                factors.solve_mut(b);
+            });
     }
 
     /// The first link of this multibody.
@@ -634,7 +674,7 @@ impl Multibody {
 
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
-                self.acc_inv_augmented_mass.solve_mut(accs);
+                self.acc_mass_factors.solve_mut(accs);
             });
 
         if check_implicit_coriolis_divergence {
@@ -697,7 +737,7 @@ impl Multibody {
                 self.augmented_mass_indices.with_rearranged_rows_mut(
                     &mut self.accelerations,
                     |accs| {
-                        self.inv_augmented_mass.solve_mut(accs);
+                        self.mass_factors.solve_mut(accs);
                     },
                 );
 
@@ -1101,18 +1141,15 @@ impl Multibody {
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
-        // TODO: avoid allocation inside LU at each timestep.
-        // Without kinematic degrees of freedom the whole matrix is factorised: a clone copies it
-        // with one memcpy, where a view's `into_owned` copies it entry by entry.
-        let leading_block = |m: &DMatrix<Real>| {
-            if effective_dim == m.nrows() {
-                m.clone()
-            } else {
-                m.view((0, 0), (effective_dim, effective_dim)).into_owned()
-            }
-        };
-        self.acc_inv_augmented_mass = LU::new(leading_block(&self.acc_augmented_mass));
-        self.inv_augmented_mass = LU::new(leading_block(&self.augmented_mass));
+        // Factorise both along the tree of degrees of freedom (no fill-in, no allocation once
+        // sized); the dense LU of the public `inv_augmented_mass` waits until it is asked for.
+        self.workspace.update_dof_parents(&self.links);
+        debug_assert_eq!(self.workspace.dof_parents.len(), effective_dim);
+        self.acc_mass_factors
+            .factorize(&self.acc_augmented_mass, &self.workspace.dof_parents);
+        self.mass_factors
+            .factorize(&self.augmented_mass, &self.workspace.dof_parents);
+        self.inv_augmented_mass.take();
     }
 
     /// Per-DoF inverse joint-space inertia `diag(M⁻¹)` at the current configuration, where `M`
@@ -1141,7 +1178,7 @@ impl Multibody {
             e[i] = 1.0;
             self.augmented_mass_indices
                 .with_rearranged_rows_mut(&mut e, |b| {
-                    self.inv_augmented_mass.solve_mut(b);
+                    self.mass_factors.solve_mut(b);
                 });
             out[i] = e[i];
         }
@@ -1231,8 +1268,7 @@ impl Multibody {
             for k in 0..ndofs {
                 jacobians[j_id + ndofs + k] = jacobians[j_id + k];
             }
-            self.inv_augmented_mass
-                .solve_mut(&mut jacobians.rows_mut(j_id + ndofs, ndofs));
+            self.solve_augmented_mass_mut(&mut jacobians.rows_mut(j_id + ndofs, ndofs));
 
             // lhs = Jᵀ M⁻¹ J = Σ J[k]·WJ[k]; only g1/g2 entries of J are nonzero.
             let lhs = jacobians[j_id + ndofs + g2] - c.coeff * jacobians[j_id + ndofs + g1];
@@ -1674,7 +1710,7 @@ impl Multibody {
             let mut out_invm_j = jacobians.rows_mut(wj_id, self.ndofs);
             self.augmented_mass_indices
                 .with_rearranged_rows_mut(&mut out_invm_j, |out_invm_j| {
-                    self.inv_augmented_mass.solve_mut(out_invm_j);
+                    self.mass_factors.solve_mut(out_invm_j);
                 });
         }
 
@@ -1747,7 +1783,7 @@ impl Multibody {
             let mut out_invm_j = jacobians.rows_mut(wj_id, self.ndofs);
             self.augmented_mass_indices
                 .with_rearranged_rows_mut(&mut out_invm_j, |out_invm_j| {
-                    self.inv_augmented_mass.solve_mut(out_invm_j);
+                    self.mass_factors.solve_mut(out_invm_j);
                 });
         }
 

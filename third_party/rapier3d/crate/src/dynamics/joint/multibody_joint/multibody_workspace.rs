@@ -4,6 +4,7 @@ use crate::math::{ANG_DIM, DIM, DVector, Real, SPATIAL_DIM};
 use na::SVector;
 
 use super::multibody_link::MultibodyLink;
+use super::tree_lu::NO_PARENT;
 
 /// A temporary workspace for various updates of the multibody.
 #[cfg_attr(feature = "serde-serialize", derive(Serialize, Deserialize))]
@@ -24,6 +25,11 @@ pub(crate) struct MultibodyWorkspace {
     /// One link's `Mᵢ·J` and the semi-implicit update's counterpart, column per path entry.
     pub mass_columns: Vec<SVector<Real, SPATIAL_DIM>>,
     pub acc_mass_columns: Vec<SVector<Real, SPATIAL_DIM>>,
+    /// Per non-kinematic degree of freedom (in order, kinematic ones left out), the one before
+    /// it on its path to the root (`NO_PARENT` for none): the tree the factorisations follow.
+    pub dof_parents: Vec<usize>,
+    /// Per link, the last non-kinematic degree of freedom on its path (scratch).
+    link_last_dof: Vec<usize>,
 }
 
 impl MultibodyWorkspace {
@@ -39,6 +45,8 @@ impl MultibodyWorkspace {
             path_coriolis_w: Vec::new(),
             mass_columns: Vec::new(),
             acc_mass_columns: Vec::new(),
+            dof_parents: Vec::new(),
+            link_last_dof: Vec::new(),
         }
     }
 
@@ -74,5 +82,27 @@ impl MultibodyWorkspace {
         self.path_coriolis_w.resize(total, SVector::zeros());
         self.mass_columns.resize(longest, SVector::zeros());
         self.acc_mass_columns.resize(longest, SVector::zeros());
+    }
+
+    /// Lists [`Self::dof_parents`]: a joint's degrees of freedom follow one another, and the
+    /// first follows the last of the nearest ancestor link that has one. The kinematic ones are
+    /// left out, the others keep their order (as `Multibody`'s kinematic reordering does).
+    pub fn update_dof_parents(&mut self, links: &[MultibodyLink]) {
+        self.dof_parents.clear();
+        self.link_last_dof.clear();
+        for (i, link) in links.iter().enumerate() {
+            let mut previous = if i == 0 {
+                NO_PARENT
+            } else {
+                self.link_last_dof[link.parent_internal_id]
+            };
+            if !link.joint.kinematic {
+                for _ in 0..link.joint.ndofs() {
+                    self.dof_parents.push(previous);
+                    previous = self.dof_parents.len() - 1;
+                }
+            }
+            self.link_last_dof.push(previous);
+        }
     }
 }
