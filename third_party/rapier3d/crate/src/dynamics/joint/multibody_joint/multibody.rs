@@ -1,5 +1,5 @@
 use super::multibody_link::{MultibodyLink, MultibodyLinkVec};
-use super::multibody_workspace::MultibodyWorkspace;
+use super::multibody_workspace::{LinkKinematicInputs, MultibodyWorkspace};
 use super::tree_lu::TreeLu;
 use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
@@ -53,6 +53,36 @@ fn dot_spatial(a: &SVector<Real, SPATIAL_DIM>, b: &SVector<Real, SPATIAL_DIM>) -
         sum += a[r] * b[r];
     }
     sum
+}
+
+/// The twist `j` of a body at the point `r` from a reference point (its linear velocity there,
+/// then its angular velocity) as the velocity of the reference point: `v − ω × r`.
+#[inline(always)]
+fn twist_at_reference(
+    j: &SVector<Real, SPATIAL_DIM>,
+    r: &na::SVector<Real, DIM>,
+) -> SVector<Real, SPATIAL_DIM> {
+    let mut twist = *j;
+    let w = j.fixed_rows::<ANG_DIM>(DIM);
+    twist
+        .fixed_rows_mut::<DIM>(0)
+        .gemm(-1.0, &r.gcross_matrix_tr(), &w, 1.0);
+    twist
+}
+
+/// The wrench `w` applied at the point `r` from a reference point (a force, then a torque) as
+/// the same wrench about the reference point: `τ + r × f`.
+#[inline(always)]
+fn wrench_at_reference(
+    w: &SVector<Real, SPATIAL_DIM>,
+    r: &na::SVector<Real, DIM>,
+) -> SVector<Real, SPATIAL_DIM> {
+    let mut wrench = *w;
+    let f = w.fixed_rows::<DIM>(0);
+    wrench
+        .fixed_rows_mut::<ANG_DIM>(DIM)
+        .gemm(1.0, &r.gcross_matrix_tr().transpose(), &f, 1.0);
+    wrench
 }
 
 /// A holonomic coupling between two generalized coordinates of a single
@@ -859,8 +889,17 @@ impl Multibody {
     /// root, so its body Jacobian `Jᵢ` is zero outside those columns (a leg's foot on a
     /// floating base: 9 of 24 columns). Each link's terms are computed on those columns alone
     /// (`MultibodyWorkspace::path_dofs`), in the order root first, so that a link's columns begin
-    /// with its parent's and the Coriolis terms it inherits are a prefix. This turns the
-    /// `O(links·ndofs²)` assembly into `O(Σᵢ pathᵢ²)`.
+    /// with its parent's and the Coriolis terms it inherits are a prefix.
+    ///
+    /// The sums over links are then taken the way the composite-rigid-body algorithm takes them
+    /// (Featherstone, *Rigid Body Dynamics Algorithms*, §6.2): a degree of freedom `a` moves all
+    /// the links below its joint with one twist `Sₐ`, so `Jᵢ`'s column `a` is `Sₐ` seen from link
+    /// `i`'s centre of mass, and `Σᵢ Jᵢ[a]ᵀ·Fᵢ[b]` is `Sₐᵀ` times the sum of the wrenches
+    /// `Fᵢ[b] = Mᵢ·Jᵢ[b]` (and their semi-implicit counterparts) over the links below both `a`'s
+    /// and `b`'s joints, taken about one reference point (the root link's centre of mass). Those
+    /// wrenches are summed from the leaves up, one addition per path entry, and each matrix entry
+    /// is one product: `O(Σᵢ pathᵢ)` work instead of the `O(Σᵢ pathᵢ²)` products of summing
+    /// `Jᵢᵀ·Mᵢ·Jᵢ` link by link, or the `O(links·ndofs²)` of the dense assembly.
     pub(crate) fn update_mass_matrix(&mut self, dt: Real, bodies: &RigidBodySet) {
         if self.ndofs == 0 {
             return; // Nothing to do.
@@ -1004,6 +1043,16 @@ impl Multibody {
                 }
             }
 
+            // This link's centre of mass from the root's, the reference point of the wrenches and
+            // twists below: the Jacobians' points follow one another by `shift02` and `shift23`.
+            let point = if i == 0 {
+                Vector::ZERO
+            } else {
+                ws.link_points[link.parent_internal_id] + link.shift02 + link.shift23
+            };
+            ws.link_points[i] = point;
+            let point = vect_to_na(point);
+
             {
                 // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
                 let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
@@ -1020,9 +1069,9 @@ impl Multibody {
             }
 
             /*
-             * Meld with the mass matrix: `M += Jᵀ·Mᵢ·J` and
-             * `M_acc += Jᵀ·(Mᵢ·J + dt·G·J_w + dt·Mᵢ·C)` with `G` the derivative of the gyroscopic
-             * forces and `C` the Coriolis matrix, each a column on the path at a time.
+             * The wrenches `Mᵢ·J` and `Mᵢ·J + dt·G·J_w + dt·Mᵢ·C` (`G` the derivative of the
+             * gyroscopic forces, `C` the Coriolis matrix), a column on the path at a time, about
+             * the reference point.
              */
             let rb_mass_na = vect_to_na(rb_mass);
             let rb_mass_dt = vect_to_na(rb_mass * dt);
@@ -1040,8 +1089,8 @@ impl Multibody {
                 let j_w = j.fixed_rows::<ANG_DIM>(DIM);
                 let coriolis_v = &ws.path_coriolis_v[k];
                 let coriolis_w = &ws.path_coriolis_w[k];
-                let mass_col = &mut ws.mass_columns[k - path.start];
-                let acc_col = &mut ws.acc_mass_columns[k - path.start];
+                let mut mass_col = SVector::<Real, SPATIAL_DIM>::zeros();
+                let mut acc_col = SVector::<Real, SPATIAL_DIM>::zeros();
 
                 mass_col
                     .fixed_rows_mut::<DIM>(0)
@@ -1066,26 +1115,57 @@ impl Multibody {
                         .fixed_rows_mut::<ANG_DIM>(DIM)
                         .copy_from(&(i_j_w + coriolis_w * (dt * rb_inertia)));
                 }
+
+                ws.path_mass_wrenches[k] = wrench_at_reference(&mass_col, &point);
+                ws.path_acc_wrenches[k] = wrench_at_reference(&acc_col, &point);
             }
 
-            let jacobians = &ws.path_jacobians[path.clone()];
-            let dofs = &ws.path_dofs[path.clone()];
-            let n = self.ndofs;
-            let mass = self.augmented_mass.as_mut_slice();
-            let acc_mass = self.acc_augmented_mass.as_mut_slice();
-            for (b, &col) in dofs.iter().enumerate() {
-                let (mass_col, acc_col) = (&ws.mass_columns[b], &ws.acc_mass_columns[b]);
-                // Column-major: entry (row, col) at `row + col * n`. `M` is symmetric: its
-                // upper triangle is mirrored.
-                let col_start = col * n;
-                for (a, (&row, j)) in dofs.iter().zip(jacobians).enumerate() {
-                    acc_mass[col_start + row] += dot_spatial(j, acc_col);
-                    if a < b {
-                        let m = dot_spatial(j, mass_col);
-                        mass[col_start + row] += m;
-                        mass[row * n + col] += m;
-                    } else if a == b {
-                        mass[col_start + row] += dot_spatial(j, mass_col);
+            // The twists of the link's own degrees of freedom about the reference point.
+            for k in path.end - ndofs..path.end {
+                ws.dof_motions[ws.path_dofs[k]] = twist_at_reference(&ws.path_jacobians[k], &point);
+            }
+        }
+
+        /*
+         * Each link's wrenches summed over the links below it, from the leaves up (a link's path
+         * begins with its parent's), then each entry `(a, b)` of both matrices as `Sₐᵀ` times the
+         * sum for column `b` at the deeper of `a`'s and `b`'s links: set once per entry, on the
+         * link that owns the deeper degree of freedom. `M` is symmetric: its entries above the
+         * diagonal are mirrored.
+         */
+        let ws = &mut self.workspace;
+        for i in (1..self.links.len()).rev() {
+            let parent = self.links[i].parent_internal_id;
+            let parent_start = ws.path_start[parent];
+            let parent_len = ws.path_start[parent + 1] - parent_start;
+            let start = ws.path_start[i];
+            for k in 0..parent_len {
+                let mass_wrench = ws.path_mass_wrenches[start + k];
+                let acc_wrench = ws.path_acc_wrenches[start + k];
+                ws.path_mass_wrenches[parent_start + k] += mass_wrench;
+                ws.path_acc_wrenches[parent_start + k] += acc_wrench;
+            }
+        }
+
+        let n = self.ndofs;
+        let mass = self.augmented_mass.as_mut_slice();
+        let acc_mass = self.acc_augmented_mass.as_mut_slice();
+        // Column-major: entry (row, col) at `row + col * n`.
+        for (i, link) in self.links.iter().enumerate() {
+            let path = ws.path_start[i]..ws.path_start[i + 1];
+            let own_start = path.end - link.joint.ndofs();
+            for ka in own_start..path.end {
+                let a = ws.path_dofs[ka];
+                let motion_a = &ws.dof_motions[a];
+                for kb in path.start..=ka {
+                    let b = ws.path_dofs[kb];
+                    let m = dot_spatial(motion_a, &ws.path_mass_wrenches[kb]);
+                    mass[a + b * n] = m;
+                    mass[b + a * n] = m;
+                    acc_mass[a + b * n] = dot_spatial(motion_a, &ws.path_acc_wrenches[kb]);
+                    if kb < ka {
+                        acc_mass[b + a * n] =
+                            dot_spatial(&ws.dof_motions[b], &ws.path_acc_wrenches[ka]);
                     }
                 }
             }
@@ -1496,6 +1576,13 @@ impl Multibody {
         // Be sure the degrees of freedom match and take the root position if needed.
         self.update_root_type(bodies, read_root_pose_from_rigid_body);
 
+        // Nothing it reads changed since the last call (the usual case at the start of a step,
+        // right after the previous step ended with its own forward kinematics): its results
+        // stand, bit for bit.
+        if self.kinematic_inputs_unchanged(bodies) {
+            return;
+        }
+
         // Special case for the root, which has no parent.
         {
             let link = &mut self.links[0];
@@ -1532,6 +1619,35 @@ impl Multibody {
          * Compute body jacobians.
          */
         self.update_body_jacobians();
+    }
+
+    /// Records what [`Self::forward_kinematics`] reads, after the root's pose is taken, and tells
+    /// whether it is what the last call read: the joints' coordinates and frames, the links'
+    /// centres of mass, the bodies' types and the tree's shape.
+    fn kinematic_inputs_unchanged(&mut self, bodies: &RigidBodySet) -> bool {
+        let ws = &mut self.workspace;
+        ws.kinematic_inputs_now.clear();
+        for link in self.links.iter() {
+            let rb = &bodies[link.rigid_body];
+            let joint = &link.joint;
+            ws.kinematic_inputs_now.push(LinkKinematicInputs {
+                rigid_body: link.rigid_body,
+                body_type: rb.body_type,
+                local_com: rb.mprops.local_mprops.local_com,
+                parent_internal_id: link.parent_internal_id,
+                assembly_id: link.assembly_id,
+                locked_axes: joint.data.locked_axes,
+                local_frame1: joint.data.local_frame1,
+                local_frame2: joint.data.local_frame2,
+                coords: joint.coords,
+                joint_rot: joint.joint_rot,
+            });
+        }
+        let unchanged = ws.kinematic_inputs_ndofs == self.ndofs
+            && ws.kinematic_inputs_now == ws.kinematic_inputs;
+        core::mem::swap(&mut ws.kinematic_inputs, &mut ws.kinematic_inputs_now);
+        ws.kinematic_inputs_ndofs = self.ndofs;
+        unchanged
     }
 
     /// Computes the ids of all the links between the root and the link identified by `link_id`.
@@ -1921,6 +2037,9 @@ impl IndexSequence {
 
 #[cfg(all(test, feature = "dim3"))]
 mod mass_matrix_tests;
+
+#[cfg(all(test, feature = "dim3"))]
+mod kinematics_tests;
 
 #[cfg(test)]
 mod test {

@@ -1,10 +1,29 @@
 use crate::alloc_prelude::*;
-use crate::dynamics::RigidBodyVelocity;
-use crate::math::{ANG_DIM, DIM, DVector, Real, SPATIAL_DIM};
+use crate::dynamics::{JointAxesMask, RigidBodyHandle, RigidBodyType, RigidBodyVelocity};
+use crate::math::{
+    ANG_DIM, DIM, DVector, Pose, Real, Rotation, SPATIAL_DIM, SpatialVector, Vector,
+};
 use na::SVector;
 
 use super::multibody_link::MultibodyLink;
 use super::tree_lu::NO_PARENT;
+
+/// What [`Multibody::forward_kinematics`](super::Multibody::forward_kinematics) reads of one
+/// link: when none of it changed since the last call, neither did the results.
+#[cfg_attr(feature = "serde-serialize", derive(Serialize, Deserialize))]
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct LinkKinematicInputs {
+    pub rigid_body: RigidBodyHandle,
+    pub body_type: RigidBodyType,
+    pub local_com: Vector,
+    pub parent_internal_id: usize,
+    pub assembly_id: usize,
+    pub locked_axes: JointAxesMask,
+    pub local_frame1: Pose,
+    pub local_frame2: Pose,
+    pub coords: SpatialVector,
+    pub joint_rot: Rotation,
+}
 
 /// A temporary workspace for various updates of the multibody.
 #[cfg_attr(feature = "serde-serialize", derive(Serialize, Deserialize))]
@@ -22,14 +41,26 @@ pub(crate) struct MultibodyWorkspace {
     /// Per link, the linear and angular parts of the Coriolis matrix on its path (same layout).
     pub path_coriolis_v: Vec<SVector<Real, DIM>>,
     pub path_coriolis_w: Vec<SVector<Real, ANG_DIM>>,
-    /// One link's `Mᵢ·J` and the semi-implicit update's counterpart, column per path entry.
-    pub mass_columns: Vec<SVector<Real, SPATIAL_DIM>>,
-    pub acc_mass_columns: Vec<SVector<Real, SPATIAL_DIM>>,
+    /// Per link, the wrenches `Mᵢ·J` and the semi-implicit update's counterpart about the root
+    /// link's centre of mass, then summed over the links below it (same layout as `path_dofs`).
+    pub path_mass_wrenches: Vec<SVector<Real, SPATIAL_DIM>>,
+    pub path_acc_wrenches: Vec<SVector<Real, SPATIAL_DIM>>,
+    /// Per link, its centre of mass from the root link's.
+    pub link_points: Vec<Vector>,
+    /// Per degree of freedom, the twist it gives the links below its joint, about the root
+    /// link's centre of mass.
+    pub dof_motions: Vec<SVector<Real, SPATIAL_DIM>>,
     /// Per non-kinematic degree of freedom (in order, kinematic ones left out), the one before
     /// it on its path to the root (`NO_PARENT` for none): the tree the factorisations follow.
     pub dof_parents: Vec<usize>,
     /// Per link, the last non-kinematic degree of freedom on its path (scratch).
     link_last_dof: Vec<usize>,
+    /// The inputs of the last forward kinematics, per link, and the multibody's number of
+    /// degrees of freedom then; empty when they must be computed anew.
+    pub kinematic_inputs: Vec<LinkKinematicInputs>,
+    pub kinematic_inputs_ndofs: usize,
+    /// The current inputs (scratch, swapped with `kinematic_inputs`).
+    pub kinematic_inputs_now: Vec<LinkKinematicInputs>,
 }
 
 impl MultibodyWorkspace {
@@ -43,17 +74,24 @@ impl MultibodyWorkspace {
             path_jacobians: Vec::new(),
             path_coriolis_v: Vec::new(),
             path_coriolis_w: Vec::new(),
-            mass_columns: Vec::new(),
-            acc_mass_columns: Vec::new(),
+            path_mass_wrenches: Vec::new(),
+            path_acc_wrenches: Vec::new(),
+            link_points: Vec::new(),
+            dof_motions: Vec::new(),
             dof_parents: Vec::new(),
             link_last_dof: Vec::new(),
+            kinematic_inputs: Vec::new(),
+            kinematic_inputs_ndofs: 0,
+            kinematic_inputs_now: Vec::new(),
         }
     }
 
-    /// Resize the workspace so it is enough for `nlinks` links.
+    /// Resize the workspace so it is enough for `nlinks` links (the multibody's links changed:
+    /// its forward kinematics must be computed anew).
     pub fn resize(&mut self, nlinks: usize, ndofs: usize) {
         self.accs.resize(nlinks, RigidBodyVelocity::zero());
-        self.ndofs_vec = DVector::zeros(ndofs)
+        self.ndofs_vec = DVector::zeros(ndofs);
+        self.kinematic_inputs.clear();
     }
 
     /// Lists each link's path degrees of freedom (see [`Self::path_dofs`]) and sizes the
@@ -63,9 +101,7 @@ impl MultibodyWorkspace {
         self.path_dofs.clear();
         self.path_start.clear();
         self.path_start.push(0);
-        let mut longest = 0;
         for (i, link) in links.iter().enumerate() {
-            let start = self.path_dofs.len();
             if i != 0 {
                 let parent = link.parent_internal_id;
                 let parent_path = self.path_start[parent]..self.path_start[parent + 1];
@@ -74,14 +110,18 @@ impl MultibodyWorkspace {
             self.path_dofs
                 .extend(link.assembly_id..link.assembly_id + link.joint.ndofs());
             self.path_start.push(self.path_dofs.len());
-            longest = longest.max(self.path_dofs.len() - start);
         }
         let total = self.path_dofs.len();
         self.path_jacobians.resize(total, SVector::zeros());
         self.path_coriolis_v.resize(total, SVector::zeros());
         self.path_coriolis_w.resize(total, SVector::zeros());
-        self.mass_columns.resize(longest, SVector::zeros());
-        self.acc_mass_columns.resize(longest, SVector::zeros());
+        self.path_mass_wrenches.resize(total, SVector::zeros());
+        self.path_acc_wrenches.resize(total, SVector::zeros());
+        self.link_points.resize(links.len(), Vector::ZERO);
+        let ndofs = links
+            .last()
+            .map_or(0, |link| link.assembly_id + link.joint.ndofs());
+        self.dof_motions.resize(ndofs, SVector::zeros());
     }
 
     /// Lists [`Self::dof_parents`]: a joint's degrees of freedom follow one another, and the

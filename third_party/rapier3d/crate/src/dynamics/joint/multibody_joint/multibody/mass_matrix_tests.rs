@@ -127,7 +127,7 @@ fn dense_mass_matrices(
 
 /// A floating base with three branches: a revolute chain of three links (the leg of a
 /// hexapod), a prismatic joint carrying a spherical one, and a single revolute link.
-fn branching_tree() -> (RigidBodySet, MultibodyJointSet, RigidBodyHandle) {
+pub(super) fn branching_tree() -> (RigidBodySet, MultibodyJointSet, RigidBodyHandle) {
     let mut bodies = RigidBodySet::new();
     let mut joints = MultibodyJointSet::new();
     let mut rng = oorandom::Rand32::new(7);
