@@ -2,7 +2,7 @@
 //! rapier's impulse joints (five locked axes and a revolute one, solved with the contacts' PGS).
 //!
 //! Why it exists: a step costs a few small constraint rows instead of rebuilding and factorising
-//! the multibody's mass matrix, which makes it about 1.5 times faster — for large sweeps.
+//! the multibody's mass matrix, which makes it about 1.3 times faster — for large sweeps.
 //! The price: the locked axes are held by the solver, not by construction, so the joints drift
 //! apart by a little (measured by [`ImpulseRobot::joint_drift`]; see the README's Performance
 //! section), and the foot's effective mass is its own link's, not the articulated robot's.
