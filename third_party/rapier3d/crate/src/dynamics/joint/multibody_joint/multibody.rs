@@ -55,6 +55,24 @@ fn dot_spatial(a: &SVector<Real, SPATIAL_DIM>, b: &SVector<Real, SPATIAL_DIM>) -
     sum
 }
 
+/// Sets `to` to `from`, reallocating only if their lengths differ.
+fn copied(to: &mut DVector, from: &DVector) {
+    if to.len() != from.len() {
+        *to = from.clone();
+    } else {
+        to.copy_from(from);
+    }
+}
+
+/// Sets `v` to `len` zeros, reallocating only if its length differs.
+fn zeroed(v: &mut DVector, len: usize) {
+    if v.len() != len {
+        *v = DVector::zeros(len);
+    } else {
+        v.fill(0.0);
+    }
+}
+
 /// The twist `j` of a body at the point `r` from a reference point (its linear velocity there,
 /// then its angular velocity) as the velocity of the reference point: `v − ω × r`.
 #[inline(always)]
@@ -587,12 +605,12 @@ impl Multibody {
         // to the explicit term if needed
         let check_implicit_coriolis_divergence = dt * self.velocities.amax() >= 1.0e-3;
         // Generalized forces that derive from positions or external inputs
-        // (gravity, user forces, spring position terms).
-        let mut pos_forces = DVector::zeros(if check_implicit_coriolis_divergence {
-            self.ndofs
-        } else {
-            0
-        });
+        // (gravity, user forces, spring position terms). The workspace keeps the vector between
+        // steps (taken out meanwhile: the loop below borrows the workspace's paths).
+        let mut pos_forces = core::mem::replace(&mut self.workspace.pos_forces, DVector::zeros(0));
+        if check_implicit_coriolis_divergence {
+            zeroed(&mut pos_forces, self.ndofs);
+        }
 
         // Eqn 42 to 45
         for i in 0..self.links.len() {
@@ -696,11 +714,10 @@ impl Multibody {
 
         // Snapshot the full generalized forces: the energy guard may need them
         // for a re-solve with the plain mass matrix.
-        let gen_forces = if check_implicit_coriolis_divergence {
-            self.accelerations.clone()
-        } else {
-            DVector::zeros(0)
-        };
+        let mut gen_forces = core::mem::replace(&mut self.workspace.gen_forces, DVector::zeros(0));
+        if check_implicit_coriolis_divergence {
+            copied(&mut gen_forces, &self.accelerations);
+        }
 
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
@@ -710,6 +727,8 @@ impl Multibody {
         if check_implicit_coriolis_divergence {
             self.free_velocity_energy_guard(dt, &gen_forces, &pos_forces);
         }
+        self.workspace.pos_forces = pos_forces;
+        self.workspace.gen_forces = gen_forces;
     }
 
     // If the semi-implicit coriolis solve introduces more energy than the external
@@ -728,37 +747,44 @@ impl Multibody {
         }
 
         // Move all quantities to the kinematic-reduced ordering of the
-        // factorized matrices (no-op when there is no kinematic dof).
-        let mut v = self.velocities.clone();
-        let mut f = gen_forces.clone();
-        let mut f_pos = pos_forces.clone();
-        self.augmented_mass_indices.rearrange_rows(&mut v, true);
-        self.augmented_mass_indices.rearrange_rows(&mut f, true);
-        self.augmented_mass_indices.rearrange_rows(&mut f_pos, true);
+        // factorized matrices (no-op when there is no kinematic dof), in the workspace's vectors.
+        let ws = &mut self.workspace;
+        let indices = &self.augmented_mass_indices;
+        for (to, from) in [
+            (&mut ws.guard_velocities, &self.velocities),
+            (&mut ws.guard_forces, gen_forces),
+            (&mut ws.guard_pos_forces, pos_forces),
+            (&mut ws.guard_accelerations, &self.accelerations),
+        ] {
+            copied(to, from);
+            indices.rearrange_rows(to, true);
+        }
+        if ws.guard_product.len() != eff_dim {
+            ws.guard_product = DVector::zeros(eff_dim);
+        }
 
         let m = self.augmented_mass.view((0, 0), (eff_dim, eff_dim));
-        let v = v.rows(0, eff_dim);
-        let f = f.rows(0, eff_dim);
-        let f_pos = f_pos.rows(0, eff_dim);
+        let v = ws.guard_velocities.rows(0, eff_dim);
+        let f = ws.guard_forces.rows(0, eff_dim);
+        let f_pos = ws.guard_pos_forces.rows(0, eff_dim);
+        let a = ws.guard_accelerations.rows(0, eff_dim);
+        let product = &mut ws.guard_product;
 
-        let energy_delta_minus_work = |accelerations: &DVector| -> Option<Real> {
-            let mut a = accelerations.clone();
-            self.augmented_mass_indices.rearrange_rows(&mut a, true);
-            let a = a.rows(0, eff_dim).into_owned();
-            if !a.iter().all(|x| x.is_finite()) {
-                return None;
-            }
-            let m_a = m * &a;
-            let energy_delta = dt * v.dot(&m_a) + 0.5 * dt * dt * a.dot(&m_a);
+        let excess = if !a.iter().all(|x| x.is_finite()) {
+            None
+        } else {
+            product.gemv(1.0, &m, &a, 0.0);
+            let energy_delta = dt * v.dot(product) + 0.5 * dt * dt * a.dot(product);
             let work = dt * v.dot(&f) + 0.5 * dt * dt * a.dot(&f_pos);
             // Margin: a small fraction of the current kinetic energy to absorb
             // discretization error on healthy steps.
-            let kinetic_energy = 0.5 * v.dot(&(m * v));
+            product.gemv(1.0, &m, &v, 0.0);
+            let kinetic_energy = 0.5 * v.dot(product);
             let energy_margin = 1.0e-2 * kinetic_energy + 1.0e-8;
             Some(energy_delta - work - energy_margin)
         };
 
-        match energy_delta_minus_work(&self.accelerations) {
+        match excess {
             Some(excess) if excess <= 0.0 => (), // Implicit update didn’t introduce too much extra energy.
             _ => {
                 // The implicit solve injected energy (or produced non-finite

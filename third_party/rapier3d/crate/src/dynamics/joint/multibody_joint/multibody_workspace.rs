@@ -55,6 +55,15 @@ pub(crate) struct MultibodyWorkspace {
     pub dof_parents: Vec<usize>,
     /// Per link, the last non-kinematic degree of freedom on its path (scratch).
     link_last_dof: Vec<usize>,
+    /// `update_acceleration`'s generalized forces (all, and those from positions and external
+    /// inputs), and its energy guard's vectors, kept so that a step allocates nothing.
+    pub gen_forces: DVector,
+    pub pos_forces: DVector,
+    pub guard_velocities: DVector,
+    pub guard_forces: DVector,
+    pub guard_pos_forces: DVector,
+    pub guard_accelerations: DVector,
+    pub guard_product: DVector,
     /// The inputs of the last forward kinematics, per link, and the multibody's number of
     /// degrees of freedom then; empty when they must be computed anew.
     pub kinematic_inputs: Vec<LinkKinematicInputs>,
@@ -80,6 +89,13 @@ impl MultibodyWorkspace {
             dof_motions: Vec::new(),
             dof_parents: Vec::new(),
             link_last_dof: Vec::new(),
+            gen_forces: DVector::zeros(0),
+            pos_forces: DVector::zeros(0),
+            guard_velocities: DVector::zeros(0),
+            guard_forces: DVector::zeros(0),
+            guard_pos_forces: DVector::zeros(0),
+            guard_accelerations: DVector::zeros(0),
+            guard_product: DVector::zeros(0),
             kinematic_inputs: Vec::new(),
             kinematic_inputs_ndofs: 0,
             kinematic_inputs_now: Vec::new(),
