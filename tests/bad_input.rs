@@ -29,8 +29,11 @@ fn every_bad_file_gets_its_clear_message() {
     let dir = root.join("tests/data/bad");
     let corpus: Corpus =
         toml::from_str(&std::fs::read_to_string(dir.join("cases.toml")).unwrap()).unwrap();
-    let scratch = std::env::temp_dir().join(format!("hexsim-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&scratch).unwrap();
+    let scratch = tempfile::Builder::new()
+        .prefix("hexsim-bad-")
+        .tempdir()
+        .unwrap();
+    let scratch = scratch.path();
     let results = scratch.join("results.jsonl");
     let mut failures = Vec::new();
     for case in &corpus.case {
@@ -65,7 +68,7 @@ fn every_bad_file_gets_its_clear_message() {
         args.extend(words);
         let out = Command::new(env!("CARGO_BIN_EXE_hexsim"))
             .args(&args)
-            .current_dir(&scratch)
+            .current_dir(scratch)
             .output()
             .unwrap();
         let text = format!(

@@ -1,8 +1,10 @@
 //! `hexsim batch` and `hexsim merge` end to end: exit codes, resume, shards, threads, baselines.
 //! The scenarios are short (mostly balls, two 1-s walks) so the suite stays fast.
 
+mod common;
+use common::Scratch;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn hexsim(args: &[&str], dir: &Path) -> Output {
@@ -13,9 +15,8 @@ fn hexsim(args: &[&str], dir: &Path) -> Output {
         .unwrap()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hexsim-batch-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+fn scratch(name: &str) -> Scratch {
+    let dir = Scratch::new(&format!("hexsim-batch-{name}-"));
     std::fs::create_dir_all(dir.join("scenarios")).unwrap();
     dir
 }

@@ -102,9 +102,10 @@ proptest! {
         ], 0..5), 0..5)
     ) {
         let text: Vec<String> = rows.iter().map(|r| r.join(",")).collect();
-        let path = std::env::temp_dir().join(format!("hexsim-prop-{}.csv", std::process::id()));
-        std::fs::write(&path, text.join("\n")).unwrap();
-        if let Ok((cols, rows, heights)) = hexsim::terrain::io::read_csv(&path) {
+        let file = tempfile::Builder::new().prefix("hexsim-prop-").suffix(".csv").tempfile().unwrap();
+        let path = file.path();
+        std::fs::write(path, text.join("\n")).unwrap();
+        if let Ok((cols, rows, heights)) = hexsim::terrain::io::read_csv(path) {
             prop_assert_eq!(cols * rows, heights.len());
             prop_assert!(heights.iter().all(|h| h.is_finite()));
         }

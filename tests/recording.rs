@@ -227,7 +227,8 @@ fn mesh_visuals_are_found_by_package_and_drawn_at_their_scale() {
 /// direction and (asked for) each leg's workspace; everything static, no timeline to look for.
 #[test]
 fn a_robot_standing_is_recorded_beside_its_report() {
-    let file = scratch("recording").join("kraby_standing.rrd");
+    let dir = scratch("recording");
+    let file = dir.join("kraby_standing.rrd");
     let stdout = record(
         &[
             "robot",

@@ -6,7 +6,8 @@ use common::{hexsim, scratch};
 
 /// Walks `robot` for 10 s with the built-in tripod on `terrain` and returns its metrics.
 fn walk(robot: &str, terrain: &str, name: &str) -> serde_json::Value {
-    let json = scratch("third_party").join(format!("{name}.json"));
+    let dir = scratch("third_party");
+    let json = dir.join(format!("{name}.json"));
     let out = hexsim()
         .args([
             "run",

@@ -639,8 +639,7 @@ fn terrain_following_keeps_the_body_level_on_a_slope() {
 #[test]
 fn feet_can_be_named_in_a_robot_file_beside_the_urdf() {
     // hex18 without its foot spheres: the robot file names the feet instead
-    let dir = std::env::temp_dir().join(format!("hexsim-feet-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("feet");
     let urdf = std::fs::read_to_string(project_file("robots/hex18.urdf")).unwrap();
     let bare: String = urdf
         .lines()

@@ -75,16 +75,17 @@ pub fn stl_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
 mod tests {
     use super::*;
 
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("hexsim-mesh-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A temporary folder, removed when the test ends.
+    fn scratch(name: &str) -> tempfile::TempDir {
+        let prefix = format!("hexsim-mesh-{name}-");
+        tempfile::Builder::new().prefix(&prefix).tempdir().unwrap()
     }
 
     /// A ROS-style tree: robot_description/urdf/robot.urdf, meshes in robot_description/meshes.
     #[test]
     fn a_package_uri_resolves_to_the_package_folder_above_the_urdf() {
-        let root = scratch("package");
+        let scratch = scratch("package");
+        let root = scratch.path();
         let urdf_dir = root.join("my_robot_description/urdf");
         let meshes = root.join("my_robot_description/meshes");
         std::fs::create_dir_all(&urdf_dir).unwrap();
@@ -101,13 +102,14 @@ mod tests {
 
     #[test]
     fn file_uris_and_relative_paths() {
-        let root = scratch("file");
+        let scratch = scratch("file");
+        let root = scratch.path();
         std::fs::write(root.join("a.obj"), "").unwrap();
         let absolute = format!("file://{}", root.join("a.obj").display());
         assert_eq!(
             resolve(&absolute, Path::new("/nowhere")).unwrap(),
             root.join("a.obj")
         );
-        assert_eq!(resolve("a.obj", &root).unwrap(), root.join("a.obj"));
+        assert_eq!(resolve("a.obj", root).unwrap(), root.join("a.obj"));
     }
 }

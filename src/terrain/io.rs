@@ -362,10 +362,14 @@ pub fn read_stl(path: &Path, cell: f64) -> Result<HeightGrid, HeightFileError> {
 mod tests {
     use super::*;
 
-    fn tmp(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("hexsim-io-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir.join(name)
+    /// A file `name` in a temporary folder, removed when the test ends.
+    fn tmp(name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::Builder::new()
+            .prefix("hexsim-io-")
+            .tempdir()
+            .unwrap();
+        let path = dir.path().join(name);
+        (dir, path)
     }
 
     fn sample_grid() -> HeightGrid {
@@ -378,7 +382,7 @@ mod tests {
     #[test]
     fn stl_round_trip_reproduces_the_grid() {
         let g = sample_grid();
-        let p = tmp("g.stl");
+        let (_dir, p) = tmp("g.stl");
         write_stl(&g, &p).unwrap();
         let (dx, _) = g.spacing();
         let back = read_stl(&p, dx).unwrap();
@@ -391,7 +395,7 @@ mod tests {
     #[test]
     fn png_round_trip_within_16_bit_quantisation() {
         let g = sample_grid();
-        let p = tmp("g.png");
+        let (_dir, p) = tmp("g.png");
         let (offset, scale) = write_png(&g, &p).unwrap();
         let (rows, cols, h) = read_png(&p, scale, offset).unwrap();
         assert_eq!((rows, cols), (g.rows(), g.cols()));
@@ -403,7 +407,7 @@ mod tests {
     #[test]
     fn csv_round_trip_is_exact() {
         let g = sample_grid();
-        let p = tmp("g.csv");
+        let (_dir, p) = tmp("g.csv");
         write_csv(&g, &p).unwrap();
         let (rows, cols, h) = read_csv(&p).unwrap();
         assert_eq!((rows, cols), (g.rows(), g.cols()));
@@ -412,7 +416,7 @@ mod tests {
 
     #[test]
     fn csv_errors_say_where() {
-        let p = tmp("ragged.csv");
+        let (_dir, p) = tmp("ragged.csv");
         std::fs::write(&p, "# c\n1,2,3\n4,5\n").unwrap();
         let e = read_csv(&p).unwrap_err().to_string();
         assert!(e.contains("line 3") && e.contains("ragged"), "{e}");

@@ -17,11 +17,35 @@ pub fn hexsim() -> std::process::Command {
     cmd
 }
 
-/// A fresh folder for one test's files.
-pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hexsim-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh folder for one test's files, removed when the test ends, passing or failing.
+pub fn scratch(name: &str) -> Scratch {
+    Scratch::new(&format!("hexsim-test-{name}-"))
+}
+
+/// A temporary folder (`tempfile`'s), usable as a `Path`.
+pub struct Scratch(tempfile::TempDir);
+
+impl Scratch {
+    pub fn new(prefix: &str) -> Self {
+        Scratch(tempfile::Builder::new().prefix(prefix).tempdir().unwrap())
+    }
+
+    pub fn path(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
 }
 
 /// Runs `cmd` (given the input file `file`) and checks that it is an input error: exit 2, the
