@@ -636,9 +636,11 @@ fn terrain_following_keeps_the_body_level_on_a_slope() {
     assert!(climbed > 0.4, "climbed only {climbed:.3} m");
 }
 
+/// hex18 without its foot spheres: its feet are found at the tips of its tibias' visual
+/// geometry (a rod ending in a 10 mm sphere: the same sphere), and a robot file naming the feet
+/// overrides what is found.
 #[test]
-fn feet_can_be_named_in_a_robot_file_beside_the_urdf() {
-    // hex18 without its foot spheres: the robot file names the feet instead
+fn feet_are_found_from_the_geometry_or_named_in_a_robot_file() {
     let dir = scratch("feet");
     let urdf = std::fs::read_to_string(project_file("robots/hex18.urdf")).unwrap();
     let bare: String = urdf
@@ -647,18 +649,33 @@ fn feet_can_be_named_in_a_robot_file_beside_the_urdf() {
         .collect::<Vec<_>>()
         .join("\n");
     std::fs::write(dir.join("bare.urdf"), &bare).unwrap();
-    let error = robot::load(&dir.join("bare.urdf")).unwrap_err().to_string();
-    assert!(
-        error.contains("carries no foot") || error.contains("legs"),
-        "{error}"
-    );
+    let reference = hex18();
+    let found = robot::load(&dir.join("bare.urdf")).unwrap();
+    for (leg, want) in found.legs.iter().zip(&reference.legs) {
+        assert_eq!(leg.foot.from, robot::FootFrom::VisualTip);
+        let apart = (leg.foot.center - want.foot.center).length();
+        assert!(
+            apart < 5e-4 && (leg.foot.radius - want.foot.radius).abs() < 5e-4,
+            "{}: {:?} against {:?}",
+            leg.name,
+            leg.foot,
+            want.foot
+        );
+    }
     std::fs::write(
         dir.join("bare.toml"),
         "[feet]\nlinks = [\"lf_tibia\", \"lm_tibia\", \"lr_tibia\", \"rf_tibia\", \"rm_tibia\", \"rr_tibia\"]\noffset = [0.12, 0.0, 0.0]\nradius = 0.01\n",
     )
     .unwrap();
     let model = robot::load(&dir.join("bare.urdf")).unwrap();
-    assert_eq!(model.legs, hex18().legs);
+    for (leg, want) in model.legs.iter().zip(&reference.legs) {
+        assert_eq!(leg.foot.from, robot::FootFrom::RobotFile);
+        assert_eq!(
+            (leg.foot.center, leg.foot.radius),
+            (want.foot.center, want.foot.radius)
+        );
+        assert_eq!((leg.foot_link, leg.joints), (want.foot_link, want.joints));
+    }
 }
 
 /// V11–V15 in each articulation: `multibody::v11_…` and `impulse::v11_…`.

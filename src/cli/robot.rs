@@ -184,7 +184,7 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
         let [a, b, c] = statics::segment_lengths(model, leg);
         let _ = writeln!(
             out,
-            "    {}  hip ({}, {}, {}) m; joints {} {} {}; segments {a:.3} {b:.3} {c:.3} m; foot radius {:.3} m",
+            "    {}  hip ({}, {}, {}) m; joints {} {} {}; segments {a:.3} {b:.3} {c:.3} m",
             leg.name,
             thousandths(hip.x),
             thousandths(hip.y),
@@ -192,7 +192,6 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             joints[0].name,
             joints[1].name,
             joints[2].name,
-            leg.foot.radius
         );
         let limits: Vec<String> = joints
             .iter()
@@ -204,6 +203,17 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             "        limits {}; effort {} N·m",
             limits.join(" "),
             efforts.join(" ")
+        );
+        let foot = leg.foot;
+        let _ = writeln!(
+            out,
+            "        foot: sphere of radius {:.1} mm centred at ({:+.1}, {:+.1}, {:+.1}) mm in link {}, {}",
+            foot.radius * 1e3,
+            foot.center.x * 1e3 + 0.0,
+            foot.center.y * 1e3 + 0.0,
+            foot.center.z * 1e3 + 0.0,
+            model.links[leg.foot_link].name,
+            foot.from.describe()
         );
     }
     match fit(model, gait) {

@@ -75,10 +75,10 @@ const SIDE_MARGIN: f64 = 0.05;
 pub(super) fn find_legs(
     links: &[Link],
     joints: &[Joint],
-    mesh_collisions: &[(String, String, std::path::PathBuf)],
+    unfound: &[(String, String)],
     forward: Option<f64>,
 ) -> Result<(Vec<Leg>, Forward), String> {
-    let chains = chains(links, joints, mesh_collisions)?;
+    let chains = chains(links, joints, unfound)?;
     // each hip in the body frame (the first joint hangs from the root)
     let hips: Vec<DVec2> = chains
         .iter()
@@ -224,13 +224,12 @@ pub(super) fn turn_to_forward(links: &mut [Link], joints: &mut [Joint], yaw: f64
 }
 
 /// The six chains from the body to a foot: every link with a foot, traced back to the root; each
-/// must hang from it by exactly three joints of its own. `mesh_collisions`: (link, mesh file,
-/// folder it resolves from) of every collision mesh, to say what is wrong with a leg whose foot is
-/// a mesh.
+/// must hang from it by exactly three joints of its own. `unfound`: (link, why) for each leg's
+/// last link whose foot could not be found from its geometry.
 fn chains(
     links: &[Link],
     joints: &[Joint],
-    mesh_collisions: &[(String, String, std::path::PathBuf)],
+    unfound: &[(String, String)],
 ) -> Result<Vec<Chain>, String> {
     let mut found = Vec::new();
     for (k, link) in links.iter().enumerate() {
@@ -259,18 +258,9 @@ fn chains(
     for (k, link) in links.iter().enumerate() {
         let is_leaf = !joints.iter().any(|j| j.parent == k);
         if is_leaf && k != 0 && link.foot.is_none() {
-            if let Some((_, file, base)) = mesh_collisions.iter().find(|(l, ..)| *l == link.name) {
-                let problem = match super::mesh::resolve(file, base) {
-                    Ok(_) => "hexsim's feet are spheres".to_string(),
-                    Err(tried) => format!(
-                        "{} does not exist",
-                        tried
-                            .first()
-                            .map_or(file.clone(), |p| p.display().to_string())
-                    ),
-                };
+            if let Some((_, why)) = unfound.iter().find(|(l, _)| *l == link.name) {
                 return Err(format!(
-                    "link `{}` ends a leg and its foot is a collision mesh ({file}): {problem}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
+                    "link `{}` ends a leg and has no foot sphere, and no foot could be found at its tip: {why}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
                     link.name
                 ));
             }

@@ -1,5 +1,6 @@
 //! The robot: URDF loading and validation, leg discovery, and leg kinematics.
 
+pub mod foot;
 pub mod kinematics;
 pub mod legs;
 pub mod mesh;
@@ -8,7 +9,9 @@ pub mod servo;
 pub mod statics;
 pub mod urdf;
 
-pub use model::{Foot, GaitHints, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual};
+pub use model::{
+    Foot, FootFrom, GaitHints, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual,
+};
 
 /// Loads a URDF robot file.
 pub fn load(path: &std::path::Path) -> Result<RobotModel, urdf::RobotError> {

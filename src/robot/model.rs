@@ -45,6 +45,31 @@ pub struct Foot {
     /// Sphere centre in the link frame.
     pub center: DVec3,
     pub radius: f64,
+    pub from: FootFrom,
+}
+
+/// Where a foot came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FootFrom {
+    /// A collision sphere in the URDF.
+    Sphere,
+    /// The robot file's `[feet]`.
+    RobotFile,
+    /// Found at the tip of the last link's collision geometry (see `robot::foot`).
+    CollisionTip,
+    /// Found at the tip of the last link's visual geometry: it has no collision geometry.
+    VisualTip,
+}
+
+impl FootFrom {
+    pub fn describe(self) -> &'static str {
+        match self {
+            FootFrom::Sphere => "given by the URDF's collision sphere",
+            FootFrom::RobotFile => "given by the robot file's [feet]",
+            FootFrom::CollisionTip => "found at the tip of the link's collision geometry",
+            FootFrom::VisualTip => "found at the tip of the link's visual geometry (no collision)",
+        }
+    }
 }
 
 /// A rigid link (links joined by fixed joints are merged into one).

@@ -3,9 +3,10 @@
 //!
 //! Every error names the file and the element (link or joint) and says what was expected.
 
+use super::foot::{self, Placed};
 use super::legs::{self, Forward};
 use super::mesh;
-use super::model::{Foot, GaitHints, Joint, Link, RobotModel, Shape, Visual};
+use super::model::{Foot, FootFrom, GaitHints, Joint, Link, RobotModel, Shape, Visual};
 use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -430,8 +431,9 @@ fn build(
     let feet = feet.as_ref();
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
-    let mut mesh_collisions = Vec::new();
     let mut mesh_problems = MeshProblems::default();
+    // each body's collision and visual shapes, in its frame: where a foot is found if none is given
+    let mut shapes: Vec<(Vec<Placed>, Vec<Placed>)> = Vec::new();
     // Walk the tree from the root, parents before children. Each URDF link maps to a body (itself,
     // or the body it is welded to by fixed joints) and its pose in that body's frame.
     let mut body_of = vec![usize::MAX; robot.links.len()];
@@ -448,6 +450,7 @@ fn build(
             None => {
                 body_of[k] = links.len();
                 links.push(empty_link(&urdf_link.name, None));
+                shapes.push(Default::default());
             }
             Some(j) => {
                 let joint = &robot.joints[j];
@@ -489,6 +492,7 @@ fn build(
                         }
                         body_of[k] = links.len();
                         links.push(empty_link(&urdf_link.name, Some(joints.len())));
+                        shapes.push(Default::default());
                         joints.push(Joint {
                             name: joint.name.clone(),
                             parent: body_of[parent],
@@ -547,16 +551,27 @@ fn build(
             body.foot = Some(Foot {
                 center: frame.transform_point3(DVec3::from_array(feet.offset)),
                 radius: feet.radius,
+                from: FootFrom::RobotFile,
             });
         }
+        let placed = |origin: &urdf_rs::Pose, geometry: &urdf_rs::Geometry| Placed {
+            origin: frame * pose(origin),
+            geometry: geometry.clone(),
+        };
+        let (collisions, visuals) = &mut shapes[body_of[k]];
+        collisions.extend(
+            urdf_link
+                .collision
+                .iter()
+                .map(|c| placed(&c.origin, &c.geometry)),
+        );
+        visuals.extend(
+            urdf_link
+                .visual
+                .iter()
+                .map(|v| placed(&v.origin, &v.geometry)),
+        );
         for collision in urdf_link.collision.iter().filter(|_| feet.is_none()) {
-            if let urdf_rs::Geometry::Mesh { filename, .. } = &collision.geometry {
-                mesh_collisions.push((
-                    urdf_link.name.clone(),
-                    filename.clone(),
-                    base.to_path_buf(),
-                ));
-            }
             if let urdf_rs::Geometry::Sphere { radius } = collision.geometry {
                 if !(radius.is_finite() && radius > 0.0) {
                     return Err(format!(
@@ -568,6 +583,7 @@ fn build(
                     body.foot = Some(Foot {
                         center: (frame * pose(&collision.origin)).translation,
                         radius,
+                        from: FootFrom::Sphere,
                     });
                 }
             }
@@ -610,8 +626,36 @@ fn build(
         ));
     }
     warnings.extend(mesh_problems.warnings());
-    let (legs, forward): (_, Forward) =
-        legs::find_legs(&links, &joints, &mesh_collisions, forward)?;
+    // a leg's last link without a foot sphere (and no robot file naming its feet): find the foot
+    // at the tip of its geometry
+    let mut unfound = Vec::new();
+    let mut unread: Vec<(String, String)> = Vec::new();
+    if feet.is_none() {
+        for (k, link) in links.iter_mut().enumerate() {
+            let leaf = k != 0 && !joints.iter().any(|j| j.parent == k);
+            if !leaf || link.foot.is_some() {
+                continue;
+            }
+            let knee = link.parent_joint.map_or(DVec3::Z, |j| joints[j].axis);
+            let (collisions, visuals) = &shapes[k];
+            match foot::find(collisions, visuals, knee, base) {
+                Ok(found) => {
+                    if let Some(first) = found.unread.first() {
+                        unread.push((link.name.clone(), first.clone()));
+                    }
+                    link.foot = Some(found.foot);
+                }
+                Err(why) => unfound.push((link.name.clone(), why)),
+            }
+        }
+    }
+    if let Some((link, why)) = unread.first() {
+        let n = unread.len();
+        warnings.push(format!(
+            "{n} feet found from their link's visual geometry, the collision geometry unreadable (e.g. link `{link}`: its collision {why})"
+        ));
+    }
+    let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
     legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
     Ok(RobotModel {
         name: robot.name.clone(),
