@@ -293,3 +293,38 @@ fn feet_are_found_at_the_tips_of_the_meshes() {
         }
     }
 }
+
+/// The huaibovip hexapod as published is a SolidWorks export whose every joint says
+/// `effort="0"`: it loads with one warning naming the joints, each effort fitted to hold a third
+/// of the robot's weight at its legs' full length; `--strict` refuses it.
+#[test]
+fn a_cad_exports_empty_efforts_are_fitted_to_the_weight() {
+    let urdf = "tests/data/third_party/hexapod_description/urdf/hexapod.urdf";
+    let model = hexsim::robot::load(&common::project_file(urdf)).unwrap();
+    let reach = model
+        .legs
+        .iter()
+        .map(|leg| {
+            hexsim::robot::statics::segment_lengths(&model, leg)[1..]
+                .iter()
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    let effort = model.total_mass() * 9.81 / 3.0 * reach;
+    assert!((effort - 1.117).abs() < 1e-3, "{effort}");
+    assert!(model.joints.iter().all(|j| j.effort == effort));
+    let warning = model
+        .warnings
+        .iter()
+        .find(|w| w.contains("18 joints state no effort"))
+        .unwrap_or_else(|| panic!("{:?}", model.warnings));
+    let stated = format!("{effort:.3} N·m");
+    assert!(
+        warning.contains("coxa_joint_l1") && warning.contains(&stated),
+        "{warning}"
+    );
+    let out = hexsim().args(["robot", urdf, "--strict"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("treated as errors"), "{stderr}");
+}

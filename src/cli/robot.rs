@@ -28,6 +28,10 @@ pub struct RobotArgs {
     /// With --record: open the recording in the rerun viewer.
     #[arg(long, requires = "record")]
     spawn: bool,
+    /// Treat the robot's warnings (a CAD export's empty joint limits, a mesh not found) as
+    /// errors: the report is printed, and hexsim exits with status 2.
+    #[arg(long)]
+    strict: bool,
 }
 
 pub fn robot_command(args: RobotArgs) -> Result<()> {
@@ -38,6 +42,14 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
     };
     let report = describe(&args.robot, &model, &gait);
     print!("{report}");
+    if args.strict && !model.warnings.is_empty() {
+        anyhow::bail!(
+            "{}: {} warning{} treated as errors (--strict)",
+            args.robot.display(),
+            model.warnings.len(),
+            if model.warnings.len() == 1 { "" } else { "s" }
+        );
+    }
     if let Some(path) = &args.record {
         // the standing pose of the gait's fit; a robot it does not fit stands with its joints at
         // zero, so the recording still shows what was loaded

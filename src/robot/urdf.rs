@@ -176,16 +176,32 @@ pub fn from_str(text: &str, origin: &Path) -> Result<RobotModel, RobotError> {
     from_str_with(text, None, origin)
 }
 
-/// A xacro file is a URDF template, which only xacro (ROS) expands.
+/// A xacro file is a URDF template, which only xacro (ROS) expands. xacro's own output keeps the
+/// `xmlns:xacro` declaration and often comments holding xacro elements: only a live xacro
+/// element or a `${…}` expression outside comments marks a template.
 fn refuse_xacro(text: &str, path: &Path) -> Result<(), String> {
-    // xacro's own output keeps the `xmlns:xacro` declaration: only its elements mark a template
     let named = path.extension().is_some_and(|e| e == "xacro");
-    if named || text.contains("<xacro:") {
+    let live = without_comments(text);
+    if named || live.contains("<xacro:") || live.contains("${") {
         return Err(
             "this is a xacro file (a URDF template): expand it first with xacro (from ROS: `xacro FILE > robot.urdf`) and give hexsim the URDF".into(),
         );
     }
     Ok(())
+}
+
+/// XML text without its `<!-- … -->` comments (an unclosed comment runs to the end).
+fn without_comments(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find("<!--") {
+        out.push_str(&rest[..start]);
+        rest = rest[start + 4..]
+            .find("-->")
+            .map_or("", |end| &rest[start + 4 + end + 3..]);
+    }
+    out.push_str(rest);
+    out
 }
 
 struct Tree<'a> {
@@ -432,6 +448,7 @@ fn build(
     let tree = tree(robot)?;
     let mut warnings = Vec::new();
     let mut mesh_problems = MeshProblems::default();
+    let mut unstated = Unstated::default();
     // each body's collision and visual shapes, in its frame: where a foot is found if none is given
     let mut shapes: Vec<(Vec<Placed>, Vec<Placed>)> = Vec::new();
     // Walk the tree from the root, parents before children. Each URDF link maps to a body (itself,
@@ -470,21 +487,31 @@ fn build(
                                 joint.name
                             ));
                         }
-                        let (lower, upper) =
+                        let (mut lower, mut upper) =
                             if matches!(joint.joint_type, urdf_rs::JointType::Continuous) {
                                 (f64::NEG_INFINITY, f64::INFINITY)
                             } else {
                                 (joint.limit.lower, joint.limit.upper)
                             };
+                        // a CAD exporter's placeholders (lower = upper = 0, effort = 0; also
+                        // what a missing <limit> reads as): the limits are absent
+                        if lower == 0.0 && upper == 0.0 {
+                            (lower, upper) = (-UNSTATED_RANGE, UNSTATED_RANGE);
+                            unstated.range.push(joint.name.clone());
+                        }
                         let ordered = lower < upper;
                         if !ordered {
                             return Err(format!(
-                                "joint `{}`: a revolute joint needs <limit lower=… upper=…> with lower < upper, got lower = {lower}, upper = {upper} (a missing <limit> reads as 0, 0)",
+                                "joint `{}`: a revolute joint needs <limit lower=… upper=…> with lower < upper, got lower = {lower}, upper = {upper}",
                                 joint.name
                             ));
                         }
-                        let effort = joint.limit.effort;
-                        if !(effort.is_finite() && effort > 0.0) {
+                        let mut effort = joint.limit.effort;
+                        if effort == 0.0 {
+                            effort = f64::NAN; // fitted to the robot's weight once its legs are known
+                            unstated.effort.push(joint.name.clone());
+                        }
+                        if !(effort.is_nan() || effort.is_finite() && effort > 0.0) {
                             return Err(format!(
                                 "joint `{}`: <limit effort> (the servo's torque limit, N·m) must be > 0, got {effort}",
                                 joint.name
@@ -657,7 +684,7 @@ fn build(
     }
     let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
     legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
-    Ok(RobotModel {
+    let mut model = RobotModel {
         name: robot.name.clone(),
         source: PathBuf::new(),
         links,
@@ -666,7 +693,74 @@ fn build(
         forward,
         gait_hints,
         warnings,
-    })
+    };
+    unstated.fill(&mut model);
+    Ok(model)
+}
+
+/// A joint range left unstated is this wide each way: a hobby servo's 300° (Dynamixel AX/MX).
+pub const UNSTATED_RANGE: f64 = 150.0 * std::f64::consts::PI / 180.0;
+
+/// The joints whose `<limit>` states no range (lower = upper = 0) or no effort (0), as CAD
+/// exporters write them on every joint.
+#[derive(Default)]
+struct Unstated {
+    range: Vec<String>,
+    effort: Vec<String>,
+}
+
+impl Unstated {
+    /// Fits the unstated efforts and says, in one warning each, what was read as absent and what
+    /// was fitted. An unstated effort is the torque that holds a third of the robot's weight at
+    /// the longest leg's full length from its femur joint: the most any joint of a leg meets
+    /// standing on three feet (a tripod's fewest), reached only with the leg stretched level, so
+    /// a stance whose feet are within half that length keeps every servo at or under half its
+    /// effort, as the gait fit asks.
+    fn fill(self, model: &mut RobotModel) {
+        let list = |names: &[String]| {
+            let shown: Vec<&str> = names.iter().take(6).map(String::as_str).collect();
+            let more = names.len().saturating_sub(6);
+            let more = if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            };
+            format!("{}{more}", shown.join(", "))
+        };
+        if !self.range.is_empty() {
+            model.warnings.push(format!(
+                "{} joint{} state{} no range (lower = upper = 0, a CAD exporter's placeholder, or no <limit>): {}; read as absent, ±{:.0}° (a hobby servo's range)",
+                self.range.len(),
+                if self.range.len() == 1 { "" } else { "s" },
+                if self.range.len() == 1 { "s" } else { "" },
+                list(&self.range),
+                UNSTATED_RANGE.to_degrees()
+            ));
+        }
+        if self.effort.is_empty() {
+            return;
+        }
+        let weight = model.total_mass() * 9.81;
+        let reach = model
+            .legs
+            .iter()
+            .map(|leg| {
+                let [_, femur, tibia] = super::statics::segment_lengths(model, leg);
+                femur + tibia
+            })
+            .fold(0.0, f64::max);
+        let effort = weight / 3.0 * reach;
+        for joint in model.joints.iter_mut().filter(|j| j.effort.is_nan()) {
+            joint.effort = effort;
+        }
+        model.warnings.push(format!(
+            "{} joint{} state{} no effort (effort = 0, a CAD exporter's placeholder, or no <limit>): {}; fitted from the robot's weight: {effort:.3} N·m, a third of its {weight:.1} N held at the legs' full {reach:.3} m",
+            self.effort.len(),
+            if self.effort.len() == 1 { "" } else { "s" },
+            if self.effort.len() == 1 { "s" } else { "" },
+            list(&self.effort),
+        ));
+    }
 }
 
 fn empty_link(name: &str, parent_joint: Option<usize>) -> Link {
@@ -705,6 +799,27 @@ fn outer(a: DVec3, b: DVec3) -> DMat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// xacro's output (the namespace declared, xacro elements commented out) is a URDF; a live
+    /// xacro element or expression is a template.
+    #[test]
+    fn only_live_xacro_marks_a_template() {
+        let urdf = Path::new("robot.urdf");
+        let output = r#"<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <!-- <xacro:include filename="legs.xacro"/> -->
+  <!--<xacro:property name="l" value="${2*r}"/>--><link name="a"/>
+</robot>"#;
+        assert_eq!(refuse_xacro(output, urdf), Ok(()));
+        for template in [
+            r#"<robot xmlns:xacro="x"><xacro:property name="l" value="1"/></robot>"#,
+            r#"<robot><link name="a"><!-- a --><mass value="${m}"/></link></robot>"#,
+            r#"<robot><!-- unclosed <link/> --> <xacro:leg/></robot>"#,
+        ] {
+            assert!(refuse_xacro(template, urdf).is_err(), "{template}");
+        }
+        assert!(refuse_xacro(output, Path::new("robot.urdf.xacro")).is_err());
+        assert_eq!(without_comments("a<!-- b"), "a");
+    }
 
     /// A solid box's inertia is physical; a thin disc sits on A + B = C and passes; a tensor whose
     /// two smaller moments fall short of the largest is flagged, however it is turned.
