@@ -241,6 +241,13 @@ fn chains(
             at = joints[j].parent;
         }
         chain.reverse();
+        if chain.len() > 3 {
+            return Err(format!(
+                "the foot on link `{}` hangs from the body by {} joints: hexsim's legs have 3 (coxa, femur, tibia), and legs with more (a tarsus) are not supported; to walk it, make the extra joints `fixed`",
+                link.name,
+                chain.len()
+            ));
+        }
         if chain.len() != 3 {
             return Err(format!(
                 "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",

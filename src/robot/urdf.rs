@@ -619,6 +619,16 @@ fn build(
             order.push(tree.index[robot.joints[j].child.link.as_str()]);
         }
     }
+    if links.iter().all(|l| l.mass <= 0.0) {
+        return Err(
+            "no link has a mass: the URDF has no <inertial> elements (a description for drawing, as RViz reads it); hexsim needs each link's <mass> and <inertia>".into(),
+        );
+    }
+    if links.iter().all(|l| l.inertia == DMat3::ZERO) {
+        return Err(
+            "no link states an inertia (every <inertia> is zero or missing); hexsim needs each link's inertia tensor (kg·m²)".into(),
+        );
+    }
     for link in &links {
         let massive = link.mass > 0.0;
         if !massive {
@@ -694,8 +704,32 @@ fn build(
         gait_hints,
         warnings,
     };
+    check_size(&model)?;
     unstated.fill(&mut model);
     Ok(model)
+}
+
+/// The longest leg a hexapod could have (m): a URDF whose legs are longer is in other units.
+const LONGEST_LEG: f64 = 10.0;
+
+/// Refuses legs too long to be in metres: a URDF written in millimetres (a CAD export set to mm)
+/// has legs a thousand times too long.
+fn check_size(model: &RobotModel) -> Result<(), String> {
+    let longest = model
+        .legs
+        .iter()
+        .map(|leg| {
+            super::statics::segment_lengths(model, leg)
+                .iter()
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max);
+    if longest > LONGEST_LEG {
+        return Err(format!(
+            "the legs are {longest:.1} m long (coxa + femur + tibia): is the URDF in millimetres? URDF lengths are in metres (and masses in kg)"
+        ));
+    }
+    Ok(())
 }
 
 /// A joint range left unstated is this wide each way: a hobby servo's 300° (Dynamixel AX/MX).
