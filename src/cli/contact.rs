@@ -12,12 +12,14 @@ pub struct ContactArgs {
     /// Normal force law.
     #[arg(long, value_enum, default_value_t = ContactSpec::default().normal)]
     normal_law: NormalChoice,
-    /// Normal stiffness k (N/m; for Hunt–Crossley N/mⁿ).
-    #[arg(long, default_value_t = ContactSpec::default().stiffness)]
-    stiffness: f64,
-    /// Normal damping c (N·s/m; for Hunt–Crossley d in s/m).
-    #[arg(long, default_value_t = ContactSpec::default().damping)]
-    damping: f64,
+    /// Normal stiffness k (N/m; for Hunt–Crossley N/mⁿ). Default: the reference 2e4 for a ball;
+    /// for a walk, the reference fitted to the robot's weight (hex18's: 2e4).
+    #[arg(long)]
+    stiffness: Option<f64>,
+    /// Normal damping c (N·s/m; for Hunt–Crossley d in s/m). Default: the reference 150 for a
+    /// ball; for a walk, the reference fitted to the robot's weight (hex18's: 150).
+    #[arg(long)]
+    damping: Option<f64>,
     /// Hunt–Crossley exponent n.
     #[arg(long, default_value_t = ContactSpec::default().exponent)]
     hc_exponent: f64,

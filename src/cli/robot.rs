@@ -4,6 +4,7 @@
 use anyhow::Result;
 use clap::Args;
 use hexsim::gait::{Fitted, GaitSpec, fit};
+use hexsim::metrics::walk::significant;
 use hexsim::record::standing;
 use hexsim::robot::{self, GaitHints, RobotModel, statics};
 use hexsim::scenario::builtin;
@@ -267,6 +268,14 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             );
         }
     }
+    let ratio = model.total_mass() / builtin::hex18().total_mass();
+    let ground = hexsim::contact::NormalLaw::default().scaled(ratio);
+    let _ = writeln!(
+        out,
+        "  ground for a scenario that leaves the contact out: k = {} N/m, c = {} N·s/m (the reference contact fitted to the robot's weight, {ratio:.2} × hex18's: its feet sink as hex18's)",
+        significant(ground.stiffness()),
+        significant(ground.damping())
+    );
     for warning in &model.warnings {
         let _ = writeln!(out, "  warning: {warning}");
     }

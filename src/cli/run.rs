@@ -203,6 +203,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         m.body_height_std,
         m.max_penetration * 1e3
     );
+    println!("  ground: {}", m.ground.describe());
     let slip: Vec<String> = m
         .foot_slip
         .iter()

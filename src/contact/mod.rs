@@ -22,7 +22,7 @@ mod rolling;
 pub use friction::{FrictionLaw, FrictionOutcome};
 pub use geometry::{SphereGeometry, sphere_geometry};
 pub use joint::respond_jointly;
-pub use normal::{NormalLaw, exact_decay_factor};
+pub use normal::{NormalLaw, REFERENCE_DAMPING, REFERENCE_STIFFNESS, exact_decay_factor};
 pub use paper::paper_geometry;
 pub use rolling::RollingBody;
 

@@ -23,12 +23,17 @@ pub enum NormalLaw {
     },
 }
 
+/// The reference contact's stiffness (N/m) and damping (N·s/m), shared/reference §2: set for
+/// hex18, a 2.52 kg robot whose feet sink 0.41 mm standing on three.
+pub const REFERENCE_STIFFNESS: f64 = 2.0e4;
+pub const REFERENCE_DAMPING: f64 = 150.0;
+
 impl Default for NormalLaw {
     /// The reference contact: k = 2·10⁴ N/m, c = 150 N·s/m.
     fn default() -> Self {
         NormalLaw::SpringDamper {
-            stiffness: 2.0e4,
-            damping: 150.0,
+            stiffness: REFERENCE_STIFFNESS,
+            damping: REFERENCE_DAMPING,
         }
     }
 }
@@ -43,6 +48,63 @@ pub fn exact_decay_factor(z: f64) -> f64 {
 }
 
 impl NormalLaw {
+    /// The law for a body `ratio` times as heavy on as many feet: the same static sink and the
+    /// same damping ratio. The spring carries `ratio` times the load, so k scales by `ratio`; the
+    /// spring–damper's ζ = c / (2·√(k·m)) then keeps with c scaled by `ratio` too, while
+    /// Hunt–Crossley's damping k·xⁿ·d already grows with k, so its d stays.
+    pub fn scaled(&self, ratio: f64) -> NormalLaw {
+        match *self {
+            NormalLaw::SpringDamper { stiffness, damping } => NormalLaw::SpringDamper {
+                stiffness: stiffness * ratio,
+                damping: damping * ratio,
+            },
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                damping,
+            } => NormalLaw::HuntCrossley {
+                stiffness: stiffness * ratio,
+                exponent,
+                damping,
+            },
+        }
+    }
+
+    /// The static penetration under a load `force` (N).
+    pub fn static_sink(&self, force: f64) -> f64 {
+        match *self {
+            NormalLaw::SpringDamper { stiffness, .. } => force / stiffness,
+            NormalLaw::HuntCrossley {
+                stiffness,
+                exponent,
+                ..
+            } => (force / stiffness).powf(1.0 / exponent),
+        }
+    }
+
+    /// The stiffness that holds a load `force` (N) at a penetration `sink` (m).
+    pub fn stiffness_for(&self, force: f64, sink: f64) -> f64 {
+        match *self {
+            NormalLaw::SpringDamper { .. } => force / sink,
+            NormalLaw::HuntCrossley { exponent, .. } => force / sink.powf(exponent),
+        }
+    }
+
+    pub fn stiffness(&self) -> f64 {
+        match *self {
+            NormalLaw::SpringDamper { stiffness, .. }
+            | NormalLaw::HuntCrossley { stiffness, .. } => stiffness,
+        }
+    }
+
+    pub fn damping(&self) -> f64 {
+        match *self {
+            NormalLaw::SpringDamper { damping, .. } | NormalLaw::HuntCrossley { damping, .. } => {
+                damping
+            }
+        }
+    }
+
     /// The normal force for penetration `x` (> 0 in contact) and penetration rate `rate` (ẋ = −v_n),
     /// on a body whose effective mass along the normal is `mass`, over a step `dt`.
     pub fn force(&self, x: f64, rate: f64, mass: f64, dt: f64) -> f64 {
@@ -147,6 +209,27 @@ impl NormalLaw {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A body `ratio` times as heavy on the scaled law sinks as deep, in both laws.
+    #[test]
+    fn a_scaled_law_holds_a_heavier_body_at_the_same_sink() {
+        let hunt = NormalLaw::HuntCrossley {
+            stiffness: 1e6,
+            exponent: 1.5,
+            damping: 0.5,
+        };
+        for law in [NormalLaw::default(), hunt] {
+            let sink = law.static_sink(8.0);
+            let heavy = law.scaled(30.0);
+            assert!((heavy.static_sink(240.0) / sink - 1.0).abs() < 1e-12);
+            assert!((law.stiffness_for(8.0, sink) / law.stiffness() - 1.0).abs() < 1e-12);
+        }
+        assert_eq!(
+            NormalLaw::default().scaled(30.0).damping(),
+            30.0 * REFERENCE_DAMPING
+        );
+        assert_eq!(hunt.scaled(30.0).damping(), 0.5);
+    }
 
     #[test]
     fn spring_damper_is_the_papers_law_for_heavy_bodies() {

@@ -8,7 +8,7 @@ pub mod ball;
 pub mod walk;
 
 pub use ball::BallMetrics;
-pub use walk::{HexapodMetrics, StanceMetrics};
+pub use walk::{GroundMetrics, HexapodMetrics, StanceMetrics};
 
 use serde::de::DeserializeOwned;
 

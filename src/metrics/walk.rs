@@ -52,6 +52,8 @@ pub struct HexapodMetrics {
     pub max_joint_drift_deg: f64,
     /// The gait's stance on this robot: its lengths, where each came from, and its room.
     pub stance: StanceMetrics,
+    /// The ground's contact stiffness and damping the walk ran on, and where each came from.
+    pub ground: GroundMetrics,
     #[serde(skip)]
     acc: Accumulators,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
@@ -109,6 +111,56 @@ impl StanceMetrics {
             body_clearance: fitted.clearance,
         }
     }
+}
+
+/// The ground a walk ran on, as the metrics JSON's `ground` object: the contact's stiffness and
+/// damping, "given" by the scenario or "fitted" to the robot's weight (the reference contact
+/// scaled by `mass_ratio`, the robot's mass over hex18's; see `scenario::resolve`).
+#[derive(Debug, Clone, Serialize, Deserialize, Default, PartialEq)]
+#[serde(default)]
+pub struct GroundMetrics {
+    pub stiffness: f64,
+    pub damping: f64,
+    pub origins: std::collections::BTreeMap<String, String>,
+    pub mass_ratio: f64,
+}
+
+impl GroundMetrics {
+    /// "k = 2.00e4 N/m, c = 150 N·s/m (fitted: 1.00 × hex18's mass)" for a run's summary.
+    pub fn describe(&self) -> String {
+        let origin = |field: &str| self.origins.get(field).map_or("given", String::as_str);
+        let fitted = [origin("stiffness"), origin("damping")]
+            .iter()
+            .filter(|o| **o == "fitted")
+            .count();
+        let why = match fitted {
+            0 => "as given".to_string(),
+            2 => format!(
+                "fitted to the robot's weight, {:.2} × hex18's: its feet sink as hex18's on the reference contact",
+                self.mass_ratio
+            ),
+            _ => format!(
+                "stiffness {}, damping {} (fitted: {:.2} × hex18's weight)",
+                origin("stiffness"),
+                origin("damping"),
+                self.mass_ratio
+            ),
+        };
+        format!(
+            "k = {} N/m, c = {} N·s/m ({why})",
+            significant(self.stiffness),
+            significant(self.damping)
+        )
+    }
+}
+
+/// `x` to four significant digits.
+pub fn significant(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(3 - x.abs().log10().floor() as i32);
+    (x * scale).round() / scale
 }
 
 #[derive(Debug, Clone, Default)]

@@ -6,7 +6,7 @@ use super::step_loop::{self, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, Fitted, GaitController};
-use crate::metrics::{HexapodMetrics, StanceMetrics};
+use crate::metrics::{GroundMetrics, HexapodMetrics, StanceMetrics};
 use crate::record::hexapod::{HexapodRecorder, HexapodTrajectory};
 use crate::record::progress::Progress;
 use crate::record::{Observer, decimation};
@@ -27,6 +27,8 @@ pub struct WalkRun {
     /// The velocity commands over the walk.
     pub commands: CommandSchedule,
     pub contact: ContactModel,
+    /// The contact's stiffness and damping and where they came from, for the metrics.
+    pub ground: GroundMetrics,
     pub settings: HexapodSettings,
     pub placement: Placement,
     /// Seconds standing before the gait starts.
@@ -141,6 +143,7 @@ impl WalkRun {
             self.outputs.metrics.clone(),
         );
         metrics.stance = StanceMetrics::of(&self.gait, &self.robot);
+        metrics.ground = self.ground.clone();
 
         let steps = ((self.settle_time + self.duration) / dt).round() as u64;
         let mut walking = Walking {

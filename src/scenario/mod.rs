@@ -84,6 +84,8 @@ struct WalkSetup {
     settle: f64,
     follow_terrain: bool,
     start: spec::StartSpec,
+    /// The contact's stiffness and damping and where they came from.
+    ground: crate::metrics::GroundMetrics,
 }
 
 impl WalkSetup {
@@ -293,6 +295,7 @@ impl Scenario {
                     gait: w.gait.clone(),
                     commands: w.commands.clone(),
                     contact: self.contact,
+                    ground: w.ground.clone(),
                     settings: w.settings,
                     settle_time: w.settle,
                     terrain_following: w.follow_terrain,

@@ -6,7 +6,7 @@ use super::spec::{
     BALL_LOG_RATE, DEFAULT_DT, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, ServoSpec, WALK_LOG_RATE,
 };
 use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
-use crate::contact::ContactModel;
+use crate::contact::{ContactModel, NormalLaw};
 use crate::gait::{CommandChange, CommandSchedule, Gait, GaitSpec, VelocityCommand};
 use crate::robot::RobotModel;
 use crate::sim::{
@@ -35,7 +35,7 @@ impl Scenario {
         };
         let base = origin.parent().unwrap_or(Path::new(""));
         check_common(&spec, &name).map_err(fail)?;
-        let contact = spec.contact.model();
+        let mut contact = spec.contact.model();
         let mut hasher = Sha256::new();
         // hashed with its step, so a default step and the same step given hash alike
         let hashed = ScenarioSpec {
@@ -49,7 +49,8 @@ impl Scenario {
         let setup = match spec.kind {
             Kind::Ball => Setup::Ball(resolve_ball(&spec, &contact).map_err(fail)?),
             Kind::Walk => Setup::Walk(Box::new(
-                resolve_walk(&spec, &contact, base, &mut hasher, &mut warnings).map_err(fail)?,
+                resolve_walk(&spec, &mut contact, base, &mut hasher, &mut warnings)
+                    .map_err(fail)?,
             )),
         };
         if let Setup::Walk(w) = &setup {
@@ -237,7 +238,7 @@ fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfi
 /// A walk's robot, gait, commands and settings.
 fn resolve_walk(
     spec: &ScenarioSpec,
-    contact: &ContactModel,
+    contact: &mut ContactModel,
     base: &Path,
     hasher: &mut Sha256,
     warnings: &mut Vec<String>,
@@ -256,19 +257,25 @@ fn resolve_walk(
         ));
     }
     warnings.extend(robot.warnings.iter().cloned());
+    let ground = fit_ground(&spec.contact, contact, &robot, support)?;
     // the lightest foot link bounds the effective mass the contact spring acts on
-    if let Some((foot, mass)) = robot
+    let (foot, foot_mass) = robot
         .legs
         .iter()
         .map(|leg| {
             let link = &robot.links[leg.foot_link];
-            (&link.name, link.mass)
+            (link.name.clone(), link.mass)
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
-    {
-        let what = format!("the lightest foot link (`{foot}`, {mass} kg)");
-        check_stable_dt(spec, contact, mass, robot.legs[0].foot.radius, &what)?;
+        .ok_or("the robot has no legs")?;
+    let what = format!("the lightest foot link (`{foot}`, {foot_mass} kg)");
+    if spec.dt.is_some() {
+        check_stable_dt(spec, contact, foot_mass, robot.legs[0].foot.radius, &what)?;
     }
+    let contact_step = ContactStep {
+        limit: CONTACT_STEP_LIMIT / (contact.normal.stiffness() / foot_mass).sqrt(),
+        what,
+    };
     let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
     if !(settle.is_finite() && settle >= 0.0) {
         return Err(format!(
@@ -282,7 +289,14 @@ fn resolve_walk(
         return Err("pgs_iterations: expected at least 1".into());
     }
     let gains = resolve_servo(spec.servo.unwrap_or_default(), &robot, &gait.standing_pose)?;
-    let dt = servo_time_step(spec, &robot, &gait.standing_pose, gains, warnings)?;
+    let dt = walk_time_step(
+        spec,
+        &robot,
+        &gait.standing_pose,
+        gains,
+        contact_step,
+        warnings,
+    )?;
     let commands = resolve_commands(spec, &gait.gait)?;
     if let Some(start) = spec.start
         && ![start.x, start.y, Some(start.heading_deg)]
@@ -306,7 +320,113 @@ fn resolve_walk(
         settle,
         follow_terrain: spec.follow_terrain.unwrap_or(false),
         start: spec.start.unwrap_or_default(),
+        ground,
     })
+}
+
+/// A walk's ground. The reference contact (k = 2·10⁴ N/m, c = 150 N·s/m) was set for hex18: on
+/// a robot 30 times as heavy the same spring lets the feet sink past their radius. So where the
+/// scenario leaves the stiffness or damping out, it is the reference's scaled to the robot's mass
+/// against hex18's ([`crate::contact::NormalLaw::scaled`]): the feet sink as hex18's do on the
+/// reference contact, with the same damping ratio (hex18 gets the reference exactly). A stiffness
+/// given that lets the feet sink past their radius standing on the gait's fewest feet is refused,
+/// naming the stiffness that would hold them.
+fn fit_ground(
+    given: &super::spec::ContactSpec,
+    contact: &mut ContactModel,
+    robot: &RobotModel,
+    support: usize,
+) -> Result<crate::metrics::GroundMetrics, String> {
+    let ratio = robot.total_mass() / hex18_mass();
+    let fitted = contact.normal.scaled(ratio);
+    let mut normal = contact.normal;
+    let origin = |given: bool| if given { "given" } else { "fitted" }.to_string();
+    if given.stiffness.is_none() || given.damping.is_none() {
+        normal = match (normal, fitted) {
+            (
+                NormalLaw::SpringDamper { stiffness, damping },
+                NormalLaw::SpringDamper {
+                    stiffness: k,
+                    damping: c,
+                },
+            ) => NormalLaw::SpringDamper {
+                stiffness: if given.stiffness.is_some() {
+                    stiffness
+                } else {
+                    k
+                },
+                damping: if given.damping.is_some() { damping } else { c },
+            },
+            (
+                NormalLaw::HuntCrossley {
+                    stiffness,
+                    exponent,
+                    damping,
+                },
+                NormalLaw::HuntCrossley {
+                    stiffness: k,
+                    damping: d,
+                    ..
+                },
+            ) => NormalLaw::HuntCrossley {
+                stiffness: if given.stiffness.is_some() {
+                    stiffness
+                } else {
+                    k
+                },
+                exponent,
+                damping: if given.damping.is_some() { damping } else { d },
+            },
+            (normal, _) => normal,
+        };
+    }
+    if given.stiffness.is_some() && support > 0 {
+        let load = robot.total_mass() * STANDARD_GRAVITY / support as f64;
+        let radius = robot
+            .legs
+            .iter()
+            .map(|leg| leg.foot.radius)
+            .fold(f64::INFINITY, f64::min);
+        let sink = normal.static_sink(load);
+        if sink >= radius {
+            return Err(format!(
+                "contact.stiffness: {} lets the feet sink {:.1} mm standing on the gait's fewest {support} feet ({load:.1} N each), past their {:.1} mm radius; a stiffness of at least {:.3e} holds them (left out, the contact is fitted to this robot: {:.3e})",
+                normal.stiffness(),
+                sink * 1e3,
+                radius * 1e3,
+                normal.stiffness_for(load, radius),
+                fitted.stiffness()
+            ));
+        }
+    }
+    contact.normal = normal;
+    Ok(crate::metrics::GroundMetrics {
+        stiffness: normal.stiffness(),
+        damping: normal.damping(),
+        origins: [
+            ("stiffness".to_string(), origin(given.stiffness.is_some())),
+            ("damping".to_string(), origin(given.damping.is_some())),
+        ]
+        .into_iter()
+        .collect(),
+        mass_ratio: ratio,
+    })
+}
+
+/// hex18's mass (kg), against which a robot's ground is scaled.
+fn hex18_mass() -> f64 {
+    static MASS: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *MASS.get_or_init(|| builtin::hex18().total_mass())
+}
+
+/// The largest ω·dt of the contact spring on the lightest foot link, ω = √(k/m), for a step
+/// hexsim chooses: half the explicit spring's stability bound of 2 (hex18 at 1 ms: 0.63).
+pub const CONTACT_STEP_LIMIT: f64 = 1.0;
+
+/// The largest step the contact spring allows ([`CONTACT_STEP_LIMIT`]), and on what.
+struct ContactStep {
+    limit: f64,
+    what: String,
 }
 
 /// The largest ω·dt a servo tolerates, ω = √(k/I) on the lightest joint (I: the inertia of the
@@ -327,12 +447,14 @@ pub const EXPLICIT_SERVO_LIMIT: f64 = 0.5;
 
 /// The time step of a walk: as given — refused when the lightest joint's servo is too fast for
 /// it ([`SERVO_STEP_LIMIT`], and [`EXPLICIT_SERVO_LIMIT`] for impulse joints) — else the
-/// default, or 1 ms / n with the least n the servo allows (said in a warning).
-fn servo_time_step(
+/// default, or 1 ms / n with the least n the servo and the contact spring allow
+/// ([`CONTACT_STEP_LIMIT`]; said in a warning).
+fn walk_time_step(
     spec: &ScenarioSpec,
     robot: &RobotModel,
     pose: &[f64],
     gains: ServoGains,
+    contact: ContactStep,
     warnings: &mut Vec<String>,
 ) -> Result<f64, String> {
     let inertias = crate::robot::servo::outboard_inertias(robot, pose);
@@ -365,10 +487,18 @@ fn servo_time_step(
             );
         }
     }
+    let (servo_limit, servo_why) = (limit, why.clone());
+    if spec.dt.is_none() && contact.limit < limit {
+        limit = contact.limit;
+        why = format!(
+            "the contact spring on {} needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}",
+            contact.what
+        );
+    }
     match spec.dt {
-        Some(dt) if dt > limit && !spec.allow_unstable_dt => Err(format!(
-            "dt = {dt} s is too large: {why}, dt ≤ {limit:.2e} s; reduce dt or the servo \
-             stiffness (or set allow_unstable_dt = true to run it anyway)"
+        Some(dt) if dt > servo_limit && !spec.allow_unstable_dt => Err(format!(
+            "dt = {dt} s is too large: {servo_why}, dt ≤ {servo_limit:.2e} s; reduce dt or the \
+             servo stiffness (or set allow_unstable_dt = true to run it anyway)"
         )),
         Some(dt) => Ok(dt),
         None if DEFAULT_DT <= limit => Ok(DEFAULT_DT),

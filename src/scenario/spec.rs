@@ -199,10 +199,13 @@ pub enum OrientationChoice {
 #[serde(deny_unknown_fields, default)]
 pub struct ContactSpec {
     pub normal: NormalChoice,
-    /// k (N/m; Hunt–Crossley N/mⁿ).
-    pub stiffness: f64,
-    /// c (N·s/m; Hunt–Crossley's d in s/m).
-    pub damping: f64,
+    /// k (N/m; Hunt–Crossley N/mⁿ). Left out: the reference contact's, fitted to a walking
+    /// robot's weight (see `scenario::resolve`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// c (N·s/m; Hunt–Crossley's d in s/m). Left out: as the stiffness.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
     /// Hunt–Crossley's n.
     pub exponent: f64,
     pub friction: FrictionChoice,
@@ -247,8 +250,8 @@ impl Default for ContactSpec {
     fn default() -> Self {
         ContactSpec {
             normal: NormalChoice::SpringDamper,
-            stiffness: 2.0e4,
-            damping: 150.0,
+            stiffness: None,
+            damping: None,
             exponent: 1.5,
             friction: FrictionChoice::Karnopp,
             mu_static: 0.9,
@@ -267,16 +270,17 @@ impl Default for ContactSpec {
 }
 
 impl ContactSpec {
+    /// The contact as given, the reference stiffness and damping where they are left out.
     pub fn model(&self) -> ContactModel {
+        use crate::contact::{REFERENCE_DAMPING, REFERENCE_STIFFNESS};
+        let stiffness = self.stiffness.unwrap_or(REFERENCE_STIFFNESS);
+        let damping = self.damping.unwrap_or(REFERENCE_DAMPING);
         let normal = match self.normal {
-            NormalChoice::SpringDamper => NormalLaw::SpringDamper {
-                stiffness: self.stiffness,
-                damping: self.damping,
-            },
+            NormalChoice::SpringDamper => NormalLaw::SpringDamper { stiffness, damping },
             NormalChoice::HuntCrossley => NormalLaw::HuntCrossley {
-                stiffness: self.stiffness,
+                stiffness,
                 exponent: self.exponent,
-                damping: self.damping,
+                damping,
             },
         };
         let friction = match self.friction {
