@@ -58,6 +58,10 @@ pub struct ContactArgs {
     /// rolling-resistance coefficient is ρ/r).
     #[arg(long, default_value_t = ContactSpec::default().rolling_resistance)]
     rolling_resistance: f64,
+    /// Spin friction μ_t (m): a torque of at most μ_t·Fn against the spin about the ground's
+    /// normal (0: none; MuJoCo's torsional friction, condim 4).
+    #[arg(long, default_value_t = ContactSpec::default().spin_friction)]
+    spin_friction: f64,
     /// Contact model: hexsim's, or the paper's step for step (vertical penetration, its angles
     /// with --paper-step, explicit damper, friction laws unlimited, forces at the sphere's centre).
     #[arg(long, value_enum, default_value_t = ContactSpec::default().variant)]
@@ -82,6 +86,7 @@ impl ContactArgs {
             paper_step: self.paper_step,
             drift_recovery: self.drift_recovery,
             rolling_resistance: self.rolling_resistance,
+            spin_friction: self.spin_friction,
             variant: self.contact_model,
         }
     }

@@ -49,6 +49,10 @@ pub struct ContactModel {
     /// pressure leads its centre (MuJoCo's rolling friction, condim 6, in the same unit; a
     /// rolling-resistance coefficient c_rr = ρ/r for a sphere of radius r). 0: none.
     pub rolling_resistance: f64,
+    /// Spin (torsional) friction μ_t (m): a torque of at most μ_t·Fn against the body's spin about
+    /// the ground's normal — MuJoCo's torsional friction, condim 4, in the same unit (the radius
+    /// of the patch over which friction acts). 0: none (the paper's point contact).
+    pub spin_friction: f64,
     /// hexsim's contact, or the paper's step for step (see `paper`).
     pub variant: Variant,
 }
@@ -71,6 +75,7 @@ impl Default for ContactModel {
             orientation: Orientation::default(),
             drift_recovery: DRIFT_RECOVERY,
             rolling_resistance: 0.0,
+            spin_friction: 0.0,
             variant: Variant::Hexsim,
         }
     }
@@ -161,8 +166,8 @@ pub struct ContactState {
     drift: DVec3,
     /// Last step's normal force (0 before the contact).
     normal_force: f64,
-    /// Last step's rolling-resistance torque and rolling angular velocity (world), for the
-    /// rolling load estimate (see `rolling`).
+    /// Last step's rolling-resistance and spin-friction torque and the body's angular velocity
+    /// (world), for the rolling load estimate (see `rolling`).
     rolling: Option<(DVec3, DVec3)>,
 }
 
@@ -333,6 +338,24 @@ impl ContactModel {
                     ),
                 ));
             }
+        }
+        if self.variant == Variant::Paper && self.spin_friction != 0.0 {
+            return Err((
+                "spin_friction".into(),
+                format!(
+                    "expected 0 for the paper variant, which has none, got {}",
+                    self.spin_friction
+                ),
+            ));
+        }
+        if !(self.spin_friction.is_finite() && self.spin_friction >= 0.0) {
+            return Err((
+                "spin_friction".into(),
+                format!(
+                    "expected a lever arm ≥ 0 m (0: none), got {}",
+                    self.spin_friction
+                ),
+            ));
         }
         if !(self.rolling_resistance.is_finite() && self.rolling_resistance >= 0.0) {
             return Err((

@@ -1,27 +1,32 @@
-//! Rolling resistance: a torque of at most ρ·Fn against a body's rolling — its angular velocity
-//! about the ground plane's axes (spin about the normal is not rolling) — solved together with
-//! the contact's friction.
+//! Rolling resistance and spin friction: torques of at most ρ·Fn against a body's rolling — its
+//! angular velocity about the ground plane's axes — and of at most μ_t·Fn against its spin about
+//! the normal (MuJoCo's condim 6 and 4, in the same units), solved together with the contact's
+//! friction.
 //!
-//! Why together: the torque turns the body about its centre, which moves the contact point; the
+//! Why together: a torque turns the body about its centre, which moves the contact point; the
 //! friction turns it back. Chosen one after the other, each reads the other's effect as a load and
 //! they fight (measured: a ball that should rest on a 2.5° slope jittered at 2 mm/s). So the
-//! contact's four in-plane unknowns g = (F₁, F₂, T₁, T₂) — the friction force and the rolling
-//! torque along the ground frame's tangents — are solved as one stick problem, as Karnopp friction
-//! is for one (see `friction`): with the generalised velocity s = (slip₁, slip₂, ω₁, ω₂) and the
-//! body's mobility W (velocity change per impulse, s⁺ = s + h·W·g),
+//! contact's five unknowns g = (F₁, F₂, T₁, T₂, Tₙ) — the friction force and the rolling torque
+//! along the ground frame's tangents, and the spin torque about its normal — are solved as one
+//! stick problem, as Karnopp friction is for one (see `friction`): with the generalised velocity
+//! s = (slip₁, slip₂, ω₁, ω₂, ωₙ) and the body's mobility W (velocity change per impulse,
+//! s⁺ = s + h·W·g),
 //!
 //!   g_stop = g_prev − W⁻¹·u,   u = (2s − s_prev)/h (s/h on a contact's first step),
 //!
-//! which stops both the slip and the rolling within the step under last step's load (the
-//! friction's part of u also carries its drift recovery). The friction law then decides whether
-//! F_stop holds (else it slides, with its law's force); the rolling torque is T_stop while
-//! |T_stop| ≤ ρ·Fn, else −ρ·Fn·ω_t/|ω_t|, which cannot reverse the rolling. A part that
-//! saturates is fixed and the other solved again with it (at most twice). A ball so stops, and
-//! stays at rest on a slope it can hold (tan θ ≤ ρ/r), without creeping.
+//! which stops the slip, the rolling and the spin within the step under last step's load (the
+//! friction's part of u also carries its drift recovery). Each torque is its stopping value while
+//! within its limit, else the limit against the motion, which cannot reverse it; the friction law
+//! decides whether F_stop holds (else it slides, with its law's force). A part that saturates is
+//! fixed and the others solved again with it (at most twice). A ball so stops, and stays at rest
+//! on a slope it can hold (tan θ ≤ ρ/r), without creeping; its spin decays at μ_t·Fn/I.
 
 use super::{ContactForce, ContactModel, ContactState, EffectiveMass, SphereGeometry};
-use glam::{DMat2, DVec2, DVec3};
+use glam::{DVec2, DVec3};
 use rapier3d::na;
+
+type Matrix5 = na::SMatrix<f64, 5, 5>;
+type Vector5 = na::SVector<f64, 5>;
 
 /// A rigid body with an isotropic rotational inertia (a sphere) at its contact.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,10 +40,58 @@ pub struct RollingBody {
     pub angular_velocity: DVec3,
 }
 
+/// The unknowns g solved with some of them fixed: for the free ones F,
+/// g_F = g_prev,F − W_FF⁻¹·(u_F + W_FS·(g_S − g_prev,S)). None if W_FF is singular.
+fn solve_free(
+    w: &Matrix5,
+    u: &Vector5,
+    previous: &Vector5,
+    fixed: &[Option<f64>; 5],
+) -> Option<Vector5> {
+    let free: Vec<usize> = (0..5).filter(|&k| fixed[k].is_none()).collect();
+    let mut g = *previous;
+    for k in 0..5 {
+        if let Some(v) = fixed[k] {
+            g[k] = v;
+        }
+    }
+    if free.is_empty() {
+        return Some(g);
+    }
+    let n = free.len();
+    let w_ff = na::DMatrix::from_fn(n, n, |a, b| w[(free[a], free[b])]);
+    let rhs = na::DVector::from_fn(n, |a, _| {
+        u[free[a]]
+            + (0..5)
+                .filter(|k| fixed[*k].is_some())
+                .map(|k| w[(free[a], k)] * (g[k] - previous[k]))
+                .sum::<f64>()
+    });
+    let step = w_ff.try_inverse()? * rhs;
+    for (a, &k) in free.iter().enumerate() {
+        g[k] = previous[k] - step[a];
+    }
+    Some(g)
+}
+
+/// A torque's stopping value `stop` within `limit`, else the limit against the motion `motion`;
+/// and whether it saturated. A motion slower than `still` (what one step of the limit torque
+/// changes) is numerical noise as far as a step can tell, and its direction would be too: the
+/// torque then acts along the stopping value, against the load that overcomes it.
+fn saturate(stop: DVec2, limit: f64, motion: DVec2, still: f64) -> (DVec2, bool) {
+    if stop.length() <= limit {
+        (stop, false)
+    } else if motion.length() > still {
+        (-limit * motion / motion.length(), true)
+    } else {
+        (stop * (limit / stop.length()), true)
+    }
+}
+
 impl ContactModel {
     /// [`Self::respond`] for a rolling body (a ball): the contact's force, and the rolling
-    /// resistance's torque about the body's centre of mass (zero when `rolling_resistance` is 0,
-    /// and then the force is exactly [`Self::respond`]'s). `None` when it does not touch.
+    /// resistance's and spin friction's torque about the body's centre of mass (zero when both
+    /// are 0, and then the force is exactly [`Self::respond`]'s). `None` when it does not touch.
     pub fn respond_rolling(
         &self,
         geometry: &SphereGeometry,
@@ -48,90 +101,122 @@ impl ContactModel {
         state: &mut ContactState,
     ) -> Option<(ContactForce, DVec3)> {
         let r = -body.arm;
-        let (t1, t2) = (geometry.frame.tangent_x, geometry.frame.tangent_y);
+        let frame = &geometry.frame;
+        let (t1, t2, n) = (frame.tangent_x, frame.tangent_y, frame.normal);
         let inverse_inertia = glam::DMat3::from_diagonal(DVec3::splat(1.0 / body.inertia));
-        let mass = EffectiveMass::rigid_body(body.mass, inverse_inertia, r, &geometry.frame);
+        let mass = EffectiveMass::rigid_body(body.mass, inverse_inertia, r, frame);
         let pending = self.begin(geometry, point_velocity, mass.normal, dt, state)?;
-        if self.rolling_resistance <= 0.0 {
+        if self.rolling_resistance <= 0.0 && self.spin_friction <= 0.0 {
             state.rolling = None;
             let stop = pending.stopping_force(mass.tangential);
             return Some((self.finish(&pending, stop, dt, state), DVec3::ZERO));
         }
         // W: a unit force along t_b moves the point by t_b/m + (I⁻¹·(r × t_b)) × r and turns the
-        // body by I⁻¹·(r × t_b); a unit torque about t_b moves the point by (I⁻¹·t_b) × r
-        let axes = [t1, t2];
+        // body by I⁻¹·(r × t_b); a unit torque about a_b moves the point by (I⁻¹·a_b) × r and
+        // turns the body by I⁻¹·a_b
         let i = body.inertia;
-        let mut w = na::Matrix4::<f64>::zeros();
-        for (b, &tb) in axes.iter().enumerate() {
+        let axes = [t1, t2, n];
+        let mut w = Matrix5::zeros();
+        for (b, &tb) in [t1, t2].iter().enumerate() {
             let by_force = tb / body.mass + (r.cross(tb) / i).cross(r);
             let turn_by_force = r.cross(tb) / i;
-            let by_torque = (tb / i).cross(r);
-            for (a, &ta) in axes.iter().enumerate() {
+            for (a, &ta) in [t1, t2].iter().enumerate() {
                 w[(a, b)] = ta.dot(by_force);
-                w[(a + 2, b)] = ta.dot(turn_by_force);
+            }
+            for (a, &aa) in axes.iter().enumerate() {
+                w[(a + 2, b)] = aa.dot(turn_by_force);
+            }
+        }
+        for (b, &ab) in axes.iter().enumerate() {
+            let by_torque = (ab / i).cross(r);
+            for (a, &ta) in [t1, t2].iter().enumerate() {
                 w[(a, b + 2)] = ta.dot(by_torque);
-                w[(a + 2, b + 2)] = ta.dot(tb) / i;
+            }
+            for (a, &aa) in axes.iter().enumerate() {
+                w[(a + 2, b + 2)] = aa.dot(ab) / i;
             }
         }
         let w = (w + w.transpose()) * 0.5;
-        let in_plane = |v: DVec3| DVec2::new(t1.dot(v), t2.dot(v));
-        let n = geometry.frame.normal;
-        let rolling = body.angular_velocity - body.angular_velocity.dot(n) * n;
-        let omega = in_plane(rolling);
+        // the body's turning in the ground frame: rolling (t₁, t₂) and spin (n)
+        let turning = |v: DVec3| DVec3::new(t1.dot(v), t2.dot(v), n.dot(v));
+        let omega = turning(body.angular_velocity);
         let (torque_prev, omega_demand) = match state.rolling {
-            Some((torque, previous)) => (in_plane(torque), (2.0 * omega - in_plane(previous)) / dt),
-            None => (DVec2::ZERO, omega / dt),
+            Some((torque, previous)) => (turning(torque), (2.0 * omega - turning(previous)) / dt),
+            None => (DVec3::ZERO, omega / dt),
         };
-        let u = na::Vector4::new(
+        let u = Vector5::new(
             pending.demand.x,
             pending.demand.y,
             omega_demand.x,
             omega_demand.y,
+            omega_demand.z,
         );
-        let block = |r0: usize, c0: usize| {
-            DMat2::from_cols(
-                DVec2::new(w[(r0, c0)], w[(r0 + 1, c0)]),
-                DVec2::new(w[(r0, c0 + 1)], w[(r0 + 1, c0 + 1)]),
-            )
-        };
-        let limit = self.rolling_resistance * pending.normal_force;
-        let saturate = |stop: DVec2| {
-            if stop.length() <= limit {
-                (stop, false)
-            } else if omega.length() > 0.0 {
-                (-limit * omega / omega.length(), true)
-            } else {
-                (stop * (limit / stop.length()), true)
+        let previous = Vector5::new(
+            pending.previous_friction.x,
+            pending.previous_friction.y,
+            torque_prev.x,
+            torque_prev.y,
+            torque_prev.z,
+        );
+        let rolling_limit = self.rolling_resistance * pending.normal_force;
+        let spin_limit = self.spin_friction * pending.normal_force;
+        // the torques within their limits, those that saturate fixed at them
+        let limit_torques = |g: &Vector5, fixed: &mut [Option<f64>; 5]| {
+            if fixed[2].is_none() {
+                let (t, saturated) = saturate(
+                    DVec2::new(g[2], g[3]),
+                    rolling_limit,
+                    omega.truncate(),
+                    rolling_limit * dt / i,
+                );
+                if saturated {
+                    (fixed[2], fixed[3]) = (Some(t.x), Some(t.y));
+                }
+            }
+            if fixed[4].is_none() {
+                let (t, saturated) = saturate(
+                    DVec2::new(g[4], 0.0),
+                    spin_limit,
+                    DVec2::new(omega.z, 0.0),
+                    spin_limit * dt / i,
+                );
+                if saturated {
+                    fixed[4] = Some(t.x);
+                }
             }
         };
-        // both parts taken to hold; then fix what saturates and solve the other with it
-        let (mut friction_stop, mut torque) = match w.try_inverse() {
-            Some(inverse) => {
-                let g = inverse * u;
-                (
-                    pending.previous_friction - DVec2::new(g[0], g[1]),
-                    torque_prev - DVec2::new(g[2], g[3]),
-                )
-            }
-            None => (pending.stopping_force(mass.tangential), torque_prev),
+        let mut fixed = [None; 5];
+        let all = solve_free(&w, &u, &previous, &fixed);
+        let Some(all) = all else {
+            // a mobility no solve can invert: friction alone, no torque
+            state.rolling = None;
+            let stop = pending.stopping_force(mass.tangential);
+            return Some((self.finish(&pending, stop, dt, state), DVec3::ZERO));
         };
-        let (t, torque_saturated) = saturate(torque);
-        torque = t;
-        let demand_v = pending.demand;
-        if torque_saturated {
-            // the torque is known: friction stops the slip it and the load leave
-            let push = block(0, 2) * (torque - torque_prev);
-            friction_stop = pending.previous_friction - block(0, 0).inverse() * (demand_v + push);
-        }
+        limit_torques(&all, &mut fixed);
+        let mut g = if fixed.iter().any(Option::is_some) {
+            solve_free(&w, &u, &previous, &fixed).unwrap_or(all)
+        } else {
+            all
+        };
+        let friction_stop = DVec2::new(g[0], g[1]);
         let outcome = pending.friction(&self.friction, friction_stop);
-        if !outcome.sticking && !torque_saturated {
-            // friction slides with its law's force: the torque stops the rolling it leaves
-            let push = block(2, 0) * (outcome.force - pending.previous_friction);
-            let stop = torque_prev - block(2, 2).inverse() * (omega_demand + push);
-            torque = saturate(stop).0;
+        if !outcome.sticking && fixed[2..].iter().any(Option::is_none) {
+            // friction slides with its law's force: the free torques stop what it leaves
+            (fixed[0], fixed[1]) = (Some(outcome.force.x), Some(outcome.force.y));
+            if let Some(again) = solve_free(&w, &u, &previous, &fixed) {
+                g = again;
+                let mut last = fixed;
+                limit_torques(&g, &mut last);
+                for k in 2..5 {
+                    if let Some(v) = last[k] {
+                        g[k] = v;
+                    }
+                }
+            }
         }
-        let torque = t1 * torque.x + t2 * torque.y;
-        state.rolling = Some((torque, rolling));
+        let torque = t1 * g[2] + t2 * g[3] + n * g[4];
+        state.rolling = Some((torque, body.angular_velocity));
         Some((self.finish(&pending, friction_stop, dt, state), torque))
     }
 }

@@ -101,6 +101,13 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
     if let Err((field, expected)) = spec.contact.model().validate() {
         return Err(format!("contact.{field}: {expected}"));
     }
+    if matches!(spec.kind, Kind::Walk) && spec.contact.spin_friction != 0.0 {
+        return Err(format!(
+            "contact.spin_friction: expected 0 for a walk, got {} (spin friction acts on a ball, \
+             `hexsim ball`; a foot's contact is a point force, with no torque about the normal)",
+            spec.contact.spin_friction
+        ));
+    }
     if matches!(spec.kind, Kind::Walk) && spec.contact.rolling_resistance != 0.0 {
         return Err(format!(
             "contact.rolling_resistance: expected 0 for a walk, got {} (rolling resistance acts on \

@@ -228,6 +228,9 @@ pub struct ContactSpec {
     /// Rolling resistance ρ (m): torque ≤ ρ·Fn against rolling (0: none; see
     /// `ContactModel::rolling_resistance`).
     pub rolling_resistance: f64,
+    /// Spin friction μ_t (m): torque ≤ μ_t·Fn against the spin about the normal (0: none; see
+    /// `ContactModel::spin_friction`).
+    pub spin_friction: f64,
     /// hexsim's contact or the paper's step for step (which reads the terrain with the paper's
     /// orientation, `paper_step`, and has no drift recovery).
     pub variant: VariantChoice,
@@ -264,6 +267,7 @@ impl Default for ContactSpec {
             paper_step: 0.01,
             drift_recovery: crate::contact::DRIFT_RECOVERY,
             rolling_resistance: 0.0,
+            spin_friction: 0.0,
             variant: VariantChoice::Hexsim,
         }
     }
@@ -323,6 +327,7 @@ impl ContactSpec {
             orientation,
             drift_recovery: if paper { 0.0 } else { self.drift_recovery },
             rolling_resistance: self.rolling_resistance,
+            spin_friction: self.spin_friction,
             variant: if paper {
                 crate::contact::Variant::Paper
             } else {
