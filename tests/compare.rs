@@ -138,13 +138,23 @@ fn a_broken_comparison_says_where() {
     }
 }
 
-/// A setting that diverges (hex18 under the paper's explicit damper at 1 ms) is reported with why,
-/// exit 1, and the others are still recorded, the diverged one up to where it stopped.
+/// A setting that diverges (hex18 under the paper's explicit damper at 1 ms, run though the set-up
+/// refuses it: `allow_unstable_dt`) is reported with why, exit 1, and the others are still
+/// recorded, the diverged one up to where it stopped.
 #[test]
 fn a_diverging_setting_is_reported_and_the_rest_recorded() {
     let dir = scratch("compare-diverge");
-    let scenario =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/natural_tripod.toml");
+    let terrain =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains/natural_matlab.toml");
+    let scenario = dir.join("unstable.toml");
+    std::fs::write(
+        &scenario,
+        format!(
+            "terrain = {:?}\nduration = 20.0\ndt = 0.001\nallow_unstable_dt = true\n[start]\nx = -1.25\ny = 0.0\n",
+            terrain.to_string_lossy()
+        ),
+    )
+    .unwrap();
     let file = dir.join("diverge.toml");
     std::fs::write(
         &file,

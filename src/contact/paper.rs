@@ -20,7 +20,9 @@ use crate::terrain::{GroundFrame, HeightGrid};
 use glam::{DVec2, DVec3};
 
 /// The paper's geometry for a sphere of `radius` centred at `center`: vertical penetration and the
-/// central-difference frame with half-steps `xe`, `ye`; the force's point is the centre.
+/// central-difference frame with half-steps `xe`, `ye` (eq. 1–2); the force's point is the
+/// centre. Heights are read from the table as the paper does, bilinearly between its samples
+/// ([`HeightGrid::table_height`]), not from hexsim's bicubic surface.
 pub fn paper_geometry(
     terrain: &HeightGrid,
     center: DVec3,
@@ -28,8 +30,11 @@ pub fn paper_geometry(
     xe: f64,
     ye: f64,
 ) -> SphereGeometry {
-    let ground = terrain.height(center.x, center.y);
-    let (alpha, beta) = terrain.paper_angles(center.x, center.y, xe, ye);
+    let h = |x: f64, y: f64| terrain.table_height(x, y);
+    let (x, y) = (center.x, center.y);
+    let ground = h(x, y);
+    let alpha = ((h(x, y + ye) - h(x, y - ye)) / (2.0 * ye)).atan();
+    let beta = ((h(x + xe, y) - h(x - xe, y)) / (2.0 * xe)).atan();
     SphereGeometry {
         penetration: ground - (center.z - radius),
         point: center,
@@ -82,5 +87,38 @@ impl ContactModel {
             normal_change: 0.0,
         };
         Some(self.finish(&pending, stop, dt, state))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The paper reads its table bilinearly: on a single bump, between the samples, its
+    /// penetration and angles are the bilinear table's, not the bicubic surface's.
+    #[test]
+    fn the_paper_variant_reads_the_table_bilinearly() {
+        let bump = HeightGrid::from_fn(5, 5, [-0.2, 0.2], [-0.2, 0.2], |x, y| {
+            if x.abs() < 1e-9 && y.abs() < 1e-9 {
+                0.01
+            } else {
+                0.0
+            }
+        })
+        .unwrap();
+        let (x, y) = (0.03, 0.02);
+        // bilinear: the peak's weight at (0.03, 0.02) in the cell [0, 0.1]²
+        let table = 0.01 * (1.0 - 0.3) * (1.0 - 0.2);
+        assert!((bump.table_height(x, y) - table).abs() < 1e-15);
+        assert!((bump.height(x, y) - table).abs() > 1e-4, "bicubic differs");
+        let center = DVec3::new(x, y, 0.05 + 0.001);
+        let g = paper_geometry(&bump, center, 0.05, 0.01, 0.01);
+        assert!((g.penetration - (table - 0.001)).abs() < 1e-15);
+        // the bilinear cell's slopes, h = 0.01·(1 − x/0.1)·(1 − y/0.1): central differences
+        // within the cell are exact
+        let alpha = (-0.01 * (1.0 - 0.3) / 0.1f64).atan();
+        let beta = (-0.01 * (1.0 - 0.2) / 0.1f64).atan();
+        let frame = GroundFrame::from_paper_angles(alpha, beta);
+        assert!((g.frame.normal - frame.normal).length() < 1e-12);
     }
 }

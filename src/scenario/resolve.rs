@@ -208,7 +208,31 @@ fn check_stable_dt(
             spec.dt()
         ));
     }
+    if let Some(limit) = explicit_damper_step(contact, mass)
+        && spec.dt() >= limit
+        && !spec.allow_unstable_dt
+    {
+        return Err(format!(
+            "dt = {} s is too large for the paper variant's explicit damper on {what}: it needs c·dt/m < 2, dt < {limit:.2e} s; reduce dt or the damping, or use hexsim's contact, whose damper is exact over a step (or set allow_unstable_dt = true to run it anyway)",
+            spec.dt()
+        ));
+    }
     Ok(())
+}
+
+/// The paper variant's damper is explicit, F = c·ẋ at the step's start: each step multiplies the
+/// normal speed by 1 − c·dt/m, stable only while c·dt/m < 2 (hexsim's is exact over the step and
+/// has no such bound). The largest stable step on a body of `mass`, for the paper variant.
+fn explicit_damper_step(contact: &ContactModel, mass: f64) -> Option<f64> {
+    if contact.variant != crate::contact::Variant::Paper {
+        return None;
+    }
+    let c = match contact.normal {
+        NormalLaw::SpringDamper { damping, .. } => damping,
+        // k·xⁿ·d: its damping coefficient grows with the load; at the static sink it is Fn·d
+        NormalLaw::HuntCrossley { .. } => return None,
+    };
+    (c > 0.0).then(|| 2.0 * mass / c)
 }
 
 /// A ball scenario's ball, its lowest point `drop_height` above the ground (the ground's height is
@@ -279,10 +303,20 @@ fn resolve_walk(
     if spec.dt.is_some() {
         check_stable_dt(spec, contact, foot_mass, robot.legs[0].foot.radius, &what)?;
     }
-    let contact_step = ContactStep {
+    let mut contact_step = ContactStep {
         limit: CONTACT_STEP_LIMIT / (contact.normal.stiffness() / foot_mass).sqrt(),
-        what,
+        what: format!("the contact spring on {what} needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}"),
     };
+    if let Some(damper) = explicit_damper_step(contact, foot_mass)
+        && 0.5 * damper < contact_step.limit
+    {
+        contact_step = ContactStep {
+            limit: 0.5 * damper,
+            what: format!(
+                "the paper variant's explicit damper on {what} needs c·dt/m ≤ 1 (half its bound)"
+            ),
+        };
+    }
     let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
     if !(settle.is_finite() && settle >= 0.0) {
         return Err(format!(
@@ -497,10 +531,7 @@ fn walk_time_step(
     let (servo_limit, servo_why) = (limit, why.clone());
     if spec.dt.is_none() && contact.limit < limit {
         limit = contact.limit;
-        why = format!(
-            "the contact spring on {} needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}",
-            contact.what
-        );
+        why = contact.what;
     }
     match spec.dt {
         Some(dt) if dt > servo_limit && !spec.allow_unstable_dt => Err(format!(

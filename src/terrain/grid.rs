@@ -273,6 +273,16 @@ impl HeightGrid {
         self.surface(x, y).height
     }
 
+    /// The height table's value at (x, y), bilinear between the samples whatever the grid's
+    /// interpolation: the paper's lookup (a table of heights read as MATLAB's interp2 does),
+    /// for its contact variant step for step. Clamped to the rectangle like [`Self::height`].
+    pub fn table_height(&self, x: f64, y: f64) -> f64 {
+        let (j, tx, _) = locate(x, self.x0, self.dx, self.nx);
+        let (i, ty, _) = locate(y, self.y0, self.dy, self.ny);
+        let row = |i: usize| (1.0 - tx) * self.sample(i, j) + tx * self.sample(i, j + 1);
+        (1.0 - ty) * row(i) + ty * row(i + 1)
+    }
+
     /// Exact unit normal of the interpolated surface at (x, y).
     pub fn normal(&self, x: f64, y: f64) -> DVec3 {
         self.surface(x, y).normal()
