@@ -65,7 +65,7 @@ pub struct RunArgs {
     #[arg(long)]
     servo_damping: Option<f64>,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
-    /// impulse joints (about 1.3× faster; the joints drift apart by up to ~0.4 mm)
+    /// impulse joints (about 1.1× faster; the joints drift apart by up to ~0.4 mm)
     #[arg(long, value_enum, default_value_t = Articulation::default())]
     articulation: Articulation,
     /// rapier substeps per step (each rebuilds the multibody's mass matrix).

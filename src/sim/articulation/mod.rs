@@ -28,7 +28,7 @@ pub enum Articulation {
     /// One reduced-coordinate multibody: joints exact by construction.
     #[default]
     Multibody,
-    /// Impulse joints between free bodies: about 1.3× faster; the joints drift apart by up to
+    /// Impulse joints between free bodies: about 1.1× faster; the joints drift apart by up to
     /// ~0.4 mm.
     Impulse,
 }
