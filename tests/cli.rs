@@ -509,3 +509,37 @@ fn time_at_a_joint_limit_is_measured() {
     let fast = run(Some("0.4"), "fast.json");
     assert!(fast > 0.1, "{fast} s at a limit");
 }
+
+/// A walk that leaves the terrain's grid (here started 0.3 m from its +x edge) is flagged: the
+/// time off it in the metrics and a warning in the summary; one that stays on reports 0.
+#[test]
+fn a_walk_off_the_terrain_grid_is_flagged() {
+    let dir = scratch("off-terrain");
+    let walk = |start: &str, name: &str| {
+        let json = dir.join(format!("{name}.json"));
+        let out = hexsim()
+            .args([
+                "run",
+                "--terrain",
+                "terrains/natural.toml",
+                "--duration",
+                "6",
+            ])
+            .args(["--start", start, "0", "--no-record", "--metrics"])
+            .arg(&json)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(out.status.success(), "{stdout}");
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (m["time_off_terrain"].as_f64().unwrap(), stdout)
+    };
+    let (off, stdout) = walk("1.7", "edge");
+    // 0.3 m at about 0.12 m/s: off the grid after about 2.5 s of the 6
+    assert!(off > 2.0 && off < 4.5, "{off} s off the terrain");
+    assert!(stdout.contains("beyond the terrain's grid"), "{stdout}");
+    let (on, stdout) = walk("-1.0", "inside");
+    assert_eq!(on, 0.0);
+    assert!(!stdout.contains("beyond the terrain's grid"), "{stdout}");
+}

@@ -27,6 +27,15 @@ fn a_comparison_reports_and_records_every_setting() {
     let names = ["hexsim", "paper", "rolling 2 mm", "soft Hunt-Crossley"];
     let header = stdout.lines().find(|l| l.starts_with("metric")).unwrap();
     assert!(names.iter().all(|n| header.contains(n)), "{header}");
+    // the final position by coordinate, not a sum of coordinates
+    for axis in ["x", "y", "z"] {
+        let row = format!("final_position {axis}");
+        assert!(
+            stdout.lines().any(|l| l.starts_with(&row)),
+            "no {row}: {stdout}"
+        );
+    }
+    assert!(!stdout.contains("final_position (sum"), "{stdout}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let settings = report["settings"].as_array().unwrap();

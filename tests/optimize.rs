@@ -170,6 +170,10 @@ fn a_broken_specification_says_where() {
             "objective.forward_distanse: unknown metric",
         ),
         (
+            spec("", Some(("check_seeds = [4]", "check_seeds = [4, 3]"))),
+            "check_seeds: seed 3 is also searched (in seeds)",
+        ),
+        (
             spec("", Some(("seeds = [3]", "seeds = []"))),
             "seeds: expected at least one terrain seed",
         ),

@@ -64,18 +64,7 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         };
         failed |= failure.is_some();
         if let Some(serde_json::Value::Object(map)) = &metrics {
-            for (key, value) in map {
-                // per-foot lists (foot slip) as their sum
-                let (key, v) = match value {
-                    serde_json::Value::Array(items) if items.iter().all(|i| i.is_number()) => (
-                        format!("{key} (sum)"),
-                        items.iter().filter_map(serde_json::Value::as_f64).sum(),
-                    ),
-                    _ => match value.as_f64() {
-                        Some(v) => (key.clone(), v),
-                        None => continue,
-                    },
-                };
+            for (key, v) in table_rows(map) {
                 let key = &key;
                 let cell = if v.fract() == 0.0 && v.abs() < 1e12 {
                     format!("{v:.0}")
@@ -137,4 +126,30 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// A run's metrics as the table's rows: numbers as they are; a list per foot (six: foot slip) as
+/// its sum over the feet; a list per axis (three: the ball's final position) as one row per axis.
+fn table_rows(map: &serde_json::Map<String, serde_json::Value>) -> Vec<(String, f64)> {
+    let mut rows = Vec::new();
+    for (key, value) in map {
+        match value {
+            serde_json::Value::Array(items) if items.iter().all(|i| i.is_number()) => {
+                let values: Vec<f64> = items.iter().filter_map(serde_json::Value::as_f64).collect();
+                if values.len() == 3 {
+                    for (axis, v) in ["x", "y", "z"].iter().zip(values) {
+                        rows.push((format!("{key} {axis}"), v));
+                    }
+                } else {
+                    rows.push((format!("{key} (sum over feet)"), values.iter().sum()));
+                }
+            }
+            _ => {
+                if let Some(v) = value.as_f64() {
+                    rows.push((key.clone(), v));
+                }
+            }
+        }
+    }
+    rows
 }

@@ -210,6 +210,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         .map(|s| format!("{:.1}", s * 1e3))
         .collect();
     println!("  foot slip (mm, lf lm lr rf rm rr): {}", slip.join(" "));
+    if m.time_off_terrain > 0.0 {
+        println!(
+            "  warning: the body was beyond the terrain's grid for {:.2} s, on the flat apron its edges extend to",
+            m.time_off_terrain
+        );
+    }
     if m.clamped_ik_steps > 0 {
         println!(
             "  warning: {} steps had foot targets out of reach (IK clamped)",

@@ -38,14 +38,20 @@ pub struct HexapodMetrics {
     pub peak_normal_force: [f64; 6],
     pub mean_normal_force: [f64; 6],
     pub max_penetration: f64,
-    /// Mechanical work done by the servos, ∫Σ|τ·q̇| dt (J), and the cost of transport E/(m·g·d).
+    /// Mechanical work done by the servos, ∫Σ|τ·q̇| dt (J), and the cost of transport E/(m·g·d):
+    /// none for a robot that did not move (d = 0), whose cost per metre is undefined, not 0 — a
+    /// search minimising it must not be rewarded for standing still.
     pub servo_energy: f64,
-    pub cost_of_transport: f64,
+    pub cost_of_transport: Option<f64>,
     /// Steps in which some leg's target was out of reach and was clamped.
     pub clamped_ik_steps: u64,
     /// The longest time any joint stayed within [`NEAR_LIMIT`] of a URDF limit over the walk (s):
     /// a servo pressed against its stop (a gait asking for more than the leg has).
     pub joint_limit_time: f64,
+    /// Time the body's centre spent beyond the terrain's grid (s), on the flat apron its edge
+    /// heights extend to: a walk there is not on the terrain it was meant for (a speed search
+    /// could exploit it).
+    pub time_off_terrain: f64,
     /// Impulse joints: the largest distance between a joint's two anchors (m) and rotation about
     /// a locked axis (deg) over the run; zero for the multibody.
     pub max_joint_drift: f64,
@@ -180,6 +186,8 @@ struct Accumulators {
     /// Each joint's URDF limits (rad), and the steps it has stayed near one.
     limits: Vec<(f64, f64)>,
     near_limit_steps: Vec<u64>,
+    /// The terrain grid's x and y ranges, if known.
+    terrain: Option<([f64; 2], [f64; 2])>,
 }
 
 /// How close to a limit a joint counts as at it (1°).
@@ -200,6 +208,14 @@ impl HexapodMetrics {
             output,
             ..Default::default()
         }
+    }
+}
+
+impl HexapodMetrics {
+    /// Also measures the time spent beyond a terrain grid of these x and y ranges.
+    pub fn on_terrain(mut self, x: [f64; 2], y: [f64; 2]) -> Self {
+        self.acc.terrain = Some((x, y));
+        self
     }
 }
 
@@ -235,6 +251,11 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         dyaw -= (dyaw / std::f64::consts::TAU).round() * std::f64::consts::TAU;
         a.yaw_total += dyaw;
         a.yaw_prev = yaw;
+        if let Some(([x0, x1], [y0, y1])) = a.terrain
+            && !((x0..=x1).contains(&position.x) && (y0..=y1).contains(&position.y))
+        {
+            self.time_off_terrain += dt;
+        }
         let moved = position - start;
         let (s_h, c_h) = heading.sin_cos();
         self.forward_distance = moved.x * c_h + moved.y * s_h;
@@ -288,11 +309,8 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             .sum();
         self.servo_energy += power * dt;
         let weight_distance = a.mass * crate::sim::STANDARD_GRAVITY * self.distance;
-        self.cost_of_transport = if weight_distance > 0.0 {
-            self.servo_energy / weight_distance
-        } else {
-            0.0
-        };
+        self.cost_of_transport =
+            (weight_distance > 0.0).then(|| self.servo_energy / weight_distance);
         Ok(())
     }
 }
@@ -500,7 +518,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         noise: Some(0.05),
         better: Better::Lower,
         bounds: &[Bound::max("cost_of_transport_max")],
-        value: |m| Value::One(m.cost_of_transport),
+        value: |m| m.cost_of_transport.map_or(Value::Absent, Value::One),
     },
     Metric {
         name: "clamped_ik_steps",
@@ -519,6 +537,15 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         better: Better::Lower,
         bounds: &[Bound::max("max_joint_limit_s")],
         value: |m| Value::One(m.joint_limit_time),
+    },
+    Metric {
+        name: "time_off_terrain",
+        unit: "s",
+        what: "time the body spent beyond the terrain's grid, on the flat apron its edges extend to",
+        noise: Some(0.0),
+        better: Better::Lower,
+        bounds: &[Bound::max("max_time_off_terrain_s")],
+        value: |m| Value::One(m.time_off_terrain),
     },
     Metric {
         name: "max_joint_drift",

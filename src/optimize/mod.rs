@@ -117,6 +117,11 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     if spec.seeds.is_empty() {
         return Err(fail("seeds: expected at least one terrain seed".into()));
     }
+    if let Some(seed) = spec.check_seeds.iter().find(|s| spec.seeds.contains(s)) {
+        return Err(fail(format!(
+            "check_seeds: seed {seed} is also searched (in seeds); a check is on terrains the search did not see"
+        )));
+    }
     if spec.terrains.as_ref().is_some_and(Vec::is_empty) {
         return Err(fail(
             "terrains: expected at least one terrain file (or leave it out: the scenario's)".into(),
@@ -458,6 +463,24 @@ impl Optimization {
                 }
             }
         }
+        // a metric the walk leaves undefined (the cost of transport of a robot that did not
+        // move) fails the candidate rather than scoring it
+        for (m, case) in metrics.iter().zip(cases) {
+            if let Some((name, _)) = self
+                .objective
+                .iter()
+                .find(|(name, _)| !metric_value(m, name).is_finite())
+            {
+                return Evaluation {
+                    objective: None,
+                    failure: Some(format!(
+                        "{}: {name} is undefined for this walk (the robot did not move)",
+                        case.label()
+                    )),
+                    metrics,
+                };
+            }
+        }
         let objective = metrics.iter().map(|m| self.score(m)).sum::<f64>() / metrics.len() as f64;
         Evaluation {
             objective: Some(objective),
@@ -507,6 +530,11 @@ pub fn judge(case: &Case, report: &anyhow::Result<Report>) -> Result<HexapodMetr
     match &report.metrics {
         // stopped by Ctrl-C: not a result (the search stops and keeps the rest)
         Metrics::Walk(m) if !m.complete => Err(INTERRUPTED.into()),
+        // beyond the grid the ground is a flat apron: not the terrain the search is for
+        Metrics::Walk(m) if m.time_off_terrain > 0.0 => Err(format!(
+            "{label}: left the terrain's grid for {:.2} s (walked onto the flat apron beyond it)",
+            m.time_off_terrain
+        )),
         Metrics::Walk(m) => Ok((**m).clone()),
         Metrics::Ball(_) => Err("not a walk".into()),
     }
@@ -550,5 +578,32 @@ impl Evaluation {
     /// Cut short by Ctrl-C: neither logged nor told to the optimiser.
     pub fn interrupted(&self) -> bool {
         self.failure.as_deref() == Some(INTERRUPTED)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A robot that did not move has no cost of transport (not 0, which a minimising search would
+    /// reward): the metric reads as undefined, a constraint on it is not met, and `evaluate`
+    /// fails such a candidate.
+    #[test]
+    fn the_cost_of_transport_of_a_robot_that_did_not_move_is_undefined() {
+        let mut still = HexapodMetrics::default();
+        still.servo_energy = 3.0;
+        assert_eq!(still.cost_of_transport, None);
+        assert!(metric_value(&still, "cost_of_transport").is_nan());
+        let mut moved = HexapodMetrics::default();
+        moved.cost_of_transport = Some(0.5);
+        assert_eq!(metric_value(&moved, "cost_of_transport"), 0.5);
+        let expect: crate::scenario::spec::Expectations =
+            toml::from_str("cost_of_transport_max = 1.0").unwrap();
+        let checks = expect.check(&crate::metrics::Metrics::Walk(Box::new(still)), false);
+        let check = checks
+            .iter()
+            .find(|c| c.expectation == "cost_of_transport_max")
+            .unwrap();
+        assert!(!check.passed && check.value.is_none());
     }
 }

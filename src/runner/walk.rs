@@ -141,7 +141,8 @@ impl WalkRun {
                 .map(|j| (j.lower, j.upper))
                 .collect(),
             self.outputs.metrics.clone(),
-        );
+        )
+        .on_terrain(self.terrain.x_range(), self.terrain.y_range());
         metrics.stance = StanceMetrics::of(&self.gait, &self.robot);
         metrics.ground = self.ground.clone();
 
