@@ -445,3 +445,62 @@ fn a_sharded_search_joins_to_the_same_log() {
         "{best}"
     );
 }
+
+/// A folder's log belongs to the specification that wrote it: resuming with the objective, the
+/// duration or the seeds changed is refused, naming what changed (it would replay the old
+/// objectives as the new ones), and so is a stale shard file of another specification.
+#[test]
+fn a_changed_specification_does_not_replay_another_ones_log() {
+    let dir = scratch("optimize-fingerprint");
+    let out = dir.join("out");
+    let run = |text: String, resume: bool| {
+        let file = dir.join("search.toml");
+        std::fs::write(&file, text).unwrap();
+        let mut cmd = hexsim();
+        cmd.arg("optimize")
+            .arg(&file)
+            .arg("--output")
+            .arg(&out)
+            .arg("--no-record");
+        if resume {
+            cmd.arg("--resume");
+        }
+        let o = cmd.output().unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, stderr) = run(spec("", None), false);
+    assert_eq!(code, Some(0), "{stderr}");
+    let (code, stderr) = run(spec("", None), true);
+    assert_eq!(code, Some(0), "the same specification resumes: {stderr}");
+    for (change, named) in [
+        (
+            ("forward_distance = 1.0", "forward_distance = 2.0"),
+            "objective",
+        ),
+        (("duration = 1.0", "duration = 1.5"), "duration"),
+        (("seeds = [3]", "seeds = [5]"), "terrains and seeds"),
+    ] {
+        let (code, stderr) = run(spec("", Some(change)), true);
+        assert_eq!(code, Some(2), "{change:?}: {stderr}");
+        assert!(
+            stderr.contains("holds evaluations of another specification")
+                && stderr.contains(&format!("its {named} changed")),
+            "{change:?}: {stderr}"
+        );
+    }
+    // a shard file left by another search in the folder
+    let main = std::fs::read_to_string(out.join("evaluations.jsonl")).unwrap();
+    let first = main.lines().next().unwrap();
+    let v: serde_json::Value = serde_json::from_str(first).unwrap();
+    let stale = first.replace(v["specification"].as_str().unwrap(), "0123456789abcdef");
+    std::fs::write(out.join("shard-0-of-2.jsonl"), stale + "\n").unwrap();
+    let (code, stderr) = run(spec("", None), true);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("shard-0-of-2.jsonl: evaluations of another specification"),
+        "{stderr}"
+    );
+}

@@ -205,8 +205,11 @@ fn search(
     };
     let mut es = Cmaes::new(fitness, &opt.start, &[0.3], &params);
     let logged = if args.resume || args.shard.is_some() {
-        log::Logged::read(&args.output, opt)?
+        log::claim_folder(&args.output, opt).map_err(anyhow::Error::msg)?;
+        log::Logged::read(&args.output, opt).map_err(anyhow::Error::msg)?
     } else {
+        log::write_specification(&args.output, &log::fingerprint(opt))
+            .map_err(anyhow::Error::msg)?;
         log::Logged::default()
     };
     // a shard logs to its own file; the main log is written only by a whole search

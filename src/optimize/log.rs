@@ -4,7 +4,7 @@
 
 use super::{Evaluation, Optimization};
 use crate::batch::Shard;
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// The main log in an output folder.
@@ -15,6 +15,109 @@ pub fn main_file(dir: &Path) -> PathBuf {
 /// The file in which `shard` logs its evaluations.
 pub fn shard_file(dir: &Path, shard: Shard) -> PathBuf {
     dir.join(format!("shard-{}-of-{}.jsonl", shard.index, shard.count))
+}
+
+/// The file in which a search's output folder keeps the specification its log was written by.
+pub fn specification_file(dir: &Path) -> PathBuf {
+    dir.join("specification.json")
+}
+
+/// What decides a search's evaluations, part by part, each as a short hash: the scenario (its
+/// robot, terrain, gait, contact and duration; the constraints and articulation), the searched
+/// terrains and seeds, the parameters and their bounds, the objective, CMA-ES's seed and
+/// population, and the start. A resumed search or a shard step replays logged evaluations only
+/// under the same parts. Left out: the number of generations (a search may be extended) and the
+/// check seeds (walked after the search, not logged).
+pub fn fingerprint(opt: &Optimization) -> BTreeMap<String, String> {
+    let mut scenario = opt.base.clone();
+    let constraints = scenario.remove("expect");
+    let duration = scenario.remove("duration");
+    let articulation = scenario.remove("articulation");
+    let searched: Vec<String> = opt.searched().iter().map(|c| c.label()).collect();
+    let parameters: Vec<String> = opt
+        .parameters
+        .iter()
+        .map(|p| format!("{} {:?}", p.name, p.domain))
+        .collect();
+    let parts: [(&str, serde_json::Value); 9] = [
+        ("scenario", serde_json::json!(scenario)),
+        ("duration", serde_json::json!(duration)),
+        ("articulation", serde_json::json!(articulation)),
+        ("constraints", serde_json::json!(constraints)),
+        ("terrains and seeds", serde_json::json!(searched)),
+        ("parameters", serde_json::json!(parameters)),
+        ("objective", serde_json::json!(opt.objective)),
+        (
+            "CMA-ES seed and population",
+            serde_json::json!([opt.seed, opt.population]),
+        ),
+        ("start", serde_json::json!(opt.start)),
+    ];
+    parts
+        .into_iter()
+        .map(|(name, value)| (name.to_string(), short_hash(&value.to_string())))
+        .collect()
+}
+
+fn short_hash(text: &str) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(text.as_bytes())[..8]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// The fingerprint as one hash, carried by every log line.
+pub fn specification_hash(parts: &BTreeMap<String, String>) -> String {
+    short_hash(&serde_json::json!(parts).to_string())
+}
+
+/// Checks a folder's recorded specification against `opt`'s, and writes it if there is none:
+/// an error names the parts that changed.
+pub fn claim_folder(dir: &Path, opt: &Optimization) -> Result<(), String> {
+    let file = specification_file(dir);
+    let parts = fingerprint(opt);
+    match std::fs::read_to_string(&file) {
+        Ok(text) => {
+            let recorded: BTreeMap<String, String> = serde_json::from_str(&text)
+                .map_err(|e| format!("{}: not a specification record: {e}", file.display()))?;
+            let changed: Vec<&str> = parts
+                .iter()
+                .filter(|(k, v)| recorded.get(*k) != Some(*v))
+                .map(|(k, _)| k.as_str())
+                .chain(
+                    recorded
+                        .keys()
+                        .filter(|k| !parts.contains_key(*k))
+                        .map(String::as_str),
+                )
+                .collect();
+            if changed.is_empty() {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{} holds evaluations of another specification: its {} changed since; resuming would replay them as this one's. Use another --output folder (or empty this one)",
+                    dir.display(),
+                    changed.join(", ")
+                ))
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => write_specification(dir, &parts),
+        Err(e) => Err(format!("{}: {e}", file.display())),
+    }
+}
+
+/// Records the specification a fresh search's log is written by.
+pub fn write_specification(dir: &Path, parts: &BTreeMap<String, String>) -> Result<(), String> {
+    let file = specification_file(dir);
+    std::fs::create_dir_all(dir)
+        .and_then(|()| {
+            std::fs::write(
+                &file,
+                serde_json::to_string_pretty(parts).unwrap_or_default(),
+            )
+        })
+        .map_err(|e| format!("{}: {e}", file.display()))
 }
 
 /// One evaluation's log line: the parameters as the scenario got them (a choice by its name),
@@ -44,6 +147,7 @@ pub fn line(
         })
         .collect();
     serde_json::json!({
+        "specification": specification_hash(&fingerprint(opt)),
         "generation": generation,
         "index": index,
         "parameters": opt.values(x),
@@ -84,8 +188,10 @@ pub struct Logged(HashMap<(usize, usize), Entry>);
 
 impl Logged {
     /// Reads the main log and every shard file in `dir` (the main log's line wins); a line cut
-    /// off by a kill, or one of another search's dimension, is skipped.
-    pub fn read(dir: &Path, opt: &Optimization) -> std::io::Result<Logged> {
+    /// off by a kill is skipped; a file with lines of another specification (a stale shard file,
+    /// a log from before the specification changed) is an error naming it.
+    pub fn read(dir: &Path, opt: &Optimization) -> Result<Logged, String> {
+        let hash = specification_hash(&fingerprint(opt));
         let mut files = vec![(main_file(dir), true)];
         let mut shards: Vec<PathBuf> = match std::fs::read_dir(dir) {
             Ok(entries) => entries
@@ -97,7 +203,7 @@ impl Logged {
                 })
                 .collect(),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-            Err(e) => return Err(e),
+            Err(e) => return Err(format!("{}: {e}", dir.display())),
         };
         shards.sort();
         files.extend(shards.into_iter().map(|p| (p, false)));
@@ -107,9 +213,16 @@ impl Logged {
                 continue;
             };
             for line in text.lines() {
-                let Some((key, entry)) = parse(line, opt, in_main) else {
+                let Some((key, entry, logged_by)) = parse(line, opt, in_main) else {
                     continue;
                 };
+                if logged_by.as_deref() != Some(hash.as_str()) {
+                    return Err(format!(
+                        "{}: evaluations of another specification (logged by {}, this one is {hash}); use another --output folder, or remove the file if it is stale",
+                        file.display(),
+                        logged_by.as_deref().unwrap_or("an unrecorded one")
+                    ));
+                }
                 logged.0.entry(key).or_insert(entry);
             }
         }
@@ -123,7 +236,12 @@ impl Logged {
     }
 }
 
-fn parse(line: &str, opt: &Optimization, in_main: bool) -> Option<((usize, usize), Entry)> {
+/// A log line's key, entry and the specification hash it was logged by.
+fn parse(
+    line: &str,
+    opt: &Optimization,
+    in_main: bool,
+) -> Option<((usize, usize), Entry, Option<String>)> {
     let v: serde_json::Value = serde_json::from_str(line).ok()?;
     let at = |k: &str| v[k].as_u64().map(|n| n as usize);
     let key = (at("generation")?, at("index")?);
@@ -132,8 +250,10 @@ fn parse(line: &str, opt: &Optimization, in_main: bool) -> Option<((usize, usize
         .iter()
         .map(serde_json::Value::as_f64)
         .collect::<Option<_>>()?;
+    let logged_by = v["specification"].as_str().map(str::to_string);
     if x.len() != opt.parameters.len() {
-        return None;
+        // another search's dimension: another specification
+        return Some((key, dummy_entry(line, in_main), logged_by));
     }
     Some((
         key,
@@ -144,7 +264,18 @@ fn parse(line: &str, opt: &Optimization, in_main: bool) -> Option<((usize, usize
             line: line.to_string(),
             in_main,
         },
+        logged_by,
     ))
+}
+
+fn dummy_entry(line: &str, in_main: bool) -> Entry {
+    Entry {
+        x: Vec::new(),
+        objective: None,
+        failure: None,
+        line: line.to_string(),
+        in_main,
+    }
 }
 
 /// Whether a logged candidate is this one, to within the last bits a decimal log can lose.
