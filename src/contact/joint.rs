@@ -34,9 +34,37 @@ pub const MAX_JOINT_CONTACTS: usize = 6;
 type Block = na::SMatrix<f64, { 2 * MAX_JOINT_CONTACTS }, { 2 * MAX_JOINT_CONTACTS }>;
 type Column = na::SVector<f64, { 2 * MAX_JOINT_CONTACTS }>;
 
-/// Singular values below this fraction of T_SS's largest entry count as zero in the least-squares
-/// solve of a singular joint problem (coincident contacts).
+/// Singular values below this fraction of T_SS's largest count as zero in the least-squares
+/// solve of a singular joint problem (coincident contacts); an LU solution amplifying the
+/// right-hand side by more than its inverse (a condition number past 10⁹) is not trusted.
 const SINGULAR: f64 = 1e-9;
+
+/// The sticking contacts' T_SS·x = rhs: by LU when T_SS is well conditioned, else the
+/// least-squares solution of least norm (contacts that nearly coincide share their force instead
+/// of pulling against each other with huge internal forces). `active`: the rows in use; the
+/// unused ones are padded with the active block's scale, so that the padding neither sets the
+/// cut-off nor hides the block's own. None if even that is not finite (a mobility with NaN).
+fn solve_sticking(mut t_ss: Block, rhs: &Column, active: usize) -> Option<Column> {
+    let scale = (0..active).map(|k| t_ss[(k, k)].abs()).fold(0.0, f64::max);
+    let scale = if scale.is_finite() && scale > 0.0 {
+        scale
+    } else {
+        1.0
+    };
+    for k in active..2 * MAX_JOINT_CONTACTS {
+        t_ss[(k, k)] = scale;
+    }
+    let finite = |x: &Column| x.iter().all(|v| v.is_finite());
+    let trusted = |x: &Column| x.amax() * scale * SINGULAR <= rhs.amax();
+    t_ss.lu()
+        .solve(rhs)
+        .filter(|x| finite(x) && trusted(x))
+        .or_else(|| {
+            let svd = t_ss.svd(true, true);
+            let largest = svd.singular_values.amax();
+            svd.solve(rhs, SINGULAR * largest).ok().filter(finite)
+        })
+}
 
 /// The forces on `contacts` over a step, solved together. `mobility(i, j)` is W_ij in the
 /// contacts' ground-frame axes (t₁, t₂, n): W_ij[a][b] = a_i·M⁻¹·b_j. A contact that does not touch
@@ -113,11 +141,7 @@ pub fn respond_jointly(
         let t_ss = (t_ss + t_ss.transpose()) * 0.5;
         // T_SS is singular when contacts coincide (two spheres on one point): any split of
         // their force stops them, and the least-squares solution of least norm shares it equally
-        let Some(x) = t_ss.lu().solve(&rhs).or_else(|| {
-            t_ss.svd(true, true)
-                .solve(&rhs, SINGULAR * t_ss.amax())
-                .ok()
-        }) else {
+        let Some(x) = solve_sticking(t_ss, &rhs, 2 * m) else {
             // not even that (a mobility with NaN): each contact's force as if alone
             for &s in sticking {
                 let pc = p(touching[s]);
@@ -433,5 +457,41 @@ mod tests {
             "shared unequally: {:?}",
             [forces[0].friction, forces[1].friction]
         );
+    }
+
+    /// Two contacts a nanometre apart: T_SS is singular to within rounding, and an LU solve
+    /// returns huge opposite internal forces that the friction cone then clips (the contacts
+    /// reported sliding). Solved with the cut-off relative to T_SS's own scale they share the
+    /// force that stops the point, as coincident ones do; so also on a body 1000 times as heavy,
+    /// whose mobility is far below the identity that pads the unused rows.
+    #[test]
+    fn nearly_coincident_contacts_share_the_force_too() {
+        for m in [1.0, 1000.0] {
+            let frame = tilted(0.1, -0.2);
+            let r = 0.05;
+            let arm = -r * frame.normal;
+            let body = Body {
+                mass: m,
+                inverse_inertia: DMat3::from_diagonal(DVec3::splat(1.0 / (0.4 * m * r * r))),
+                arms: vec![arm, arm + 1e-9 * frame.tangent_x],
+                frames: vec![frame, frame],
+            };
+            let model = ContactModel::default();
+            // a slip the friction can stop within a step on either body
+            let velocity = frame.to_world(DVec3::new(3e-4 / m, -2e-4 / m, -0.01));
+            let geometry = body.geometry(0, 1e-3);
+            let contacts = [0, 1].map(|_| JointContact {
+                geometry: &geometry,
+                velocity,
+            });
+            let forces = body.respond_pair(&model, &contacts);
+            assert!(forces.iter().all(|f| f.sticking), "m = {m}: {forces:?}");
+            let total = (forces[0].friction + forces[1].friction).length();
+            assert!(
+                (forces[0].friction - forces[1].friction).length() < 1e-3 * total,
+                "m = {m}: shared unequally: {:?}",
+                [forces[0].friction, forces[1].friction]
+            );
+        }
     }
 }
