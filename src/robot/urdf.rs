@@ -705,8 +705,74 @@ fn build(
         warnings,
     };
     check_size(&model)?;
+    warn_implausible_inertias(&mut model);
     unstated.fill(&mut model);
     Ok(model)
+}
+
+/// A link's radius of gyration k = √(I_max/m) (its mass's spread about its centre) against the
+/// robot's size D (the diagonal of the box around its joints and feet, standing at zero): no
+/// part of a robot has k > D, and k < 0.5 % of D is a mass far denser than any material — the
+/// marks of an inertia in g·mm² or kg·mm², or a mass in grams, where URDF wants kg·m² and kg
+/// (hex18's links: 2–5 % of D). One warning per kind, naming the links; simulated as given.
+fn warn_implausible_inertias(model: &mut RobotModel) {
+    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
+    let mut points: Vec<DVec3> = poses.iter().map(|p| p.translation).collect();
+    points.extend(
+        model
+            .legs
+            .iter()
+            .map(|leg| poses[leg.foot_link].transform_point3(leg.foot.center)),
+    );
+    let low = points.iter().copied().fold(DVec3::INFINITY, DVec3::min);
+    let high = points.iter().copied().fold(DVec3::NEG_INFINITY, DVec3::max);
+    let size = (high - low).length();
+    if !(size.is_finite() && size > 0.0) {
+        return;
+    }
+    let gyration = |l: &Link| {
+        let largest = l
+            .inertia
+            .x_axis
+            .x
+            .max(l.inertia.y_axis.y)
+            .max(l.inertia.z_axis.z);
+        (largest / l.mass).sqrt()
+    };
+    let (mut wide, mut dense) = (Vec::new(), Vec::new());
+    for link in &model.links {
+        let k = gyration(link);
+        if k > size {
+            wide.push((link.name.clone(), k));
+        } else if k < 0.005 * size {
+            dense.push((link.name.clone(), k));
+        }
+    }
+    let named = |links: &[(String, f64)]| {
+        let more = links.len() - 1;
+        let others = if more > 0 {
+            format!(
+                " (and {more} more link{})",
+                if more == 1 { "" } else { "s" }
+            )
+        } else {
+            String::new()
+        };
+        (links[0].0.clone(), links[0].1, others)
+    };
+    if !wide.is_empty() {
+        let (name, k, others) = named(&wide);
+        model.warnings.push(format!(
+            "link `{name}`{others}: its inertia spreads its mass {k:.3} m from its centre, more than the whole robot's {size:.3} m: an inertia in g·mm² or kg·mm² instead of kg·m²? Simulated as given"
+        ));
+    }
+    if !dense.is_empty() {
+        let (name, k, others) = named(&dense);
+        model.warnings.push(format!(
+            "link `{name}`{others}: its inertia spreads its mass only {:.2} mm from its centre, under 0.5 % of the robot's {size:.3} m (denser than any material): a mass in grams instead of kg? Simulated as given",
+            k * 1e3
+        ));
+    }
 }
 
 /// The longest leg a hexapod could have (m): a URDF whose legs are longer is in other units.

@@ -281,7 +281,15 @@ fn resolve_walk(
     let (gait, gait_name) = resolve_gait(spec, base)?;
     hasher.update(serde_json::to_vec(&gait).expect("a spec is plain data"));
     let support = crate::gait::minimum_support(&gait.offsets(), gait.duty_factor);
-    let gait = crate::gait::fit(&robot, &gait).map_err(|e| format!("{gait_name}: {e}"))?;
+    // a robot that does not fit may say why in its warnings (masses in grams): name them too
+    let gait = crate::gait::fit(&robot, &gait).map_err(|e| {
+        let noted: String = robot
+            .warnings
+            .iter()
+            .map(|w| format!("\n  and the robot warns: {w}"))
+            .collect();
+        format!("{gait_name}: {e}{noted}")
+    })?;
     if support < 3 {
         warnings.push(format!(
             "{gait_name}: at times only {support} feet are on the ground (a hexapod needs 3 to stand statically); check its duty_factor and phase_offsets"
@@ -346,6 +354,17 @@ fn resolve_walk(
             .all(f64::is_finite)
     {
         return Err("start: expected finite numbers".into());
+    }
+    if let Some(start) = spec.start
+        && let Some(far) = [start.x, start.y]
+            .into_iter()
+            .flatten()
+            .find(|v| v.abs() > crate::terrain::FARTHEST)
+    {
+        return Err(format!(
+            "start: {far} m is farther than {} m from the origin, where the physics' f32 positions resolve too coarsely for the contact; place the terrain and the start near the origin",
+            crate::terrain::FARTHEST
+        ));
     }
     Ok(WalkSetup {
         robot: Arc::new(robot),

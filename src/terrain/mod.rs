@@ -12,7 +12,7 @@ pub use generate::{MatlabRand, bell, flat, natural, rough, sine, slope, steps};
 pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
 pub use orientation::{GroundFrame, Orientation};
 pub use source::Source;
-pub use spec::{TerrainError, TerrainSpec};
+pub use spec::{FARTHEST, TerrainError, TerrainSpec};
 
 /// Loads a terrain file and builds its grid.
 pub fn load(path: &std::path::Path) -> Result<HeightGrid, TerrainError> {
