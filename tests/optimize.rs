@@ -316,27 +316,62 @@ fn an_interrupted_search_resumes_to_the_same_result() {
         std::fs::read_to_string(cut.join("evaluations.jsonl")).unwrap(),
         expected
     );
-    // a real Ctrl-C, wherever it lands: exit 130 (or 0 if it finished first), then --resume
+    // a real Ctrl-C in the middle of a longer search: sent once the log shows it running, it
+    // must stop it (exit 130, saying so, the log short of the whole), and --resume completes it
+    // to the same log as a search never interrupted
+    let long = dir.join("long.toml");
+    std::fs::write(
+        &long,
+        spec("", Some(("generations = 1", "generations = 40"))),
+    )
+    .unwrap();
+    let search = |out: &std::path::Path, resume: bool| {
+        let mut cmd = hexsim();
+        cmd.arg("optimize")
+            .arg(&long)
+            .arg("--output")
+            .arg(out)
+            .arg("--no-record");
+        if resume {
+            cmd.arg("--resume");
+        }
+        cmd
+    };
+    let whole_long = dir.join("whole-long");
+    assert_eq!(
+        search(&whole_long, false).output().unwrap().status.code(),
+        Some(0)
+    );
+    let expected = std::fs::read_to_string(whole_long.join("evaluations.jsonl")).unwrap();
     let real = dir.join("real");
-    let mut child = hexsim()
-        .arg("optimize")
-        .arg(&file)
-        .arg("--output")
-        .arg(&real)
-        .stdout(std::process::Stdio::null())
+    let child = search(&real, false)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(400));
-    let _ = std::process::Command::new("kill")
+    let log = real.join("evaluations.jsonl");
+    let started = std::time::Instant::now();
+    while std::fs::read_to_string(&log).map_or(0, |t| t.lines().count()) < 3 {
+        assert!(started.elapsed().as_secs() < 60, "the search never logged");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let kill = std::process::Command::new("kill")
         .args(["-INT", &child.id().to_string()])
-        .status();
-    let code = child.wait().unwrap().code();
-    assert!(matches!(code, Some(130) | Some(0)), "{code:?}");
-    assert_eq!(run(&real, true).0, Some(0));
-    assert_eq!(
-        std::fs::read_to_string(real.join("evaluations.jsonl")).unwrap(),
-        expected
+        .status()
+        .unwrap();
+    assert!(kill.success(), "kill -INT failed");
+    let out = child.wait_with_output().unwrap();
+    let said =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{said}");
+    assert!(said.contains("interrupted"), "{said}");
+    let logged = std::fs::read_to_string(&log).unwrap().lines().count();
+    assert!(
+        logged < expected.lines().count(),
+        "the interrupt came after the search's end: {logged} lines logged"
     );
+    assert_eq!(search(&real, true).output().unwrap().status.code(), Some(0));
+    assert_eq!(std::fs::read_to_string(&log).unwrap(), expected);
 }
 
 /// A search spread over shards, as a cluster's array jobs run it (each step every shard's slice

@@ -191,8 +191,30 @@ fn walk(
     samples[(1.0 / DT) as usize - 1..].to_vec()
 }
 
+/// V12's gait, as shared/reference §4 states it: the tripod with period 1 s, duty 0.5, stride
+/// 0.06 m and step height 0.03 m (hex18's robot file and the tripod give exactly that).
+fn v12_gait() -> Gait {
+    let gait = tripod();
+    assert_eq!(
+        (
+            gait.period,
+            gait.duty_factor,
+            gait.stride_length,
+            gait.step_height
+        ),
+        (1.0, 0.5, 0.06, 0.03),
+        "the fitted tripod is not V12's"
+    );
+    gait
+}
+
 fn v12_tripod_walks_on_flat_ground(articulation: Articulation) {
     let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+    let gait = v12_gait();
+    let seconds = 20.0;
+    // stride / (duty · period) · t, and each leg's stances over the walk
+    let nominal = gait.nominal_speed() * seconds;
+    let stances = seconds / gait.period;
     let samples = walk(
         ground,
         Placement {
@@ -200,8 +222,8 @@ fn v12_tripod_walks_on_flat_ground(articulation: Articulation) {
             y: 0.0,
             yaw: 0.0,
         },
-        tripod(),
-        20.0,
+        gait.clone(),
+        seconds,
         articulation,
     );
     let (start, end) = (samples.first().unwrap(), samples.last().unwrap());
@@ -212,8 +234,8 @@ fn v12_tripod_walks_on_flat_ground(articulation: Articulation) {
         moved.x, moved.y
     );
     assert!(
-        moved.x >= 0.9 * 2.4,
-        "V12: walked {:.3} m, expected ≥ 2.16 m",
+        moved.x >= 0.9 * nominal,
+        "V12: walked {:.3} m, expected ≥ 90 % of {nominal:.3} m",
         moved.x
     );
     assert!(
@@ -222,27 +244,31 @@ fn v12_tripod_walks_on_flat_ground(articulation: Articulation) {
         moved.y
     );
     assert!(heading.abs() < 5.0, "V12: heading changed {heading:.2}°");
-    // feet hold in stance: what each slides over its 20 stances, per stance, against the stride
+    // feet hold in stance: what each slides over its stances, per stance, against the stride
     for leg in 0..6 {
         let slid: f64 = samples
             .iter()
             .filter_map(|s| s.foot_contacts[leg].map(|c| c.slip.length() * DT))
             .sum();
-        let per_stance = slid / 20.0;
+        let per_stance = slid / stances;
         println!(
             "V12: leg {leg} slides {:.2} mm per stance",
             per_stance * 1e3
         );
         assert!(
-            per_stance < 0.05 * 0.06,
-            "leg {leg} slides {:.2} mm per stance, over 5 % of the 60 mm stride",
-            per_stance * 1e3
+            per_stance < 0.05 * gait.stride_length,
+            "leg {leg} slides {:.2} mm per stance, over 5 % of the {:.0} mm stride",
+            per_stance * 1e3,
+            gait.stride_length * 1e3
         );
     }
 }
 
 fn v13_tripod_walks_on_the_natural_terrain(articulation: Articulation) {
     let ground = terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
+    let gait = v12_gait();
+    let seconds = 20.0;
+    let nominal = gait.nominal_speed() * seconds;
     let samples = walk(
         ground,
         Placement {
@@ -250,8 +276,8 @@ fn v13_tripod_walks_on_the_natural_terrain(articulation: Articulation) {
             y: 0.0,
             yaw: 0.0,
         },
-        tripod(),
-        20.0,
+        gait,
+        seconds,
         articulation,
     );
     let (start, end) = (samples.first().unwrap(), samples.last().unwrap());
@@ -272,8 +298,8 @@ fn v13_tripod_walks_on_the_natural_terrain(articulation: Articulation) {
         deepest * 1e3
     );
     assert!(
-        forward >= 0.7 * 2.4,
-        "V13: walked {forward:.3} m, expected ≥ 1.68 m"
+        forward >= 0.7 * nominal,
+        "V13: walked {forward:.3} m, expected ≥ 70 % of {nominal:.3} m"
     );
     assert!(tilt < 25.0, "V13: tilted {tilt:.1}°");
     assert!(deepest <= 0.005, "V13: a foot sank {:.2} mm", deepest * 1e3);
