@@ -9,55 +9,9 @@
 //! them: +y if it does, else the one that leaves the hips farthest from the axis, and says so.
 //! The model is then turned about z so that its body frame's x is the walking direction.
 
+pub use super::forward::{Forward, ForwardFrom};
 use super::model::{Foot, Joint, LEG_NAMES, Leg, Link};
 use glam::{DAffine3, DMat3, DVec2};
-
-/// Where the walking direction came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ForwardFrom {
-    /// The URDF's +x.
-    Urdf,
-    /// The robot file's `forward`.
-    RobotFile,
-    /// Chosen from the legs: the URDF's x does not split them three a side.
-    Legs,
-}
-
-/// The walking direction: its angle about z in the URDF's base link frame (rad), and where it
-/// came from.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Forward {
-    pub yaw: f64,
-    pub from: ForwardFrom,
-}
-
-impl Forward {
-    pub const URDF_X: Forward = Forward {
-        yaw: 0.0,
-        from: ForwardFrom::Urdf,
-    };
-
-    /// "+x", "+y", "-x", "-y", or the angle in degrees.
-    pub fn describe(&self) -> String {
-        let deg = self.yaw.to_degrees();
-        let name = [
-            (0.0, "+x"),
-            (90.0, "+y"),
-            (180.0, "-x"),
-            (-180.0, "-x"),
-            (-90.0, "-y"),
-        ]
-        .iter()
-        .find(|(a, _)| (deg - a).abs() < 1e-9)
-        .map_or(format!("{deg:.1}° from +x"), |(_, n)| n.to_string());
-        let from = match self.from {
-            ForwardFrom::Urdf => "the URDF's",
-            ForwardFrom::RobotFile => "set in the robot file",
-            ForwardFrom::Legs => "chosen: the legs do not split three a side about x",
-        };
-        format!("{name} ({from})")
-    }
-}
 
 /// A leg before it is named: its joints from the body out, and its foot.
 struct Chain {

@@ -1,6 +1,7 @@
 //! The robot: URDF loading and validation, leg discovery, and leg kinematics.
 
 pub mod foot;
+mod forward;
 pub mod kinematics;
 pub mod legs;
 pub mod mesh;

@@ -131,7 +131,7 @@ pub struct RobotModel {
     pub legs: Vec<Leg>,
     /// The walking direction in the URDF's base link frame; the model's body frame is that frame
     /// turned about z so that its x points this way (see `legs`).
-    pub forward: super::legs::Forward,
+    pub forward: super::forward::Forward,
     /// The gait geometry the robot file states for this robot, if any.
     pub gait_hints: GaitHints,
     /// Things that were accepted with a fallback (e.g. a missing visual mesh).

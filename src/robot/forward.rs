@@ -1,0 +1,51 @@
+//! The walking direction of a robot: its angle about z in the URDF's base link frame, and where
+//! it came from (the URDF's +x, the robot file, or chosen from the legs; see `legs`). Its own
+//! module so that the model (`model`) and the leg finder (`legs`) both use it without using each
+//! other.
+
+/// Where the walking direction came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForwardFrom {
+    /// The URDF's +x.
+    Urdf,
+    /// The robot file's `forward`.
+    RobotFile,
+    /// Chosen from the legs: the URDF's x does not split them three a side.
+    Legs,
+}
+
+/// The walking direction: its angle about z in the URDF's base link frame (rad), and where it
+/// came from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Forward {
+    pub yaw: f64,
+    pub from: ForwardFrom,
+}
+
+impl Forward {
+    pub const URDF_X: Forward = Forward {
+        yaw: 0.0,
+        from: ForwardFrom::Urdf,
+    };
+
+    /// "+x", "+y", "-x", "-y", or the angle in degrees.
+    pub fn describe(&self) -> String {
+        let deg = self.yaw.to_degrees();
+        let name = [
+            (0.0, "+x"),
+            (90.0, "+y"),
+            (180.0, "-x"),
+            (-180.0, "-x"),
+            (-90.0, "-y"),
+        ]
+        .iter()
+        .find(|(a, _)| (deg - a).abs() < 1e-9)
+        .map_or(format!("{deg:.1}° from +x"), |(_, n)| n.to_string());
+        let from = match self.from {
+            ForwardFrom::Urdf => "the URDF's",
+            ForwardFrom::RobotFile => "set in the robot file",
+            ForwardFrom::Legs => "chosen: the legs do not split three a side about x",
+        };
+        format!("{name} ({from})")
+    }
+}
