@@ -545,7 +545,7 @@ mod tests {
     fn the_fitted_stance_meets_its_constraints_and_is_a_local_best() {
         let model = RobotModel {
             gait_hints: GaitHints::default(),
-            ..crate::scenario::builtin::hex18()
+            ..crate::robot::hex18_for_tests()
         };
         let fitted = fit(&model, &tripod()).unwrap();
         let g = &fitted.gait;
@@ -578,7 +578,7 @@ mod tests {
     /// Each length comes from the gait file, else the robot file, else the fit.
     #[test]
     fn given_lengths_win_over_the_robot_file_and_the_fit() {
-        let model = crate::scenario::builtin::hex18(); // robot file: 0.10, 0.15, 0.03, 0.06
+        let model = crate::robot::hex18_for_tests(); // robot file: 0.10, 0.15, 0.03, 0.06
         let spec = GaitSpec {
             stance_height: Some(0.12),
             ..tripod()
@@ -608,7 +608,7 @@ mod tests {
             stance_height: Some(0.4),
             ..tripod()
         };
-        let e = fit(&crate::scenario::builtin::hex18(), &spec).unwrap_err();
+        let e = fit(&crate::robot::hex18_for_tests(), &spec).unwrap_err();
         assert!(
             e.0.contains("cannot reach its standing foot position"),
             "{e}"

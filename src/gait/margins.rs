@@ -86,7 +86,7 @@ mod tests {
     use std::path::Path;
 
     fn hex18() -> RobotModel {
-        crate::scenario::builtin::hex18()
+        crate::robot::hex18_for_tests()
     }
 
     fn tripod() -> Gait {

@@ -14,3 +14,13 @@ pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
 pub use margins::{CycleMargins, Unreached, cycle_margins};
 pub use schedule::{LegPhase, leg_phase, minimum_support};
 pub use spec::{Gait, GaitError, GaitSpec, SwingShape};
+
+/// The tripod gait file, for the unit tests of this layer and those above it.
+#[cfg(test)]
+pub(crate) fn tripod_for_tests() -> GaitSpec {
+    GaitSpec::from_toml(
+        include_str!("../../gaits/tripod.toml"),
+        std::path::Path::new("gaits/tripod.toml"),
+    )
+    .expect("the tripod parses")
+}

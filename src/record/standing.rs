@@ -172,17 +172,15 @@ pub fn record(path: &Path, standing: &Standing) -> Result<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gait::{GaitSpec, fit};
+    use crate::gait::fit;
     use crate::robot::kinematics::IK_TOLERANCE;
-    use crate::scenario::builtin;
 
     /// In the tripod's fitted standing pose hex18 stands level on all six feet: each foot's lowest
     /// point on the ground, and its hips at the stance height above it (to the IK's tolerance).
     #[test]
     fn hex18_stands_on_all_six_feet_at_its_stance_height() {
-        let model = builtin::hex18();
-        let spec =
-            GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path)).unwrap();
+        let model = crate::robot::hex18_for_tests();
+        let spec = crate::gait::tripod_for_tests();
         let fitted = fit(&model, &spec).unwrap();
         let frames = model.link_poses(&fitted.standing_pose);
         let body = body_on_ground(&model, &frames);
@@ -206,7 +204,7 @@ mod tests {
     /// sample lies farther from the hip than the leg is long.
     #[test]
     fn a_legs_workspace_reaches_as_far_as_the_leg_and_no_farther() {
-        let model = builtin::hex18();
+        let model = crate::robot::hex18_for_tests();
         let spaces = workspace(&model, 5);
         for (leg, points) in model.legs.iter().zip(&spaces) {
             assert_eq!(points.len(), 125);

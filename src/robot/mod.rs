@@ -20,3 +20,15 @@ pub fn load(path: &std::path::Path) -> Result<RobotModel, urdf::RobotError> {
     model.source = path.to_path_buf();
     Ok(model)
 }
+
+/// The reference robot for the unit tests of this layer and those above it (the scenario layer's
+/// built-in copy is above them: `scenario::builtin`).
+#[cfg(test)]
+pub(crate) fn hex18_for_tests() -> RobotModel {
+    urdf::from_str_with(
+        include_str!("../../robots/hex18.urdf"),
+        Some(include_str!("../../robots/hex18.toml")),
+        std::path::Path::new("robots/hex18.urdf"),
+    )
+    .expect("hex18 loads")
+}

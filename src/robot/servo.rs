@@ -65,7 +65,7 @@ mod tests {
     /// inertia taken by central differences of the link poses.
     #[test]
     fn outboard_inertias_match_the_kinetic_energy_of_a_unit_turn() {
-        let model = crate::scenario::builtin::hex18();
+        let model = crate::robot::hex18_for_tests();
         let pose: Vec<f64> = (0..model.joints.len())
             .map(|j| [0.2, -0.4, 0.9][j % 3])
             .collect();
@@ -112,7 +112,7 @@ mod tests {
     #[test]
     fn heavier_legs_get_proportionally_stiffer_servos() {
         use crate::gait::{GaitSpec, fit};
-        let model = crate::scenario::builtin::hex18();
+        let model = crate::robot::hex18_for_tests();
         let spec = GaitSpec::from_toml(
             include_str!("../../gaits/tripod.toml"),
             std::path::Path::new("tripod"),

@@ -397,14 +397,11 @@ impl Hexapod {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gait::{GaitSpec, fit};
-    use crate::scenario::builtin;
-    use std::path::Path;
+    use crate::gait::fit;
 
     fn standing(articulation: Articulation) -> Hexapod {
-        let model = Arc::new(builtin::hex18());
-        let spec =
-            GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path)).unwrap();
+        let model = Arc::new(crate::robot::hex18_for_tests());
+        let spec = crate::gait::tripod_for_tests();
         let pose = fit(&model, &spec).unwrap().standing_pose;
         let ground = Arc::new(crate::terrain::flat([2.0, 2.0], [0.0, 0.0], 0.0).unwrap());
         Hexapod::new(
