@@ -112,7 +112,7 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         println!("wrote {}", path.display());
     }
     if !args.no_record {
-        let written = hexsim::record::compare::write(&args.record, &comparison, &outcomes)?;
+        let written = hexsim::compare::recording::write(&args.record, &comparison, &outcomes)?;
         println!("wrote {}", written.display());
         if args.spawn {
             hexsim::record::rerun::spawn_viewer(&written)?;

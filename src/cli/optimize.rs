@@ -5,8 +5,8 @@ use clap::Args;
 use fcmaes_core::{Cmaes, CmaesParams, Fitness};
 use hexsim::batch::Shard;
 use hexsim::compare::{self, Comparison};
+use hexsim::optimize::recording::Evaluated;
 use hexsim::optimize::{self, Case, Evaluation, Optimization, log};
-use hexsim::record::search::Evaluated;
 use hexsim::sim::Articulation;
 use rayon::prelude::*;
 use std::io::Write;
@@ -156,7 +156,7 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
                 .collect::<Vec<_>>()
                 .join(", "),
         );
-        written.push(hexsim::record::search::write(
+        written.push(hexsim::optimize::recording::write(
             &args.output.join("search.rrd"),
             &opt,
             &searched.history,
@@ -525,7 +525,7 @@ fn multibody_pair(
         let _ = std::fs::remove_dir_all(&dir);
         return Ok((pair, None));
     }
-    let path = hexsim::record::compare::write_titled(
+    let path = hexsim::compare::recording::write_titled(
         &args.output.join(format!("{}.rrd", case.file_stem())),
         &format!("start and best on {}", case.label()),
         &comparison,

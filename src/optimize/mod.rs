@@ -29,6 +29,7 @@
 
 pub mod log;
 mod parameters;
+pub mod recording;
 
 pub use parameters::{Domain, Parameter, searchable};
 use parameters::{Range, parameter, set, start_point};

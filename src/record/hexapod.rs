@@ -202,7 +202,7 @@ impl HexapodRecorder {
 /// The robot's horizontal radius, which sets the follow camera's distance: its farthest foot
 /// with each leg stretched out level from its hip along the leg's heading at rest — hex18's zero
 /// pose; a URDF whose zero pose hangs the tibias down (a PhantomX) is measured the same way.
-pub(super) fn robot_radius(model: &RobotModel) -> f64 {
+pub fn robot_radius(model: &RobotModel) -> f64 {
     let radius = model
         .legs
         .iter()

@@ -6,13 +6,11 @@ pub mod background;
 pub mod ball;
 pub mod blueprint;
 pub mod camera;
-pub mod compare;
 pub mod hexapod;
 pub mod links;
 pub mod output;
 pub mod progress;
 pub mod rerun;
-pub mod search;
 pub mod standing;
 pub mod table;
 

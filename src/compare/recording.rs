@@ -3,11 +3,11 @@
 //! forces, penetration and energy on shared plots, one series per setting. Drawn from each run's
 //! trajectory CSV after the runs, so the runs themselves stay plain scenario runs.
 
-use super::blueprint::{History, Layout, View};
-use super::camera::{self, FollowCamera};
-use super::links::LinkTree;
-use super::rerun::Recording;
-use crate::compare::{Comparison, Outcome};
+use super::{Comparison, Outcome};
+use crate::record::blueprint::{History, Layout, View};
+use crate::record::camera::{self, FollowCamera};
+use crate::record::links::LinkTree;
+use crate::record::rerun::Recording;
 use crate::robot::RobotModel;
 use anyhow::{Context, Result};
 use glam::{DAffine3, DQuat, DVec3};
@@ -124,7 +124,7 @@ pub fn write_titled(
     let rec = recording.stream();
     recording.log_terrain("world/terrain", &first.build_terrain()?)?;
     let size = match (&robot, first.ball()) {
-        (Some(model), _) => super::hexapod::robot_radius(model),
+        (Some(model), _) => crate::record::hexapod::robot_radius(model),
         (None, Some(ball)) => 10.0 * ball.radius,
         _ => 0.5,
     };

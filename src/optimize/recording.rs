@@ -3,9 +3,9 @@
 //! sampled within its bounds — CMA-ES narrowing onto the best reads as the points converging —
 //! and how many candidates failed, beside a table of the start against the best.
 
-use super::blueprint::{Layout, View};
-use super::rerun::Recording;
-use crate::optimize::{Domain, Optimization};
+use super::{Domain, Optimization};
+use crate::record::blueprint::{Layout, View};
+use crate::record::rerun::Recording;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
 
@@ -20,7 +20,7 @@ pub struct Evaluated {
 }
 
 /// A colour per parameter.
-const COLORS: [[u8; 3]; 8] = super::compare::COLORS;
+const COLORS: [[u8; 3]; 8] = crate::compare::recording::COLORS;
 
 fn layout() -> Layout {
     Layout::horizontal(

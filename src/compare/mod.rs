@@ -2,7 +2,7 @@
 //! under several contact settings (normal and friction laws, the paper's variant, stiffness,
 //! damping, rolling resistance…), each a set of `[contact]` fields laid over the scenario's, the
 //! runs in parallel, their metrics in one table and their motion in one recording
-//! (`record::compare`).
+//! (`compare::recording`).
 //!
 //! ```toml
 //! description = "the ball on the bell: hexsim's contact, the paper's, with rolling resistance"
@@ -14,6 +14,8 @@
 //! name = "paper"
 //! contact = { variant = "paper" }
 //! ```
+
+pub mod recording;
 
 use crate::runner::Outputs;
 use crate::scenario::{self, Report, Scenario, ScenarioError};
