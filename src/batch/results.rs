@@ -134,3 +134,29 @@ impl Appender {
             .map_err(|e| anyhow::anyhow!("{}: cannot write results: {e}", self.path.display()))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// Results read back (merge, resume, baselines) and optimisation logs replayed must hold the
+    /// very numbers that were written. serde_json's default float parser may be one ulp off; this
+    /// value, a ball's final height from `scenarios/ball_bell.toml`, was (`hexsim merge` changed
+    /// it) until the `float_roundtrip` feature was turned on.
+    #[test]
+    fn numbers_read_back_bit_for_bit() {
+        for value in [
+            -0.9205063581466675_f64,
+            0.1 + 0.2,
+            1e-300,
+            6.02214076e23,
+            -2.5e-8,
+        ] {
+            let text = serde_json::to_string(&value).unwrap();
+            let back: f64 = serde_json::from_str(&text).unwrap();
+            assert_eq!(
+                back.to_bits(),
+                value.to_bits(),
+                "{text} read back as {back:e}"
+            );
+        }
+    }
+}

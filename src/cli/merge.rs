@@ -24,7 +24,7 @@ pub fn merge(args: MergeArgs) -> Result<()> {
     let merged = batch::merge(&parts)?;
     results::write_all(&args.output, &merged)?;
     println!(
-        "merged {} results from {} files into {}",
+        "merged {} results from {} file(s) into {}",
         merged.len(),
         parts.len(),
         args.output.display()
