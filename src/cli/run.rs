@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::{Args, Parser};
 use hexsim::scenario::spec::{
-    CommandSpec, DEFAULT_SETTLE, RecordSpec, ServoSpec, StartSpec, WALK_LOG_RATE,
+    CommandSpec, DEFAULT_SETTLE, RUN_DURATION, RecordSpec, ServoSpec, StartSpec, WALK_LOG_RATE,
 };
 use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Scenario, ScenarioSpec};
 use hexsim::sim::Articulation;
@@ -26,7 +26,7 @@ pub struct RunArgs {
     #[arg(long)]
     gait: Option<PathBuf>,
     /// Seconds walked (after settling).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = RUN_DURATION)]
     duration: f64,
     /// Seconds standing still before the gait starts.
     #[arg(long, default_value_t = DEFAULT_SETTLE)]

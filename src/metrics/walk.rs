@@ -234,8 +234,8 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         self.max_joint_drift_deg = self
             .max_joint_drift_deg
             .max(r.joint_drift.angle.to_degrees());
-        if s.gait.is_none() {
-            return Ok(()); // settling: not part of the walk
+        if s.settling {
+            return Ok(()); // not part of the walk
         }
         let a = &mut self.acc;
         let (roll, pitch, yaw) = r.roll_pitch_yaw();

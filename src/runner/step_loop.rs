@@ -49,56 +49,131 @@ pub fn run<T: Stepper>(
     steps: u64,
     observers: &mut [&mut dyn Observer<T::Sample, T::World>],
 ) -> Result<LoopEnd> {
-    fn observe<T: Stepper>(
-        observers: &mut [&mut dyn Observer<T::Sample, T::World>],
-        sample: &T::Sample,
-        world: &T::World,
-    ) -> Result<()> {
-        observers
-            .iter_mut()
-            .try_for_each(|o| o.observe(sample, world))
-    }
-    let mut error = match stepper.initial() {
-        Some(initial) => observe::<T>(observers, &initial, stepper.world()).err(),
-        None => None,
-    };
-    let started = std::time::Instant::now();
-    let mut failure = None;
-    let mut taken = 0;
-    while error.is_none() && taken < steps && !super::interrupted() {
-        let sample = stepper.step();
-        taken += 1;
-        if let Some(message) = stepper.diverged(&sample) {
-            // the diverged step is still observed: the files show where it went wrong
-            let _ = observe::<T>(observers, &sample, stepper.world());
-            failure = Some(message);
-            break;
+    let mut looping = Looping::begin(stepper, observers);
+    looping.advance(stepper, steps, observers);
+    looping.finish(steps, observers)
+}
+
+/// The step loop taken a stretch at a time (a caller that steps, reads the state, steps on, as
+/// Python does): [`run`] is `begin`, one `advance` and `finish`, and so is every run in between.
+pub struct Looping<S> {
+    /// An observer's error: the loop takes no more steps.
+    error: Option<anyhow::Error>,
+    /// What diverged: the loop takes no more steps.
+    failure: Option<String>,
+    taken: u64,
+    /// Wall-clock seconds spent in `advance`.
+    seconds: f64,
+    /// The last step's sample (or the initial state's).
+    last: Option<S>,
+}
+
+impl<S> Looping<S> {
+    /// Shows the observers the initial state, if the stepper has one.
+    pub fn begin<T: Stepper<Sample = S>>(
+        stepper: &T,
+        observers: &mut [&mut dyn Observer<S, T::World>],
+    ) -> Self {
+        let last = stepper.initial();
+        let error = last
+            .as_ref()
+            .and_then(|initial| observe(observers, initial, stepper.world()).err());
+        Looping {
+            error,
+            failure: None,
+            taken: 0,
+            seconds: 0.0,
+            last,
         }
-        error = observe::<T>(observers, &sample, stepper.world()).err();
     }
-    let seconds = started.elapsed().as_secs_f64();
-    let complete = taken == steps && failure.is_none() && error.is_none();
-    let mut written = Vec::new();
-    let mut finish_error = None;
-    for observer in observers.iter_mut() {
-        match observer.finish(complete) {
-            Ok(file) => written.extend(file),
-            Err(e) => {
-                finish_error.get_or_insert(e);
+
+    /// Takes up to `steps` more steps, each observed; fewer if the run diverges, an observer
+    /// fails or the process is interrupted. Returns the steps taken.
+    pub fn advance<T: Stepper<Sample = S>>(
+        &mut self,
+        stepper: &mut T,
+        steps: u64,
+        observers: &mut [&mut dyn Observer<S, T::World>],
+    ) -> u64 {
+        let started = std::time::Instant::now();
+        let mut taken = 0;
+        while !self.stopped() && taken < steps && !super::interrupted() {
+            let sample = stepper.step();
+            taken += 1;
+            if let Some(message) = stepper.diverged(&sample) {
+                // the diverged step is still observed: the files show where it went wrong
+                let _ = observe(observers, &sample, stepper.world());
+                self.failure = Some(message);
+            } else {
+                self.error = observe(observers, &sample, stepper.world()).err();
+            }
+            self.last = Some(sample);
+        }
+        self.taken += taken;
+        self.seconds += started.elapsed().as_secs_f64();
+        taken
+    }
+
+    /// True once the loop will take no more steps: diverged or an observer failed.
+    pub fn stopped(&self) -> bool {
+        self.error.is_some() || self.failure.is_some()
+    }
+
+    /// What diverged, if the run did.
+    pub fn failure(&self) -> Option<&str> {
+        self.failure.as_deref()
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.taken
+    }
+
+    /// The latest state: the last step's sample, or the initial one before any step.
+    pub fn last(&self) -> Option<&S> {
+        self.last.as_ref()
+    }
+
+    /// Finishes every observer in order; the run is complete if it took `planned` steps and
+    /// neither diverged nor failed.
+    pub fn finish<W: ?Sized>(
+        self,
+        planned: u64,
+        observers: &mut [&mut dyn Observer<S, W>],
+    ) -> Result<LoopEnd> {
+        let complete = self.taken == planned && !self.stopped();
+        let mut written = Vec::new();
+        let mut finish_error = None;
+        for observer in observers.iter_mut() {
+            match observer.finish(complete) {
+                Ok(file) => written.extend(file),
+                Err(e) => {
+                    finish_error.get_or_insert(e);
+                }
             }
         }
+        // a writer's own error says more than the observe error it caused ("the writer stopped")
+        if let Some(e) = finish_error.or(self.error) {
+            return Err(super::failure_error(&format!("{e:#}"), &written));
+        }
+        Ok(LoopEnd {
+            complete,
+            failure: self.failure,
+            steps: self.taken,
+            seconds: self.seconds,
+            written,
+        })
     }
-    // a writer's own error says more than the observe error it caused ("the writer stopped")
-    if let Some(e) = finish_error.or(error) {
-        return Err(super::failure_error(&format!("{e:#}"), &written));
-    }
-    Ok(LoopEnd {
-        complete,
-        failure,
-        steps: taken,
-        seconds,
-        written,
-    })
+}
+
+fn observe<S, W: ?Sized>(
+    observers: &mut [&mut dyn Observer<S, W>],
+    sample: &S,
+    world: &W,
+) -> Result<()> {
+    observers
+        .iter_mut()
+        .try_for_each(|o| o.observe(sample, world))
 }
 
 #[cfg(test)]

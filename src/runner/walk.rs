@@ -2,10 +2,10 @@
 //! CSV, metrics.
 
 use super::Outputs;
-use super::step_loop::{self, Stepper};
+use super::step_loop::{Looping, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
-use crate::gait::{CommandSchedule, Fitted, GaitController};
+use crate::gait::{CommandSchedule, Fitted, GaitController, VelocityCommand};
 use crate::metrics::{GroundMetrics, HexapodMetrics, StanceMetrics};
 use crate::record::hexapod::{HexapodRecorder, HexapodTrajectory};
 use crate::record::progress::Progress;
@@ -56,6 +56,8 @@ pub struct WalkOutcome {
 struct Walking {
     walker: Walker,
     commands: CommandSchedule,
+    /// A command that replaces the schedule (a caller steering step by step).
+    command: Option<VelocityCommand>,
     watchdog: Watchdog,
 }
 
@@ -64,7 +66,9 @@ impl Stepper for Walking {
     type World = Walker;
 
     fn step(&mut self) -> WalkSample {
-        let command = self.commands.at(self.walker.gait_time().max(0.0));
+        let command = self
+            .command
+            .unwrap_or_else(|| self.commands.at(self.walker.gait_time().max(0.0)));
         self.walker.set_command(command);
         self.walker.step()
     }
@@ -82,6 +86,14 @@ impl WalkRun {
     /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
     /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<WalkOutcome> {
+        let mut session = self.start()?;
+        session.advance(session.remaining());
+        session.finish()
+    }
+
+    /// Builds the world and the outputs and stands the robot at its start, ready to step:
+    /// [`WalkRun::execute`] is this, every planned step, and [`WalkSession::finish`].
+    pub fn start(self) -> Result<WalkSession> {
         self.outputs.check_writable()?;
         let controller = GaitController::new(&self.robot, self.gait.gait.clone())
             .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?;
@@ -146,10 +158,11 @@ impl WalkRun {
         metrics.stance = StanceMetrics::of(&self.gait, &self.robot);
         metrics.ground = self.ground.clone();
 
-        let steps = ((self.settle_time + self.duration) / dt).round() as u64;
-        let mut walking = Walking {
+        let planned = ((self.settle_time + self.duration) / dt).round() as u64;
+        let walking = Walking {
             walker,
             commands: self.commands,
+            command: None,
             watchdog: Watchdog::walk(
                 &self.robot,
                 self.contact.normal,
@@ -157,14 +170,125 @@ impl WalkRun {
                 crate::sim::STANDARD_GRAVITY,
             ),
         };
+        let mut session = WalkSession {
+            walking,
+            observers,
+            metrics,
+            planned,
+            looping: None,
+        };
+        let looping = {
+            let (walking, mut list) = session.parts();
+            Looping::begin(walking, &mut list)
+        };
+        session.looping = Some(looping);
+        Ok(session)
+    }
+}
+
+/// A walk being stepped a stretch at a time: the same world, observers and step loop as
+/// [`WalkRun::execute`], with the state readable between stretches and the commands or the joint
+/// targets set from outside (the Python package drives it).
+pub struct WalkSession {
+    walking: Walking,
+    observers: Vec<Box<dyn Observer<WalkSample, Walker>>>,
+    metrics: HexapodMetrics,
+    /// The steps of the set-up's settle time and duration.
+    planned: u64,
+    /// Always Some between calls (taken by `finish`).
+    looping: Option<Looping<WalkSample>>,
+}
+
+impl WalkSession {
+    /// The stepper and every observer, the metrics last.
+    fn parts(&mut self) -> (&mut Walking, Vec<&mut dyn Observer<WalkSample, Walker>>) {
         let mut list: Vec<&mut dyn Observer<WalkSample, Walker>> =
-            observers.iter_mut().map(|o| o.as_mut() as _).collect();
-        list.push(&mut metrics);
-        let end = step_loop::run(&mut walking, steps, &mut list)?;
+            self.observers.iter_mut().map(|o| o.as_mut() as _).collect();
+        list.push(&mut self.metrics);
+        (&mut self.walking, list)
+    }
+
+    fn looping(&self) -> &Looping<WalkSample> {
+        self.looping
+            .as_ref()
+            .expect("a session is finished only once")
+    }
+
+    /// Takes up to `steps` steps (fewer at the end of the planned duration, on divergence, on an
+    /// output's error or when interrupted); returns the steps taken.
+    pub fn advance(&mut self, steps: u64) -> u64 {
+        let steps = steps.min(self.remaining());
+        let mut looping = self
+            .looping
+            .take()
+            .expect("a session is finished only once");
+        let (walking, mut list) = self.parts();
+        let taken = looping.advance(walking, steps, &mut list);
+        self.looping = Some(looping);
+        taken
+    }
+
+    /// Steps left of the planned settle time and duration.
+    pub fn remaining(&self) -> u64 {
+        self.planned.saturating_sub(self.looping().steps())
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.looping().steps()
+    }
+
+    /// True once no more steps will be taken: the run diverged or an output failed.
+    pub fn stopped(&self) -> bool {
+        self.looping().stopped()
+    }
+
+    /// What diverged, if the run did.
+    pub fn failure(&self) -> Option<&str> {
+        self.looping().failure()
+    }
+
+    /// The latest step's state (None before the first step).
+    pub fn sample(&self) -> Option<&WalkSample> {
+        self.looping().last()
+    }
+
+    /// The metrics so far.
+    pub fn metrics(&self) -> &HexapodMetrics {
+        &self.metrics
+    }
+
+    /// The walker: the robot, its model and the gait.
+    pub fn walker(&self) -> &Walker {
+        &self.walking.walker
+    }
+
+    /// Replaces the scenario's command schedule by `command` from the next step on (None: back
+    /// to the schedule).
+    pub fn set_command(&mut self, command: Option<VelocityCommand>) {
+        self.walking.command = command;
+    }
+
+    /// Drives the joints to these targets (rad, by model joint) from the next step on, instead
+    /// of the gait (None: back to the gait).
+    pub fn set_joint_targets(&mut self, targets: Option<Vec<f64>>) -> Result<()> {
+        self.walking.walker.set_joint_targets(targets)
+    }
+
+    /// Finishes every output (the recording, the trajectory, the metrics file) and returns what
+    /// the run measured; complete if it took every planned step.
+    pub fn finish(mut self) -> Result<WalkOutcome> {
+        let looping = self
+            .looping
+            .take()
+            .expect("a session is finished only once");
+        let planned = self.planned;
+        let (_, mut list) = self.parts();
+        let end = looping.finish(planned, &mut list)?;
         Ok(WalkOutcome {
             steps_per_second: end.steps as f64 / end.seconds.max(1e-9),
-            physics_seconds: walking.walker.hexapod().physics_seconds(),
-            metrics,
+            physics_seconds: self.walking.walker.hexapod().physics_seconds(),
+            metrics: self.metrics,
             written: end.written,
             failure: end.failure,
         })

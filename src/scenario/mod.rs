@@ -17,7 +17,7 @@ use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, Fitted, Gait};
 use crate::robot::RobotModel;
 use crate::runner::ball::BallRun;
-use crate::runner::walk::WalkRun;
+use crate::runner::walk::{WalkRun, WalkSession};
 use crate::sim::{BallConfig, HexapodSettings, Placement};
 use crate::terrain::{HeightGrid, TerrainSpec};
 use spec::START_INSET;
@@ -279,6 +279,49 @@ impl Scenario {
             })
     }
 
+    fn walk_run(&self, w: &WalkSetup, grid: Arc<HeightGrid>, outputs: Outputs) -> WalkRun {
+        WalkRun {
+            robot: w.robot.clone(),
+            placement: w.placement(&grid),
+            terrain: grid,
+            terrain_name: self.terrain.name.clone(),
+            gait: w.gait.clone(),
+            commands: w.commands.clone(),
+            contact: self.contact,
+            ground: w.ground.clone(),
+            settings: w.settings,
+            settle_time: w.settle,
+            terrain_following: w.follow_terrain,
+            duration: self.spec.duration,
+            log_rate: self.log_rate,
+            outputs,
+        }
+    }
+
+    /// Starts a walk scenario to be stepped a stretch at a time (the Python package): the run
+    /// [`Scenario::run`] makes, with the state readable between stretches. Its metrics at the end
+    /// are `run`'s, bit for bit.
+    pub fn start_walk(&self, outputs: Outputs) -> anyhow::Result<WalkSession> {
+        let Setup::Walk(w) = &self.setup else {
+            anyhow::bail!(
+                "{}: {} is a ball scenario; only a walk can be stepped",
+                self.file.display(),
+                self.name
+            );
+        };
+        let grid = Arc::new(self.build_terrain()?);
+        self.walk_run(w, grid, outputs).start()
+    }
+
+    /// The same scenario with the terrain generator's seed replaced (as `seed = …` in the file).
+    pub fn with_seed(&self, seed: u32) -> Result<Scenario, ScenarioError> {
+        let spec = ScenarioSpec {
+            seed: Some(seed),
+            ..self.spec.clone()
+        };
+        Scenario::resolve(spec, self.name.clone(), &self.file)
+    }
+
     /// Runs the scenario and checks its expectations. An error is an input or output problem; a
     /// run that diverged is a [`Report`] with `failure` set.
     pub fn run(&self, outputs: Outputs) -> anyhow::Result<Report> {
@@ -287,23 +330,7 @@ impl Scenario {
         let started = std::time::Instant::now();
         let (metrics, steps_per_second, physics_seconds, failure, written) = match &self.setup {
             Setup::Walk(w) => {
-                let run = WalkRun {
-                    robot: w.robot.clone(),
-                    placement: w.placement(&grid),
-                    terrain: grid,
-                    terrain_name: self.terrain.name.clone(),
-                    gait: w.gait.clone(),
-                    commands: w.commands.clone(),
-                    contact: self.contact,
-                    ground: w.ground.clone(),
-                    settings: w.settings,
-                    settle_time: w.settle,
-                    terrain_following: w.follow_terrain,
-                    duration: spec.duration,
-                    log_rate: self.log_rate,
-                    outputs,
-                };
-                let o = run.execute()?;
+                let o = self.walk_run(w, grid, outputs).execute()?;
                 (
                     Metrics::Walk(Box::new(o.metrics)),
                     o.steps_per_second,

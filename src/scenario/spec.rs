@@ -155,6 +155,8 @@ impl ScenarioSpec {
 }
 /// Seconds a walk stands before the gait starts.
 pub const DEFAULT_SETTLE: f64 = 1.0;
+/// Seconds walked by `hexsim run` (and a Python `Simulation`) when no duration is given.
+pub const RUN_DURATION: f64 = 20.0;
 /// Samples per second in a walk's recording and trajectory.
 pub const WALK_LOG_RATE: f64 = 50.0;
 /// Samples per second in a ball's recording and trajectory (a bounce lasts ~10 ms).

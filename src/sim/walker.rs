@@ -17,14 +17,18 @@ pub struct Walker {
     /// Follow the terrain under the feet (see [`GaitController::targets`]); off: every foot path
     /// is planned for level ground.
     pub terrain_following: bool,
+    /// Joint targets given from outside (rad, by model joint), in place of the gait's.
+    given_targets: Option<Vec<f64>>,
 }
 
 /// A step of the walker: the robot's state and the gait's targets for it.
 #[derive(Debug, Clone)]
 pub struct WalkSample {
     pub robot: HexapodSample,
-    /// None while settling.
+    /// The gait's targets; None while settling and while the joints are driven from outside.
     pub gait: Option<GaitTargets>,
+    /// Standing still before the walk (the settle time): not part of the walk's metrics.
+    pub settling: bool,
 }
 
 impl Walker {
@@ -44,6 +48,7 @@ impl Walker {
             last_targets: None,
             clamped_steps: 0,
             terrain_following: false,
+            given_targets: None,
         }
     }
 
@@ -53,6 +58,11 @@ impl Walker {
 
     pub fn set_command(&mut self, command: VelocityCommand) {
         self.command = command;
+    }
+
+    /// Seconds standing still before the gait starts.
+    pub fn settle_time(&self) -> f64 {
+        self.settle_time
     }
 
     /// Seconds since the gait started (negative while settling).
@@ -75,7 +85,7 @@ impl Walker {
         }
     }
 
-    fn set_joint_targets(&mut self, angles: [[f64; 3]; 6]) {
+    fn set_leg_targets(&mut self, angles: [[f64; 3]; 6]) {
         for (leg, angles) in self.hexapod.model().legs.iter().zip(angles) {
             for (j, a) in leg.joints.iter().zip(angles) {
                 self.targets_by_joint[*j] = a;
@@ -86,9 +96,42 @@ impl Walker {
         self.targets_by_joint = targets_by_joint;
     }
 
+    /// Drives the servos to `targets` (rad, one per model joint, in the model's joint order) from
+    /// the next step on, instead of the gait; None hands the joints back to the gait. Targets
+    /// beyond a joint's limits are passed on as they are: the limit stops the joint.
+    pub fn set_joint_targets(&mut self, targets: Option<Vec<f64>>) -> anyhow::Result<()> {
+        if let Some(targets) = &targets {
+            let joints = &self.hexapod.model().joints;
+            if targets.len() != joints.len() {
+                anyhow::bail!(
+                    "joint targets: {} given, the robot has {} joints ({})",
+                    targets.len(),
+                    joints.len(),
+                    joints
+                        .iter()
+                        .map(|j| j.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+            if let Some((i, t)) = targets.iter().enumerate().find(|(_, t)| !t.is_finite()) {
+                anyhow::bail!(
+                    "joint targets: {t} for joint {} ({}) is not a finite angle",
+                    i,
+                    joints[i].name
+                );
+            }
+        }
+        self.given_targets = targets;
+        Ok(())
+    }
+
     pub fn step(&mut self) -> WalkSample {
         let t = self.gait_time();
-        if t >= 0.0 {
+        if let Some(targets) = &self.given_targets {
+            self.hexapod.set_targets(targets);
+            self.last_targets = None;
+        } else if t >= 0.0 {
             let period = self.controller.gait().period;
             // ramp the stride up over the first cycle so the feet leave the standing pose smoothly
             let blend = (t / period).min(1.0);
@@ -98,7 +141,7 @@ impl Walker {
             } else {
                 self.controller.targets(t, self.command, blend, |_| 0.0)
             };
-            self.set_joint_targets(targets.joint_angles);
+            self.set_leg_targets(targets.joint_angles);
             if targets.clamped.iter().any(|&c| c) {
                 self.clamped_steps += 1;
             }
@@ -107,12 +150,13 @@ impl Walker {
             // stand level from the start, so the walk does not begin tilted with the ground
             let ground = Self::ground_relative(&self.hexapod);
             let angles = self.controller.standing_on(ground);
-            self.set_joint_targets(angles);
+            self.set_leg_targets(angles);
         }
         let robot = self.hexapod.step();
         WalkSample {
             robot,
             gait: self.last_targets,
+            settling: t < 0.0,
         }
     }
 }
