@@ -38,7 +38,11 @@ fn the_files_shown_are_the_files_that_run() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut documents = vec![root.join("README.md")];
     if let Ok(pages) = std::fs::read_dir(root.join("docs")) {
-        documents.extend(pages.map(|p| p.unwrap().path()));
+        documents.extend(
+            pages
+                .map(|p| p.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|e| e == "md")),
+        );
     }
     let mut checked = 0;
     for document in &documents {

@@ -5,7 +5,6 @@ mod ball;
 mod batch;
 mod bench;
 mod compare;
-mod contact;
 mod merge;
 mod optimize;
 mod robot;
@@ -150,5 +149,111 @@ pub(crate) fn conclude(report: &Report) -> ExitCode {
         ExitCode::from(130)
     } else {
         ExitCode::SUCCESS
+    }
+}
+
+#[cfg(test)]
+mod documented_commands {
+    use super::Cli;
+    use clap::Parser;
+    use std::path::Path;
+
+    /// Every `hexsim …` command in a shell block of the README or a page of docs/, its comment
+    /// cut and its continued lines joined: (document, line, the command).
+    fn commands() -> Vec<(String, usize, String)> {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut documents = vec![root.join("README.md")];
+        for page in std::fs::read_dir(root.join("docs")).unwrap() {
+            let page = page.unwrap().path();
+            if page.extension().is_some_and(|e| e == "md") {
+                documents.push(page);
+            }
+        }
+        let mut found = Vec::new();
+        for document in documents {
+            let text = std::fs::read_to_string(&document).unwrap();
+            let name = document.file_name().unwrap().to_string_lossy().into_owned();
+            let mut in_shell = false;
+            let mut pending: Option<(usize, String)> = None;
+            for (i, line) in text.lines().enumerate() {
+                if let Some(fence) = line.trim_start().strip_prefix("```") {
+                    in_shell = !in_shell && matches!(fence, "sh" | "bash" | "console");
+                    continue;
+                }
+                if !in_shell {
+                    continue;
+                }
+                let line = line.trim().trim_start_matches("$ ");
+                let line = match line.find(" # ") {
+                    Some(at) => line[..at].trim_end(),
+                    None => line,
+                };
+                let (start, mut command) = match pending.take() {
+                    Some((start, before)) => (start, before + " " + line),
+                    None if line.starts_with("hexsim ") || line == "hexsim" => {
+                        (i + 1, line.to_string())
+                    }
+                    None => continue,
+                };
+                if let Some(continued) = command.strip_suffix('\\') {
+                    command = continued.to_string();
+                    pending = Some((start, command));
+                } else {
+                    found.push((name.clone(), start, command));
+                }
+            }
+        }
+        found
+    }
+
+    /// A job script's command with its shell variables (`$NAME`, `${NAME:-default}`) set to 1,
+    /// which every option they stand for accepts (a shard 1/1, one thread, a path).
+    fn with_variables_set(command: &str) -> String {
+        let mut out = String::new();
+        let mut chars = command.chars().peekable();
+        while let Some(c) = chars.next() {
+            if c != '$' {
+                out.push(c);
+                continue;
+            }
+            if chars.peek() == Some(&'{') {
+                for c in chars.by_ref() {
+                    if c == '}' {
+                        break;
+                    }
+                }
+            } else {
+                while chars
+                    .peek()
+                    .is_some_and(|c| c.is_ascii_alphanumeric() || *c == '_')
+                {
+                    chars.next();
+                }
+            }
+            out.push('1');
+        }
+        out
+    }
+
+    /// The commands the documentation shows parse as it shows them (an option renamed or
+    /// removed fails here, naming the page and line).
+    #[test]
+    fn the_documented_commands_parse() {
+        let commands = commands();
+        // the README's usage block alone shows 21: fewer means the blocks were not found
+        assert!(
+            commands.len() >= 21,
+            "only {} commands found",
+            commands.len()
+        );
+        let mut failures = Vec::new();
+        for (document, line, command) in &commands {
+            let words = shlex::split(&with_variables_set(command))
+                .unwrap_or_else(|| panic!("{document}:{line}: cannot split `{command}`"));
+            if let Err(e) = Cli::try_parse_from(&words) {
+                failures.push(format!("{document}:{line}: `{command}`: {}", e.kind()));
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
     }
 }

@@ -24,8 +24,8 @@ use std::sync::Arc;
 /// Steps between two measurements of the impulse joints' drift (it changes slowly).
 const DRIFT_EVERY: u64 = 10;
 
-/// rapier substeps per step by default: one — V1–V15 hold with it (see the README's Performance
-/// section), and each substep rebuilds the multibody's mass matrix.
+/// rapier substeps per step by default: one — V1–V15 hold with it (see docs/performance.md), and
+/// each substep rebuilds the multibody's mass matrix.
 pub const DEFAULT_SOLVER_ITERATIONS: usize = 1;
 
 /// How the robot is simulated: articulation, step, solver substeps, servo gains.

@@ -2,10 +2,10 @@
 //! rapier's impulse joints (five locked axes and a revolute one, solved with the contacts' PGS).
 //!
 //! Why it exists: a step costs a few small constraint rows instead of rebuilding and factorising
-//! the multibody's mass matrix, which makes it about 1.3 times faster — for large sweeps.
-//! The price: the locked axes are held by the solver, not by construction, so the joints drift
-//! apart by a little (measured by [`ImpulseRobot::joint_drift`]; see the README's Performance
-//! section), and the foot's effective mass is its own link's, not the articulated robot's.
+//! the multibody's mass matrix: about 1.1 times faster since rapier was patched
+//! (docs/performance.md), for large sweeps. The price: the locked axes are held by the solver,
+//! not by construction, so the joints drift apart by a little (measured by
+//! [`ImpulseRobot::joint_drift`]; see docs/performance.md), and the foot's effective mass is its own link's, not the articulated robot's.
 //!
 //! Servos are explicit torque pairs on the joint's two links: the multibody's law
 //! τ = k·(q* − qₙ) − (k·dt + d)·q̇ evaluated at the start of the step, clamped to the URDF's

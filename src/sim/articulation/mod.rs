@@ -40,8 +40,7 @@ impl Articulation {
     /// Constraint-solver sweeps per substep unless set: the multibody has no constraints to
     /// solve (its servos are implicit springs), so one; impulse joints are held by the solver:
     /// with 3 sweeps a foot slides at most 2.3 mm per stance on V12 (4: 1.7 mm; 6: 1.3 mm), with
-    /// 2 the legs shake loose and the feet slide metres (measured; see the README's Performance
-    /// section).
+    /// 2 the legs shake loose and the feet slide metres (measured; see docs/performance.md).
     pub fn default_pgs_iterations(self) -> usize {
         match self {
             Articulation::Multibody => 1,
