@@ -11,7 +11,7 @@
 //! physics broke is flagged as such, and reports the share of its time spent inside rapier's step
 //! (what the figure could be if hexsim's own work cost nothing).
 
-use crate::scenario::{Metrics, Outputs, Report, Scenario, ScenarioSpec};
+use crate::scenario::{Metrics, Output, Outputs, Report, Scenario, ScenarioSpec};
 use crate::sim::Articulation;
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -89,12 +89,7 @@ fn resolve(spec: ScenarioSpec, name: &str) -> Result<Scenario> {
 }
 
 fn run(scenario: &Scenario, record: Option<PathBuf>) -> Result<Report> {
-    let report = scenario.run(Outputs {
-        record,
-        trajectory: None,
-        metrics: None,
-        progress: None,
-    })?;
+    let report = scenario.run(Outputs::new().with_some(record.map(Output::Recording)))?;
     if let Some(failure) = &report.failure {
         anyhow::bail!("{}: {failure}", scenario.name);
     }

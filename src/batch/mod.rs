@@ -5,7 +5,7 @@ pub mod baseline;
 pub mod results;
 pub mod summary;
 
-use crate::scenario::{self, Outputs, Scenario, ScenarioError};
+use crate::scenario::{self, Output, Outputs, Scenario, ScenarioError};
 use anyhow::{Context, Result, bail};
 use baseline::Regression;
 use rayon::prelude::*;
@@ -331,20 +331,16 @@ fn run_one(
             bar.inc(done.saturating_sub(before));
         }) as Box<dyn Fn(u64)>
     };
-    let outputs = Outputs {
-        record: s
-            .spec
-            .record
-            .rrd
-            .then(|| options.record_dir.join(format!("{}.rrd", s.name))),
-        trajectory: s
-            .spec
-            .record
-            .trajectory
-            .then(|| options.record_dir.join(format!("{}.csv", s.name))),
-        metrics: None,
-        progress: Some(progress),
-    };
+    let file = |extension: &str| options.record_dir.join(format!("{}.{extension}", s.name));
+    let outputs = Outputs::new()
+        .with_some(s.spec.record.rrd.then(|| Output::Recording(file("rrd"))))
+        .with_some(
+            s.spec
+                .record
+                .trajectory
+                .then(|| Output::Trajectory(file("csv"))),
+        )
+        .with(Output::Progress(progress));
     let started = std::time::Instant::now();
     let result = s.run(outputs);
     bar.inc(expected.saturating_sub(reported.load(std::sync::atomic::Ordering::Relaxed)));

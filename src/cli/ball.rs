@@ -2,12 +2,11 @@
 
 use anyhow::Result;
 use clap::{Args, Parser};
-use hexsim::scenario::spec::{BALL_LOG_RATE, BallSpec, DEFAULT_DT, RecordSpec};
-use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Scenario, ScenarioSpec};
+use hexsim::scenario::spec::{BALL_LOG_RATE, BallSpec, ContactSpec, DEFAULT_DT, RecordSpec};
+use hexsim::scenario::{FileOr, Kind, Metrics, Output, Outputs, Scenario, ScenarioSpec};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::contact::ContactArgs;
 use super::{COMMAND_LINE, Cli, Command, conclude};
 
 #[derive(Args)]
@@ -38,7 +37,7 @@ pub struct BallArgs {
     #[arg(long)]
     lock_rotation: bool,
     #[command(flatten)]
-    contact: ContactArgs,
+    contact: ContactSpec,
     /// Simulated time (s).
     #[arg(long, default_value_t = 10.0)]
     duration: f64,
@@ -87,7 +86,7 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
         seed: None,
         duration: args.duration,
         dt: Some(args.dt),
-        contact: args.contact.spec(),
+        contact: args.contact,
         allow_unstable_dt: args.allow_unstable_dt,
         robot: None,
         gait: None,
@@ -121,12 +120,12 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
     };
     let scenario = Scenario::resolve(spec, "ball".into(), Path::new(COMMAND_LINE))?;
     let terrain_name = scenario.terrain_name().to_string();
-    let report = scenario.run(Outputs {
-        record: (!args.no_record).then(|| args.record.clone()),
-        trajectory: args.trajectory.clone(),
-        metrics: args.metrics.clone(),
-        progress: None,
-    })?;
+    let report = scenario.run(
+        Outputs::new()
+            .with_some((!args.no_record).then(|| Output::Recording(args.record.clone())))
+            .with_some(args.trajectory.clone().map(Output::Trajectory))
+            .with_some(args.metrics.clone().map(Output::Metrics)),
+    )?;
     let Metrics::Ball(m) = &report.metrics else {
         unreachable!("a ball scenario reports ball metrics")
     };

@@ -21,8 +21,8 @@ pub struct CompareArgs {
     /// Every setting's metrics as JSON.
     #[arg(long)]
     metrics: Option<PathBuf>,
-    /// Folder for each setting's trajectory CSV (NAME.csv). Default: a temporary folder, removed
-    /// after.
+    /// Folder for each setting's trajectory CSV (NAME.csv). Default: none written (the recording
+    /// is drawn from the trajectories in memory).
     #[arg(long)]
     trajectories: Option<PathBuf>,
     /// Worker threads, one run each. Default: all cores.
@@ -43,17 +43,13 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
     if let Some(path) = &args.metrics {
         hexsim::record::output::check_writable(path)?;
     }
-    let temporary = args.trajectories.is_none();
-    let dir = args.trajectories.clone().unwrap_or_else(|| {
-        std::env::temp_dir().join(format!("hexsim-compare-{}", std::process::id()))
-    });
     let jobs = args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
     if let Some(d) = &comparison.description {
         println!("{d}");
     }
-    let outcomes = compare::run(&comparison, &dir, jobs)?;
+    let outcomes = compare::run(&comparison, args.trajectories.as_deref(), jobs)?;
     let mut failed = false;
     let mut json = Vec::new();
     let mut rows: Vec<(String, Vec<String>)> = Vec::new();
@@ -117,9 +113,6 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         if args.spawn {
             hexsim::record::rerun::spawn_viewer(&written)?;
         }
-    }
-    if temporary {
-        let _ = std::fs::remove_dir_all(&dir);
     }
     Ok(if failed {
         ExitCode::from(1)

@@ -3,14 +3,14 @@
 use anyhow::Result;
 use clap::{Args, Parser};
 use hexsim::scenario::spec::{
-    CommandSpec, DEFAULT_SETTLE, RUN_DURATION, RecordSpec, ServoSpec, StartSpec, WALK_LOG_RATE,
+    CommandSpec, ContactSpec, DEFAULT_SETTLE, RUN_DURATION, RecordSpec, ServoSpec, StartSpec,
+    WALK_LOG_RATE,
 };
-use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Scenario, ScenarioSpec};
+use hexsim::scenario::{FileOr, Kind, Metrics, Output, Outputs, Scenario, ScenarioSpec};
 use hexsim::sim::Articulation;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::contact::ContactArgs;
 use super::{COMMAND_LINE, Cli, Command, conclude, progress_bar, warn_about};
 
 #[derive(Args)]
@@ -57,7 +57,7 @@ pub struct RunArgs {
     #[arg(long)]
     seed: Option<u32>,
     #[command(flatten)]
-    contact: ContactArgs,
+    contact: ContactSpec,
     /// Servo stiffness (N·m/rad). Default: fitted to the robot's legs (hex18: the reference's 20).
     #[arg(long)]
     servo_stiffness: Option<f64>,
@@ -121,7 +121,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         seed: args.seed,
         duration: args.duration,
         dt: args.dt,
-        contact: args.contact.spec(),
+        contact: args.contact,
         allow_unstable_dt: args.allow_unstable_dt,
         robot: args.robot.clone(),
         gait: args.gait.clone().map(FileOr::File),
@@ -162,14 +162,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         scenario.total_steps(),
         format!("{} s", args.settle + args.duration),
     );
-    let outputs = Outputs {
-        record: (!args.no_record).then(|| args.record.clone()),
-        trajectory: args.trajectory.clone(),
-        metrics: args.metrics.clone(),
-        progress: bar
-            .clone()
-            .map(|b| Box::new(move |done: u64| b.set_position(done)) as Box<dyn Fn(u64)>),
-    };
+    let outputs = Outputs::new()
+        .with_some((!args.no_record).then(|| Output::Recording(args.record.clone())))
+        .with_some(args.trajectory.clone().map(Output::Trajectory))
+        .with_some(args.metrics.clone().map(Output::Metrics))
+        .with_some(
+            bar.clone()
+                .map(|b| Output::Progress(Box::new(move |done: u64| b.set_position(done)))),
+        );
     let report = scenario.run(outputs);
     if let Some(bar) = bar {
         bar.finish_and_clear();

@@ -17,7 +17,8 @@
 
 pub mod recording;
 
-use crate::runner::Outputs;
+use crate::record::table::{SharedTable, Table};
+use crate::runner::{Output, Outputs};
 use crate::scenario::{self, Report, Scenario, ScenarioError};
 use rayon::prelude::*;
 use serde::Deserialize;
@@ -127,17 +128,24 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
     })
 }
 
-/// One setting's run: its report (or why it could not run) and its trajectory CSV.
+/// One setting's run: its report (or why it could not run) and its trajectory, kept in memory
+/// (empty when it could not run).
 pub struct Outcome {
     pub name: String,
     pub report: anyhow::Result<Report>,
-    pub trajectory: PathBuf,
+    pub trajectory: Table,
 }
 
-/// Runs every setting, in parallel on `jobs` threads (each run alone is deterministic), writing
-/// each trajectory to `dir`/NAME.csv.
-pub fn run(comparison: &Comparison, dir: &Path, jobs: usize) -> anyhow::Result<Vec<Outcome>> {
-    std::fs::create_dir_all(dir)?;
+/// Runs every setting, in parallel on `jobs` threads (each run alone is deterministic), keeping
+/// each trajectory in memory and, given a folder, also writing it there as NAME.csv.
+pub fn run(
+    comparison: &Comparison,
+    trajectories: Option<&Path>,
+    jobs: usize,
+) -> anyhow::Result<Vec<Outcome>> {
+    if let Some(dir) = trajectories {
+        std::fs::create_dir_all(dir)?;
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs.max(1))
         .build()?;
@@ -146,15 +154,19 @@ pub fn run(comparison: &Comparison, dir: &Path, jobs: usize) -> anyhow::Result<V
             .settings
             .par_iter()
             .map(|s| {
-                let trajectory = dir.join(format!("{}.csv", s.name.replace(' ', "_")));
-                let report = s.run(Outputs {
-                    trajectory: Some(trajectory.clone()),
-                    ..Outputs::default()
+                let table = SharedTable::new();
+                let file = trajectories.map(|dir| {
+                    Output::Trajectory(dir.join(format!("{}.csv", s.name.replace(' ', "_"))))
                 });
+                let report = s.run(
+                    Outputs::new()
+                        .with(Output::Table(table.clone()))
+                        .with_some(file),
+                );
                 Outcome {
                     name: s.name.clone(),
                     report,
-                    trajectory,
+                    trajectory: table.take(),
                 }
             })
             .collect()

@@ -1,18 +1,19 @@
 //! The recording of a comparison (`hexsim compare`): every setting's ball or robot superposed in
 //! one 3D view, each in its own colour and labelled with its setting's name, and their motion,
 //! forces, penetration and energy on shared plots, one series per setting. Drawn from each run's
-//! trajectory CSV after the runs, so the runs themselves stay plain scenario runs.
+//! trajectory (kept in memory) after the runs, so the runs themselves stay plain scenario runs.
 
 use super::{Comparison, Outcome};
 use crate::record::blueprint::{History, Layout, View};
 use crate::record::camera::{self, FollowCamera};
 use crate::record::links::LinkTree;
 use crate::record::rerun::Recording;
+use crate::record::table::Table;
 use crate::robot::RobotModel;
 use anyhow::{Context, Result};
 use glam::{DAffine3, DQuat, DVec3};
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A colour per setting, in the order of the comparison file.
 pub const COLORS: [[u8; 3]; 8] = [
@@ -26,7 +27,7 @@ pub const COLORS: [[u8; 3]; 8] = [
     [150, 150, 150],
 ];
 
-/// What is plotted, per kind: a trajectory CSV column, or a quantity computed from its row.
+/// What is plotted, per kind: a trajectory column, or a quantity computed from its row.
 const BALL_PLOTS: [&str; 6] = [
     "height",
     "speed",
@@ -44,43 +45,125 @@ const WALK_PLOTS: [&str; 6] = [
     "pitch_deg",
 ];
 
-/// One trajectory CSV, its columns by name.
-struct Table {
-    columns: HashMap<String, usize>,
-    rows: Vec<Vec<f64>>,
+/// What the runs move: every setting's robot (the same model) or ball.
+enum Body {
+    Robot(Arc<RobotModel>),
+    Ball { radius: f64 },
 }
 
-impl Table {
-    fn read(path: &Path) -> Result<Table> {
-        let mut reader = csv::Reader::from_path(path)
-            .with_context(|| format!("cannot read the trajectory {}", path.display()))?;
-        let columns = reader
-            .headers()?
-            .iter()
-            .enumerate()
-            .map(|(k, h)| (h.to_string(), k))
-            .collect();
-        let mut rows = Vec::new();
-        for record in reader.records() {
-            let record = record?;
-            rows.push(
-                record
-                    .iter()
-                    .map(|v| v.parse::<f64>().unwrap_or(f64::NAN))
-                    .collect(),
-            );
+impl Body {
+    fn plots(&self) -> &'static [&'static str] {
+        match self {
+            Body::Robot(_) => &WALK_PLOTS,
+            Body::Ball { .. } => &BALL_PLOTS,
         }
-        Ok(Table { columns, rows })
     }
 
-    fn get(&self, row: &[f64], column: &str) -> f64 {
-        self.columns.get(column).map_or(f64::NAN, |&k| row[k])
+    /// The size the camera frames.
+    fn size(&self) -> f64 {
+        match self {
+            Body::Robot(model) => crate::record::hexapod::robot_radius(model),
+            Body::Ball { radius } => 10.0 * radius,
+        }
     }
 }
 
-fn layout(walk: bool, title: &str) -> Layout {
-    let plots: &[&str] = if walk { &WALK_PLOTS } else { &BALL_PLOTS };
-    let origins: Vec<String> = plots.iter().map(|p| format!("plots/{p}")).collect();
+/// A setting's trajectory with the columns the recording reads found once by name: a column the
+/// run does not have is an error here, not a silent NaN in a plot.
+struct Track<'a> {
+    table: &'a Table,
+    time: usize,
+    position: [usize; 3],
+    velocity: [usize; 3],
+    /// Each plot's columns: the one it shows, or those it sums or converts.
+    plots: Vec<Vec<usize>>,
+    /// A walk's roll, pitch, yaw and its joint angles by model joint.
+    attitude: Option<[usize; 3]>,
+    joints: Vec<usize>,
+}
+
+impl<'a> Track<'a> {
+    fn new(table: &'a Table, body: &Body) -> Result<Self> {
+        let col = |name: &str| table.column(name);
+        let cols = |names: &[&str]| names.iter().map(|n| col(n)).collect::<Result<Vec<_>>>();
+        let feet = |quantity: &str| -> Result<Vec<usize>> {
+            crate::robot::LEG_NAMES
+                .iter()
+                .map(|l| col(&format!("{l}_{quantity}")))
+                .collect()
+        };
+        let mut plots = Vec::new();
+        for &plot in body.plots() {
+            plots.push(match plot {
+                "height" | "forward_x" | "body_z" => Vec::new(), // from the position
+                "speed" => Vec::new(),                           // from the velocity
+                "penetration_mm" => cols(&["penetration"])?,
+                "roll_deg" => cols(&["roll"])?,
+                "pitch_deg" => cols(&["pitch"])?,
+                "feet_normal_force" => feet("normal")?,
+                "feet_slip" => feet("slip")?,
+                other => cols(&[other])?,
+            });
+        }
+        let (attitude, joints) = match body {
+            Body::Robot(model) => (
+                Some([col("roll")?, col("pitch")?, col("yaw")?]),
+                model
+                    .joints
+                    .iter()
+                    .map(|j| col(&format!("{}_angle", j.name)))
+                    .collect::<Result<_>>()?,
+            ),
+            Body::Ball { .. } => (None, Vec::new()),
+        };
+        Ok(Track {
+            table,
+            time: col("time")?,
+            position: [col("x")?, col("y")?, col("z")?],
+            velocity: [col("vx")?, col("vy")?, col("vz")?],
+            plots,
+            attitude,
+            joints,
+        })
+    }
+
+    fn vector(row: &[f64], [x, y, z]: [usize; 3]) -> DVec3 {
+        DVec3::new(row[x], row[y], row[z])
+    }
+
+    fn position(&self, row: &[f64]) -> DVec3 {
+        Self::vector(row, self.position)
+    }
+
+    /// Plot `k`'s value at `row`.
+    fn plot(&self, body: &Body, k: usize, row: &[f64]) -> f64 {
+        let columns = &self.plots[k];
+        match body.plots()[k] {
+            "height" | "body_z" => self.position(row).z,
+            "forward_x" => self.position(row).x,
+            "speed" => Self::vector(row, self.velocity).length(),
+            "penetration_mm" => 1e3 * row[columns[0]],
+            "roll_deg" | "pitch_deg" => row[columns[0]].to_degrees(),
+            // the feet's normal forces, and their slip speeds (how much the stance feet slide),
+            // summed
+            _ => columns.iter().map(|&c| row[c]).sum(),
+        }
+    }
+
+    /// A walk's body pose at `row` from its position and roll, pitch, yaw (z-y-x), and the joint
+    /// angles.
+    fn pose(&self, row: &[f64]) -> Option<(DAffine3, Vec<f64>)> {
+        let [roll, pitch, yaw] = self.attitude?;
+        let body = DAffine3::from_rotation_translation(
+            DQuat::from_euler(glam::EulerRot::ZYX, row[yaw], row[pitch], row[roll]),
+            self.position(row),
+        );
+        Some((body, self.joints.iter().map(|&j| row[j]).collect()))
+    }
+}
+
+fn layout(body: &Body, title: &str) -> Layout {
+    let origins: Vec<String> = body.plots().iter().map(|p| format!("plots/{p}")).collect();
     let refs: Vec<&str> = origins.iter().map(String::as_str).collect();
     let (first, rest) = refs.split_at(refs.len().div_ceil(2));
     Layout::horizontal(
@@ -103,7 +186,8 @@ pub fn write(path: &Path, comparison: &Comparison, outcomes: &[Outcome]) -> Resu
     write_titled(path, "settings superposed", comparison, outcomes)
 }
 
-/// [`write`], its 3D view titled `title`.
+/// [`write`], its 3D view titled `title`: the terrain, each setting's body, label and series
+/// styled in its colour, one camera framing every path, then the runs row by row.
 pub fn write_titled(
     path: &Path,
     title: &str,
@@ -114,224 +198,206 @@ pub fn write_titled(
         .settings
         .first()
         .context("a comparison has settings")?;
-    let robot = first.robot().map(|r| std::sync::Arc::new(r.clone()));
+    let body = match (first.robot(), first.ball()) {
+        (Some(model), _) => Body::Robot(Arc::new(model.clone())),
+        (None, Some(ball)) => Body::Ball {
+            radius: ball.radius,
+        },
+        (None, None) => anyhow::bail!("a comparison's scenario is a walk or a ball"),
+    };
     let dt = first.spec.dt();
     let name = comparison
         .file
         .file_stem()
         .map_or("comparison".into(), |s| s.to_string_lossy().into_owned());
-    let recording = Recording::create(path, name, dt, &layout(robot.is_some(), title))?;
-    let rec = recording.stream();
+    let mut recording = Recording::create(path, name, dt, &layout(&body, title))?;
     recording.log_terrain("world/terrain", &first.build_terrain()?)?;
-    let size = match (&robot, first.ball()) {
-        (Some(model), _) => crate::record::hexapod::robot_radius(model),
-        (None, Some(ball)) => 10.0 * ball.radius,
-        _ => 0.5,
-    };
-    rec.log_static("world/camera", &camera::pinhole(0.02f32))?;
-    let plots: &[&str] = if robot.is_some() {
-        &WALK_PLOTS
-    } else {
-        &BALL_PLOTS
-    };
-    let mut tables = Vec::new();
-    let mut trees = Vec::new();
-    for (k, outcome) in outcomes.iter().enumerate() {
-        let color = COLORS[k % COLORS.len()];
-        let entity = entity_name(&outcome.name);
-        // a setting that could not run has no trajectory: it is in the table with its error
-        let table = if outcome.report.is_ok() {
-            Table::read(&outcome.trajectory)?
-        } else {
-            Table {
-                columns: HashMap::new(),
-                rows: Vec::new(),
-            }
-        };
-        for plot in plots {
-            rec.log_static(
-                format!("plots/{plot}/{entity}"),
-                &rerun::SeriesLines::new()
-                    .with_names([outcome.name.as_str()])
-                    .with_colors([color]),
-            )?;
-        }
-        rec.log_static(
-            format!("world/paths/{entity}"),
-            &rerun::LineStrips3D::update_fields().with_colors([color]),
-        )?;
-        match (&robot, first.ball()) {
-            (Some(model), _) => {
-                let root = format!("world/{entity}/robot");
-                trees.push(Some(LinkTree::log_tinted(rec, model, &root, Some(color))?));
-            }
-            (None, Some(ball)) => {
-                rec.log_static(
-                    format!("world/{entity}/ball"),
-                    &rerun::Ellipsoids3D::from_radii([ball.radius as f32])
-                        .with_colors([color])
-                        .with_fill_mode(rerun::FillMode::Solid),
-                )?;
-                trees.push(None);
-            }
-            _ => trees.push(None),
-        }
-        rec.log_static(
-            format!("world/{entity}/label"),
-            &rerun::Points3D::update_fields()
-                .with_colors([color])
-                .with_radii([0.004f32])
-                .with_labels([outcome.name.as_str()])
-                .with_show_labels(true),
-        )?;
-        tables.push(table);
-    }
-    let mut recording = recording;
-    // one camera for all, framing every setting's path (and the body's size)
-    let (low, high) = tables
-        .iter()
-        .flat_map(|t| t.rows.iter().map(move |r| (t, r)))
-        .map(|(t, r)| DVec3::new(t.get(r, "x"), t.get(r, "y"), t.get(r, "z")))
-        .filter(|p| p.is_finite())
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p), hi.max(p))
-        });
-    let spread = if low.is_finite() {
-        0.5 * (high - low).truncate().length()
-    } else {
-        0.0
-    };
-    let mut camera = FollowCamera::new(size.max(spread), false);
-    let overview = camera.follow(
-        if low.is_finite() {
-            0.5 * (low + high)
-        } else {
-            DVec3::ZERO
-        },
-        0.0,
-        0.0,
-    );
     recording
         .stream()
-        .log_static("world/camera", &camera::transform(&overview))?;
-    let steps = tables.iter().map(|t| t.rows.len()).max().unwrap_or(0);
-    let mut last_point: Vec<Option<[f32; 3]>> = vec![None; outcomes.len()];
-    for row in 0..steps {
-        let mut shown = 0;
-        for (k, (outcome, table)) in outcomes.iter().zip(&tables).enumerate() {
-            let Some(values) = table.rows.get(row) else {
+        .log_static("world/camera", &camera::pinhole(0.02f32))?;
+    let mut tracks = Vec::new();
+    let mut trees = Vec::new();
+    for (k, outcome) in outcomes.iter().enumerate() {
+        trees.push(log_setting(recording.stream(), &body, k, &outcome.name)?);
+        // a setting that could not run has no trajectory: it is in the table with its error
+        tracks.push(match outcome.report {
+            Ok(_) => Some(
+                Track::new(&outcome.trajectory, &body)
+                    .with_context(|| format!("setting {:?}", outcome.name))?,
+            ),
+            Err(_) => None,
+        });
+    }
+    frame_every_path(&recording, &tracks, body.size())?;
+    let rows = tracks
+        .iter()
+        .flatten()
+        .map(|t| t.table.rows.len())
+        .max()
+        .unwrap_or(0);
+    let mut path_ends: Vec<Option<[f32; 3]>> = vec![None; outcomes.len()];
+    for row in 0..rows {
+        let mut stepped = false;
+        for (k, track) in tracks.iter().enumerate() {
+            let Some(values) = track.as_ref().and_then(|t| t.table.rows.get(row)) else {
                 continue;
             };
-            let time = table.get(values, "time");
-            if shown == 0 {
-                recording.set_step((time / dt).round() as u64);
+            let track = track.as_ref().expect("a row has its track");
+            if !stepped {
+                recording.set_step((values[track.time] / dt).round() as u64);
+                stepped = true;
             }
-            let rec = recording.stream();
-            let position = DVec3::new(
-                table.get(values, "x"),
-                table.get(values, "y"),
-                table.get(values, "z"),
-            );
-            shown += 1;
-            let velocity = DVec3::new(
-                table.get(values, "vx"),
-                table.get(values, "vy"),
-                table.get(values, "vz"),
-            );
-            let name = entity_name(&outcome.name);
-            let point = position.as_vec3().to_array();
-            if let Some(end) = last_point[k] {
-                rec.log(
-                    format!("world/paths/{name}"),
-                    &rerun::LineStrips3D::new([[end, point]]),
-                )?;
-            }
-            last_point[k] = Some(point);
-            let label_at = match &robot {
-                Some(model) => {
-                    log_robot(rec, model, trees[k].as_ref(), table, values)?;
-                    // stacked above the body, one line per setting, as the robots overlap
-                    position + DVec3::Z * (size * (0.6 + 0.12 * k as f64))
-                }
-                None => {
-                    rec.log(
-                        format!("world/{name}/ball"),
-                        &rerun::Transform3D::from_translation(point),
-                    )?;
-                    position + DVec3::Z * (size * (0.3 + 0.06 * k as f64))
-                }
+            let setting = Setting {
+                entity: entity_name(&outcomes[k].name),
+                index: k,
+                tree: trees[k].as_ref(),
             };
-            rec.log(
-                format!("world/{name}/label"),
-                &rerun::Points3D::new([label_at.as_vec3().to_array()]),
+            log_row(
+                &recording,
+                &body,
+                &setting,
+                track,
+                values,
+                &mut path_ends[k],
             )?;
-            let value = |plot: &str| -> f64 {
-                match plot {
-                    "height" => position.z,
-                    "speed" => velocity.length(),
-                    "penetration_mm" => 1e3 * table.get(values, "penetration"),
-                    "forward_x" => position.x,
-                    "body_z" => table.get(values, "z"),
-                    "roll_deg" => table.get(values, "roll").to_degrees(),
-                    "pitch_deg" => table.get(values, "pitch").to_degrees(),
-                    "feet_normal_force" => crate::robot::LEG_NAMES
-                        .iter()
-                        .map(|l| table.get(values, &format!("{l}_normal")))
-                        .sum(),
-                    // the feet's slip speeds summed: how much the stance feet slide
-                    "feet_slip" => crate::robot::LEG_NAMES
-                        .iter()
-                        .map(|l| table.get(values, &format!("{l}_slip")))
-                        .sum(),
-                    other => table.get(values, other),
-                }
-            };
-            for plot in plots {
-                rec.log(
-                    format!("plots/{plot}/{name}"),
-                    &rerun::Scalars::new([value(plot)]),
-                )?;
-            }
         }
     }
     recording.finish()
 }
 
+/// Logs setting `k`'s static parts in its colour: its series' names, its path's colour, its
+/// body (a tinted copy of the robot, or a ball) and its label; the robot's link tree.
+fn log_setting(
+    rec: &rerun::RecordingStream,
+    body: &Body,
+    k: usize,
+    name: &str,
+) -> Result<Option<LinkTree>> {
+    let color = COLORS[k % COLORS.len()];
+    let entity = entity_name(name);
+    for plot in body.plots() {
+        rec.log_static(
+            format!("plots/{plot}/{entity}"),
+            &rerun::SeriesLines::new()
+                .with_names([name])
+                .with_colors([color]),
+        )?;
+    }
+    rec.log_static(
+        format!("world/paths/{entity}"),
+        &rerun::LineStrips3D::update_fields().with_colors([color]),
+    )?;
+    let tree = match body {
+        Body::Robot(model) => {
+            let root = format!("world/{entity}/robot");
+            Some(LinkTree::log_tinted(rec, model, &root, Some(color))?)
+        }
+        Body::Ball { radius } => {
+            rec.log_static(
+                format!("world/{entity}/ball"),
+                &rerun::Ellipsoids3D::from_radii([*radius as f32])
+                    .with_colors([color])
+                    .with_fill_mode(rerun::FillMode::Solid),
+            )?;
+            None
+        }
+    };
+    rec.log_static(
+        format!("world/{entity}/label"),
+        &rerun::Points3D::update_fields()
+            .with_colors([color])
+            .with_radii([0.004f32])
+            .with_labels([name])
+            .with_show_labels(true),
+    )?;
+    Ok(tree)
+}
+
+/// One camera for all, still, framing every setting's path (and the body's size).
+fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<()> {
+    let (low, high) = tracks
+        .iter()
+        .flatten()
+        .flat_map(|t| t.table.rows.iter().map(move |r| t.position(r)))
+        .filter(|p| p.is_finite())
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
+    let (centre, spread) = if low.is_finite() {
+        (0.5 * (low + high), 0.5 * (high - low).truncate().length())
+    } else {
+        (DVec3::ZERO, 0.0)
+    };
+    let mut camera = FollowCamera::new(size.max(spread), false);
+    let overview = camera.follow(centre, 0.0, 0.0);
+    recording
+        .stream()
+        .log_static("world/camera", &camera::transform(&overview))
+        .map_err(Into::into)
+}
+
+/// A setting as its rows are logged.
+struct Setting<'a> {
+    entity: String,
+    /// Its place in the comparison: its colour, and its label's height above the others'.
+    index: usize,
+    tree: Option<&'a LinkTree>,
+}
+
+/// Logs one setting's row: its path's next segment, its body (the robot's links from the
+/// joint angles, or the ball), its label and its plots.
+fn log_row(
+    recording: &Recording,
+    body: &Body,
+    setting: &Setting,
+    track: &Track,
+    values: &[f64],
+    path_end: &mut Option<[f32; 3]>,
+) -> Result<()> {
+    let rec = recording.stream();
+    let name = &setting.entity;
+    let position = track.position(values);
+    let point = position.as_vec3().to_array();
+    if let Some(end) = *path_end {
+        rec.log(
+            format!("world/paths/{name}"),
+            &rerun::LineStrips3D::new([[end, point]]),
+        )?;
+    }
+    *path_end = Some(point);
+    let k = setting.index as f64;
+    let label_at = match body {
+        Body::Robot(model) => {
+            if let (Some(tree), Some((pose, q))) = (setting.tree, track.pose(values)) {
+                let frames: Vec<DAffine3> =
+                    model.link_poses(&q).into_iter().map(|f| pose * f).collect();
+                tree.log_frames(rec, model, &frames, false, false)?;
+            }
+            // stacked above the body, one line per setting, as the robots overlap
+            position + DVec3::Z * (body.size() * (0.6 + 0.12 * k))
+        }
+        Body::Ball { .. } => {
+            rec.log(
+                format!("world/{name}/ball"),
+                &rerun::Transform3D::from_translation(point),
+            )?;
+            position + DVec3::Z * (body.size() * (0.3 + 0.06 * k))
+        }
+    };
+    rec.log(
+        format!("world/{name}/label"),
+        &rerun::Points3D::new([label_at.as_vec3().to_array()]),
+    )?;
+    for (p, plot) in body.plots().iter().enumerate() {
+        rec.log(
+            format!("plots/{plot}/{name}"),
+            &rerun::Scalars::new([track.plot(body, p, values)]),
+        )?;
+    }
+    Ok(())
+}
+
 /// A setting's name as an entity path part (spaces would need escaping).
 fn entity_name(name: &str) -> String {
     name.replace(' ', "_")
-}
-
-/// Logs a robot's links at a trajectory row: the body's pose from its position and roll, pitch,
-/// yaw (z-y-x), the links from the joint angles.
-fn log_robot(
-    rec: &rerun::RecordingStream,
-    model: &RobotModel,
-    tree: Option<&LinkTree>,
-    table: &Table,
-    values: &[f64],
-) -> Result<()> {
-    let Some(tree) = tree else {
-        return Ok(());
-    };
-    let body = DAffine3::from_rotation_translation(
-        DQuat::from_euler(
-            glam::EulerRot::ZYX,
-            table.get(values, "yaw"),
-            table.get(values, "pitch"),
-            table.get(values, "roll"),
-        ),
-        DVec3::new(
-            table.get(values, "x"),
-            table.get(values, "y"),
-            table.get(values, "z"),
-        ),
-    );
-    let q: Vec<f64> = model
-        .joints
-        .iter()
-        .map(|j| table.get(values, &format!("{}_angle", j.name)))
-        .collect();
-    let frames: Vec<DAffine3> = model.link_poses(&q).into_iter().map(|f| body * f).collect();
-    tree.log_frames(rec, model, &frames, false, false)
 }

@@ -1,16 +1,17 @@
-//! Observers for the ball experiment: rerun recording and trajectory CSV (its metrics:
+//! The ball experiment's outputs: its rerun recording and its trajectory's columns (its metrics:
 //! `crate::metrics`).
 
-use super::Observer;
 use super::background::Background;
 use super::blueprint::{History, Layout, View};
 use super::camera::{self, FollowCamera};
 use super::rerun::Recording;
-use super::table::CsvTable;
-use crate::sim::{BallConfig, BallSample};
+use super::table::RowOf;
+use super::{Observer, Scene};
+use crate::sim::{BallConfig, BallSample, BallSim};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Records the ball, its contact force, its path and time series to rerun, every `every` steps,
 /// with a camera that follows the ball.
@@ -142,77 +143,88 @@ impl BallRecorder {
     }
 }
 
-/// Writes every `every`-th sample as a CSV row.
-pub struct BallTrajectory {
-    table: CsvTable,
-    every: u64,
+/// The ball run as its outputs see it: the recorder's set-up and the trajectory's columns.
+pub struct BallScene {
+    pub name: String,
+    pub dt: f64,
+    pub terrain: Arc<HeightGrid>,
+    pub ball: BallConfig,
+    pub every: u64,
 }
 
-impl BallTrajectory {
-    pub const HEADER: [&str; 19] = [
-        "time",
-        "x",
-        "y",
-        "z",
-        "vx",
-        "vy",
-        "vz",
-        "wx",
-        "wy",
-        "wz",
-        "fx",
-        "fy",
-        "fz",
-        "normal_force",
-        "penetration",
-        "kinetic_energy",
-        "potential_energy",
-        "total_energy",
-        "slip",
-    ];
+/// The trajectory's columns.
+pub const COLUMNS: [&str; 19] = [
+    "time",
+    "x",
+    "y",
+    "z",
+    "vx",
+    "vy",
+    "vz",
+    "wx",
+    "wy",
+    "wz",
+    "fx",
+    "fy",
+    "fz",
+    "normal_force",
+    "penetration",
+    "kinetic_energy",
+    "potential_energy",
+    "total_energy",
+    "slip",
+];
 
-    pub fn create(path: &Path, every: u64) -> Result<Self> {
-        Ok(BallTrajectory {
-            table: CsvTable::create(path, Self::HEADER)?,
-            every,
-        })
-    }
+/// A sample's row, in the order of [`COLUMNS`].
+fn row(s: &BallSample, row: &mut Vec<f64>) {
+    let force = s.contact.map_or(glam::DVec3::ZERO, |c| c.force);
+    let (normal, depth) = s
+        .contact
+        .map_or((0.0, 0.0), |c| (c.normal_force, c.penetration));
+    row.extend([
+        s.time,
+        s.position.x,
+        s.position.y,
+        s.position.z,
+        s.velocity.x,
+        s.velocity.y,
+        s.velocity.z,
+        s.angular_velocity.x,
+        s.angular_velocity.y,
+        s.angular_velocity.z,
+        force.x,
+        force.y,
+        force.z,
+        normal,
+        depth,
+        s.kinetic_energy,
+        s.potential_energy,
+        s.total_energy(),
+        s.contact.map_or(0.0, |c| c.slip.length()),
+    ]);
 }
 
-impl<W: ?Sized> Observer<BallSample, W> for BallTrajectory {
-    fn finish(&mut self, _complete: bool) -> Result<Option<PathBuf>> {
-        self.table.finish()
+impl Scene for BallScene {
+    type Sample = BallSample;
+    type World = BallSim;
+
+    fn recorder(&self, path: &Path) -> Result<Box<dyn Observer<BallSample, BallSim>>> {
+        let recorder = BallRecorder::create(
+            path,
+            self.name.clone(),
+            self.dt,
+            &self.terrain,
+            &self.ball,
+            self.every,
+        )?;
+        Ok(Box::new(recorder.in_background()))
     }
 
-    fn observe(&mut self, s: &BallSample, _: &W) -> Result<()> {
-        if !s.step.is_multiple_of(self.every) {
-            return Ok(());
-        }
-        let force = s.contact.map_or(glam::DVec3::ZERO, |c| c.force);
-        let (normal, depth) = s
-            .contact
-            .map_or((0.0, 0.0), |c| (c.normal_force, c.penetration));
-        let row = [
-            s.time,
-            s.position.x,
-            s.position.y,
-            s.position.z,
-            s.velocity.x,
-            s.velocity.y,
-            s.velocity.z,
-            s.angular_velocity.x,
-            s.angular_velocity.y,
-            s.angular_velocity.z,
-            force.x,
-            force.y,
-            force.z,
-            normal,
-            depth,
-            s.kinetic_energy,
-            s.potential_energy,
-            s.total_energy(),
-            s.contact.map_or(0.0, |c| c.slip.length()),
-        ];
-        self.table.row(&row)
+    fn columns(&self) -> (Vec<String>, RowOf<BallSample>) {
+        (COLUMNS.map(String::from).to_vec(), row)
+    }
+
+    fn every(&self) -> u64 {
+        self.every
     }
 }

@@ -1,12 +1,13 @@
-//! Observers for a hexapod run: rerun recording and trajectory CSV (its metrics: `crate::metrics`).
+//! A walk's outputs: its rerun recording and its trajectory's columns (its metrics:
+//! `crate::metrics`).
 
-use super::Observer;
 use super::background::Background;
 use super::blueprint::{History, Layout, View};
 use super::camera::{self, FollowCamera};
 use super::links::LinkTree;
 use super::rerun::Recording;
-use super::table::CsvTable;
+use super::table::RowOf;
+use super::{Observer, Scene};
 use crate::robot::{LEG_NAMES, RobotModel};
 use crate::sim::{WalkSample, Walker};
 use crate::terrain::HeightGrid;
@@ -364,79 +365,98 @@ impl HexapodRecorder {
     }
 }
 
-/// Writes every `every`-th step as a CSV row: time, body pose and velocity, joint angles, targets
-/// and torques, and per foot its force, contact state and slip speed.
-pub struct HexapodTrajectory {
-    table: CsvTable,
-    every: u64,
+/// A walk as its outputs see it: the recorder's set-up and the trajectory's columns.
+pub struct WalkScene {
+    pub name: String,
+    pub dt: f64,
+    pub terrain: Arc<HeightGrid>,
+    pub robot: Arc<RobotModel>,
+    pub every: u64,
+    /// Whether links can drift from their joints (impulse joints): the recording then logs each
+    /// link's full pose.
+    pub joints_drift: bool,
 }
 
-impl HexapodTrajectory {
-    pub fn create(path: &Path, model: &RobotModel, every: u64) -> Result<Self> {
-        let mut header: Vec<String> = [
+/// A sample's trajectory row: time, body pose and velocity, joint angles, targets and torques,
+/// and per foot its force, contact state and slip speed (the columns of [`WalkScene`]).
+fn row(s: &WalkSample, row: &mut Vec<f64>) {
+    let r = &s.robot;
+    let (roll, pitch, yaw) = r.roll_pitch_yaw();
+    let p = r.body.translation;
+    row.extend([
+        r.time,
+        p.x,
+        p.y,
+        p.z,
+        roll,
+        pitch,
+        yaw,
+        r.body_velocity.x,
+        r.body_velocity.y,
+        r.body_velocity.z,
+        r.body_angular_velocity.x,
+        r.body_angular_velocity.y,
+        r.body_angular_velocity.z,
+    ]);
+    row.extend(&r.joint_angles);
+    row.extend(&r.joint_targets);
+    row.extend(&r.joint_torques);
+    for c in &r.foot_contacts {
+        match c {
+            Some(c) => row.extend([
+                c.force.x,
+                c.force.y,
+                c.force.z,
+                c.normal_force,
+                1.0,
+                c.slip.length(),
+            ]),
+            None => row.extend([0.0; 6]),
+        }
+    }
+}
+
+impl Scene for WalkScene {
+    type Sample = WalkSample;
+    type World = Walker;
+
+    fn recorder(&self, path: &Path) -> Result<Box<dyn Observer<WalkSample, Walker>>> {
+        let recorder = HexapodRecorder::create(
+            path,
+            self.name.clone(),
+            self.dt,
+            &self.terrain,
+            &self.robot,
+            self.every,
+            self.joints_drift,
+        )?;
+        Ok(Box::new(recorder.in_background(self.robot.clone())))
+    }
+
+    fn columns(&self) -> (Vec<String>, RowOf<WalkSample>) {
+        let mut columns: Vec<String> = [
             "time", "x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz",
         ]
         .map(String::from)
         .to_vec();
         for suffix in ["angle", "target", "torque"] {
-            header.extend(model.joints.iter().map(|j| format!("{}_{suffix}", j.name)));
+            columns.extend(
+                self.robot
+                    .joints
+                    .iter()
+                    .map(|j| format!("{}_{suffix}", j.name)),
+            );
         }
         for leg in LEG_NAMES {
-            header.extend(
+            columns.extend(
                 ["fx", "fy", "fz", "normal", "contact", "slip"].map(|q| format!("{leg}_{q}")),
             );
         }
-        Ok(HexapodTrajectory {
-            table: CsvTable::create(path, header)?,
-            every,
-        })
-    }
-}
-
-impl<W: ?Sized> Observer<WalkSample, W> for HexapodTrajectory {
-    fn finish(&mut self, _complete: bool) -> Result<Option<PathBuf>> {
-        self.table.finish()
+        (columns, row)
     }
 
-    fn observe(&mut self, s: &WalkSample, _: &W) -> Result<()> {
-        let r = &s.robot;
-        if !r.step.is_multiple_of(self.every) {
-            return Ok(());
-        }
-        let (roll, pitch, yaw) = r.roll_pitch_yaw();
-        let p = r.body.translation;
-        let mut row = vec![
-            r.time,
-            p.x,
-            p.y,
-            p.z,
-            roll,
-            pitch,
-            yaw,
-            r.body_velocity.x,
-            r.body_velocity.y,
-            r.body_velocity.z,
-            r.body_angular_velocity.x,
-            r.body_angular_velocity.y,
-            r.body_angular_velocity.z,
-        ];
-        row.extend(&r.joint_angles);
-        row.extend(&r.joint_targets);
-        row.extend(&r.joint_torques);
-        for c in &r.foot_contacts {
-            match c {
-                Some(c) => row.extend([
-                    c.force.x,
-                    c.force.y,
-                    c.force.z,
-                    c.normal_force,
-                    1.0,
-                    c.slip.length(),
-                ]),
-                None => row.extend([0.0; 6]),
-            }
-        }
-        self.table.row(&row)
+    fn every(&self) -> u64 {
+        self.every
     }
 }
 

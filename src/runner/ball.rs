@@ -5,9 +5,8 @@ use super::step_loop::{self, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::metrics::BallMetrics;
-use crate::record::ball::{BallRecorder, BallTrajectory};
-use crate::record::progress::Progress;
-use crate::record::{Observer, decimation};
+use crate::record::ball::BallScene;
+use crate::record::{self, Observer, decimation};
 use crate::sim::{BallConfig, BallSample, BallSim};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
@@ -64,35 +63,23 @@ impl Stepper for Dropping {
 }
 
 impl BallRun {
-    /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
+    /// Runs the set-up, which the scenario layer has checked field by field when it resolved it
     /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<BallOutcome> {
-        self.outputs.check_writable()?;
         let sim = BallSim::new(self.ball, self.terrain.clone(), self.contact, self.dt);
         let every = decimation(self.log_rate, self.dt);
         let initial = sim.sample();
 
-        let mut observers: Vec<Box<dyn Observer<BallSample, BallSim>>> = Vec::new();
-        if let Some(path) = &self.outputs.record {
-            let recorder = BallRecorder::create(
-                path,
-                format!("ball on {}", self.terrain_name),
-                self.dt,
-                &self.terrain,
-                &self.ball,
-                every,
-            )?;
-            observers.push(Box::new(recorder.in_background()));
-        }
-        if let Some(path) = &self.outputs.trajectory {
-            observers.push(Box::new(BallTrajectory::create(path, every)?));
-        }
-        if let Some(progress) = self.outputs.progress {
-            observers.push(Box::new(Progress::new(progress)));
-        }
+        let scene = BallScene {
+            name: format!("ball on {}", self.terrain_name),
+            dt: self.dt,
+            terrain: self.terrain.clone(),
+            ball: self.ball,
+            every,
+        };
+        let (mut observers, metrics_file) = record::observers(&scene, self.outputs)?;
         // last: its file is written once the others are complete
-        let mut metrics =
-            BallMetrics::new(&initial, self.ball.radius, self.outputs.metrics.clone());
+        let mut metrics = BallMetrics::new(&initial, self.ball.radius, metrics_file);
 
         let steps = (self.duration / self.dt).round() as u64;
         let mut dropping = Dropping {

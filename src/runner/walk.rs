@@ -7,9 +7,8 @@ use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, Fitted, GaitController, VelocityCommand};
 use crate::metrics::{GroundMetrics, HexapodMetrics, StanceMetrics};
-use crate::record::hexapod::{HexapodRecorder, HexapodTrajectory};
-use crate::record::progress::Progress;
-use crate::record::{Observer, decimation};
+use crate::record::hexapod::WalkScene;
+use crate::record::{self, Observer, decimation};
 use crate::robot::RobotModel;
 use crate::sim::{Articulation, Hexapod, HexapodSettings, Placement, WalkSample, Walker};
 use crate::terrain::HeightGrid;
@@ -83,7 +82,7 @@ impl Stepper for Walking {
 }
 
 impl WalkRun {
-    /// Runs the set-up, which [`crate::scenario::Scenario::resolve`] has checked field by field
+    /// Runs the set-up, which the scenario layer has checked field by field when it resolved it
     /// (every command builds its runs from a scenario).
     pub fn execute(self) -> Result<WalkOutcome> {
         let mut session = self.start()?;
@@ -94,7 +93,6 @@ impl WalkRun {
     /// Builds the world and the outputs and stands the robot at its start, ready to step:
     /// [`WalkRun::execute`] is this, every planned step, and [`WalkSession::finish`].
     pub fn start(self) -> Result<WalkSession> {
-        self.outputs.check_writable()?;
         let controller = GaitController::new(&self.robot, self.gait.gait.clone())
             .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?;
         let pose = self.robot.pose_from_legs(&controller.standing_angles());
@@ -111,38 +109,22 @@ impl WalkRun {
         walker.terrain_following = self.terrain_following;
         let every = decimation(self.log_rate, dt);
 
-        let mut observers: Vec<Box<dyn Observer<WalkSample, Walker>>> = Vec::new();
-        if let Some(path) = &self.outputs.record {
-            let name = match self.settings.articulation {
-                Articulation::Multibody => {
-                    format!("{} on {}", self.gait.gait.name, self.terrain_name)
-                }
-                Articulation::Impulse => format!(
-                    "{} on {} (impulse joints)",
-                    self.gait.gait.name, self.terrain_name
-                ),
-            };
-            let recorder = HexapodRecorder::create(
-                path,
-                name,
-                dt,
-                &self.terrain,
-                &self.robot,
-                every,
-                self.settings.articulation == Articulation::Impulse,
-            )?;
-            observers.push(Box::new(recorder.in_background(self.robot.clone())));
-        }
-        if let Some(path) = &self.outputs.trajectory {
-            observers.push(Box::new(HexapodTrajectory::create(
-                path,
-                &self.robot,
-                every,
-            )?));
-        }
-        if let Some(progress) = self.outputs.progress {
-            observers.push(Box::new(Progress::new(progress)));
-        }
+        let name = match self.settings.articulation {
+            Articulation::Multibody => format!("{} on {}", self.gait.gait.name, self.terrain_name),
+            Articulation::Impulse => format!(
+                "{} on {} (impulse joints)",
+                self.gait.gait.name, self.terrain_name
+            ),
+        };
+        let scene = WalkScene {
+            name,
+            dt,
+            terrain: self.terrain.clone(),
+            robot: self.robot.clone(),
+            every,
+            joints_drift: self.settings.articulation == Articulation::Impulse,
+        };
+        let (observers, metrics_file) = record::observers(&scene, self.outputs)?;
         // last: its file is written once the others are complete
         let mut metrics = HexapodMetrics::new(
             dt,
@@ -152,7 +134,7 @@ impl WalkRun {
                 .iter()
                 .map(|j| (j.lower, j.upper))
                 .collect(),
-            self.outputs.metrics.clone(),
+            metrics_file,
         )
         .on_terrain(self.terrain.x_range(), self.terrain.y_range());
         metrics.stance = StanceMetrics::of(&self.gait, &self.robot);

@@ -9,7 +9,7 @@ pub mod spec;
 pub mod sweep;
 
 pub use crate::metrics::Metrics;
-pub use crate::runner::Outputs;
+pub use crate::runner::{Output, Outputs};
 pub use expect::Check;
 pub use spec::{FileOr, Kind, ScenarioSpec};
 
