@@ -27,9 +27,12 @@
 //! one that does not, and the search goes on. Every evaluation is a line of the JSON Lines log
 //! (`log`), which is also what a resumed or sharded search replays.
 
+pub mod check;
 pub mod log;
 mod parameters;
 pub mod recording;
+pub mod results;
+pub mod search;
 
 pub use parameters::{Domain, Parameter, searchable};
 use parameters::{Range, parameter, set, start_point};
@@ -372,6 +375,14 @@ fn resolve(
 }
 
 impl Optimization {
+    /// Candidates a generation: the file's `population`, else CMA-ES's default 4 + ⌊3 ln n⌋ for
+    /// n parameters.
+    pub fn population_size(&self) -> usize {
+        let dim = self.parameters.len() as f64;
+        self.population
+            .unwrap_or((4.0 + 3.0 * dim.ln()).floor() as usize)
+    }
+
     /// The optimisation file's stem, naming its recordings.
     pub fn name(&self) -> String {
         stem(&self.file.to_string_lossy())
