@@ -195,46 +195,72 @@ pub enum OrientationChoice {
     Paper,
 }
 
-/// The contact's parameters as written in a file or on the command line; defaults are the
-/// reference contact of shared/reference §2.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// The contact's parameters, each defined once: a scenario's `[contact]` field and, with the same
+/// doc, `hexsim run`'s and `hexsim ball`'s option (named after the field, but where the option
+/// says more: `--normal-law`, `--hc-exponent`, `--friction-width`, `--contact-model`). Defaults
+/// are the reference contact of shared/reference §2; the physics of each is in
+/// [`crate::contact::ContactModel`], which [`ContactSpec::model`] builds.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(deny_unknown_fields, default)]
 pub struct ContactSpec {
+    /// Normal force law.
+    #[arg(long = "normal-law", value_enum, default_value_t = ContactSpec::default().normal)]
     pub normal: NormalChoice,
-    /// k (N/m; Hunt–Crossley N/mⁿ). Left out: the reference contact's, fitted to a walking
-    /// robot's weight (see `scenario::resolve`).
+    /// Normal stiffness k (N/m; for Hunt–Crossley N/mⁿ). Default: the reference 2e4 for a ball;
+    /// for a walk, the reference fitted to the robot's weight (hex18's: 2e4).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[arg(long)]
     pub stiffness: Option<f64>,
-    /// c (N·s/m; Hunt–Crossley's d in s/m). Left out: as the stiffness.
+    /// Normal damping c (N·s/m; for Hunt–Crossley d in s/m). Default: the reference 150 for a
+    /// ball; for a walk, the reference fitted to the robot's weight (hex18's: 150).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[arg(long)]
     pub damping: Option<f64>,
-    /// Hunt–Crossley's n.
+    /// Hunt–Crossley exponent n.
+    #[arg(long = "hc-exponent", default_value_t = ContactSpec::default().exponent)]
     pub exponent: f64,
+    /// Friction law.
+    #[arg(long, value_enum, default_value_t = ContactSpec::default().friction)]
     pub friction: FrictionChoice,
+    /// Static friction coefficient μs (Karnopp, Stribeck).
+    #[arg(long, default_value_t = ContactSpec::default().mu_static)]
     pub mu_static: f64,
-    /// Karnopp's μk, Coulomb's μ, Stribeck's Coulomb level.
+    /// Kinetic friction coefficient μk (Karnopp; Coulomb's μ; Stribeck's Coulomb level).
+    #[arg(long, default_value_t = ContactSpec::default().mu_kinetic)]
     pub mu_kinetic: f64,
-    /// Karnopp's stick band Δv (m/s).
+    /// Karnopp stick band Δv (m/s).
+    #[arg(long, default_value_t = ContactSpec::default().stick_band)]
     pub stick_band: f64,
     /// Regularisation width of Coulomb and Stribeck (m/s).
+    #[arg(long = "friction-width", default_value_t = ContactSpec::default().width)]
     pub width: f64,
-    /// Viscous coefficient (N·s/m).
+    /// Viscous friction coefficient (N·s/m; viscous law, Stribeck's viscous part).
+    #[arg(long, default_value_t = ContactSpec::default().viscous)]
     pub viscous: f64,
+    /// Stribeck velocity (m/s).
+    #[arg(long, default_value_t = ContactSpec::default().stribeck_velocity)]
     pub stribeck_velocity: f64,
+    /// How the ground's orientation is found.
+    #[arg(long, value_enum, default_value_t = ContactSpec::default().orientation)]
     pub orientation: OrientationChoice,
-    /// The paper's XE = YE (m).
+    /// The paper's half-step XE = YE (m) for its finite-difference angles.
+    #[arg(long, default_value_t = ContactSpec::default().paper_step)]
     pub paper_step: f64,
-    /// Fraction of a sticking contact's drift its stick force undoes per step (0: off; see
-    /// `ContactModel::drift_recovery`).
+    /// Fraction of a sticking contact's drift that its stick force undoes per step (0: off, each
+    /// friction law as its equation; the default halves the creep of a foot under a changing load).
+    #[arg(long, default_value_t = ContactSpec::default().drift_recovery)]
     pub drift_recovery: f64,
-    /// Rolling resistance ρ (m): torque ≤ ρ·Fn against rolling (0: none; see
-    /// `ContactModel::rolling_resistance`).
+    /// Rolling resistance ρ (m): a torque of at most ρ·Fn against rolling (0: none; a sphere's
+    /// rolling-resistance coefficient is ρ/r).
+    #[arg(long, default_value_t = ContactSpec::default().rolling_resistance)]
     pub rolling_resistance: f64,
-    /// Spin friction μ_t (m): torque ≤ μ_t·Fn against the spin about the normal (0: none; see
-    /// `ContactModel::spin_friction`).
+    /// Spin friction μ_t (m): a torque of at most μ_t·Fn against the spin about the ground's
+    /// normal (0: none; MuJoCo's torsional friction, condim 4).
+    #[arg(long, default_value_t = ContactSpec::default().spin_friction)]
     pub spin_friction: f64,
-    /// hexsim's contact or the paper's step for step (which reads the terrain with the paper's
-    /// orientation, `paper_step`, and has no drift recovery).
+    /// Contact model: hexsim's, or the paper's step for step (vertical penetration, its angles
+    /// with --paper-step, explicit damper, friction laws unlimited, forces at the sphere's centre).
+    #[arg(long = "contact-model", value_enum, default_value_t = ContactSpec::default().variant)]
     pub variant: VariantChoice,
 }
 
