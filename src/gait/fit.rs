@@ -614,4 +614,32 @@ mod tests {
             "{e}"
         );
     }
+
+    /// hex18 standing in its fitted pose gets the reference servo; legs ten times as heavy get
+    /// ten times the stiffness and damping (same bandwidth, same damping time).
+    #[test]
+    fn heavier_legs_get_proportionally_stiffer_servos() {
+        use crate::robot::servo::{
+            BANDWIDTH, REFERENCE_DAMPING, REFERENCE_STIFFNESS, fitted_gains, outboard_inertias,
+        };
+        let model = crate::robot::hex18_for_tests();
+        let pose = fit(&model, &tripod()).unwrap().standing_pose;
+        let (k, d) = fitted_gains(&model, &pose);
+        let coxa = outboard_inertias(&model, &pose)[model.legs[0].joints[0]];
+        assert!(BANDWIDTH * BANDWIDTH * coxa < REFERENCE_STIFFNESS * 1.05);
+        assert_eq!((k, d), (REFERENCE_STIFFNESS, REFERENCE_DAMPING));
+        let mut heavy = model.clone();
+        for leg in &model.legs {
+            for &j in &leg.joints {
+                let link = &mut heavy.links[model.joints[j].child];
+                link.mass *= 10.0;
+                link.inertia *= 10.0;
+            }
+        }
+        let (k10, d10) = fitted_gains(&heavy, &pose);
+        let heavy_coxa = outboard_inertias(&heavy, &pose)[model.legs[0].joints[0]];
+        assert!((heavy_coxa / coxa - 10.0).abs() < 1e-9);
+        assert!((k10 - BANDWIDTH * BANDWIDTH * heavy_coxa).abs() < 1e-9);
+        assert!((d10 / k10 - REFERENCE_DAMPING / REFERENCE_STIFFNESS).abs() < 1e-12);
+    }
 }

@@ -434,6 +434,10 @@ fn shape(
     }
 }
 
+/// The model of a parsed URDF, in named steps: its bodies (links welded by fixed joints merged),
+/// joints and shapes read from the root down; masses checked; feet found where none is given;
+/// legs and the walking direction found; then its size checked, its inertias warned about and
+/// its unstated efforts fitted.
 fn build(
     robot: &urdf_rs::Robot,
     base: &Path,
@@ -444,106 +448,145 @@ fn build(
         forward,
         gait: gait_hints,
     } = settings;
-    let feet = feet.as_ref();
     let tree = tree(robot)?;
-    let mut warnings = Vec::new();
-    let mut mesh_problems = MeshProblems::default();
-    let mut unstated = Unstated::default();
-    // each body's collision and visual shapes, in its frame: where a foot is found if none is given
-    let mut shapes: Vec<(Vec<Placed>, Vec<Placed>)> = Vec::new();
-    // Walk the tree from the root, parents before children. Each URDF link maps to a body (itself,
-    // or the body it is welded to by fixed joints) and its pose in that body's frame.
-    let mut body_of = vec![usize::MAX; robot.links.len()];
-    let mut in_body = vec![DAffine3::IDENTITY; robot.links.len()];
-    let mut links: Vec<Link> = Vec::new();
-    let mut joints: Vec<Joint> = Vec::new();
+    let mut bodies = Bodies::new(robot, base, feet.as_ref());
+    // Walk the tree from the root, parents before children.
     let mut order = vec![tree.root];
     let mut cursor = 0;
     while cursor < order.len() {
         let k = order[cursor];
         cursor += 1;
-        let urdf_link = &robot.links[k];
-        match tree.parent[k] {
-            None => {
-                body_of[k] = links.len();
-                links.push(empty_link(&urdf_link.name, None));
-                shapes.push(Default::default());
+        bodies.attach(k, tree.parent[k], &tree)?;
+        bodies.fold(k)?;
+        for &j in &tree.children[k] {
+            order.push(tree.index[robot.joints[j].child.link.as_str()]);
+        }
+    }
+    let Bodies {
+        mut links,
+        joints,
+        shapes,
+        mesh_problems,
+        unstated,
+        ..
+    } = bodies;
+    check_masses(&links)?;
+    let mut warnings: Vec<String> = impossible_inertia_warning(&links).into_iter().collect();
+    warnings.extend(mesh_problems.warnings());
+    let unfound = if feet.is_none() {
+        let (unfound, warning) = find_feet(&mut links, &joints, &shapes, base);
+        warnings.extend(warning);
+        unfound
+    } else {
+        Vec::new()
+    };
+    let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
+    let mut joints = joints;
+    legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
+    let mut model = RobotModel {
+        name: robot.name.clone(),
+        source: PathBuf::new(),
+        links,
+        joints,
+        legs,
+        forward,
+        gait_hints,
+        warnings,
+    };
+    check_size(&model)?;
+    warn_implausible_inertias(&mut model);
+    unstated.fill(&mut model);
+    Ok(model)
+}
+
+/// The model's bodies as the URDF's links are read: each URDF link maps to a body (itself, or
+/// the body it is welded to by fixed joints) and its pose in that body's frame.
+struct Bodies<'a> {
+    robot: &'a urdf_rs::Robot,
+    base: &'a Path,
+    /// The robot file's feet, which replace the URDF's.
+    feet: Option<&'a FeetConfig>,
+    body_of: Vec<usize>,
+    in_body: Vec<DAffine3>,
+    links: Vec<Link>,
+    joints: Vec<Joint>,
+    /// Each body's collision and visual shapes, in its frame: where a foot is found if none is
+    /// given.
+    shapes: Vec<(Vec<Placed>, Vec<Placed>)>,
+    mesh_problems: MeshProblems,
+    unstated: Unstated,
+}
+
+impl<'a> Bodies<'a> {
+    fn new(robot: &'a urdf_rs::Robot, base: &'a Path, feet: Option<&'a FeetConfig>) -> Self {
+        Bodies {
+            robot,
+            base,
+            feet,
+            body_of: vec![usize::MAX; robot.links.len()],
+            in_body: vec![DAffine3::IDENTITY; robot.links.len()],
+            links: Vec::new(),
+            joints: Vec::new(),
+            shapes: Vec::new(),
+            mesh_problems: MeshProblems::default(),
+            unstated: Unstated::default(),
+        }
+    }
+
+    /// Gives URDF link `k` its body: a new one for the root or a revolute joint's child, its
+    /// parent's for a fixed joint's.
+    fn attach(&mut self, k: usize, parent_joint: Option<usize>, tree: &Tree) -> Result<(), String> {
+        let urdf_link = &self.robot.links[k];
+        let Some(j) = parent_joint else {
+            self.body_of[k] = self.links.len();
+            self.links.push(empty_link(&urdf_link.name, None));
+            self.shapes.push(Default::default());
+            return Ok(());
+        };
+        let joint = &self.robot.joints[j];
+        let parent = tree.index[joint.parent.link.as_str()];
+        let origin = self.in_body[parent] * pose(&joint.origin);
+        match &joint.joint_type {
+            urdf_rs::JointType::Fixed => {
+                self.body_of[k] = self.body_of[parent];
+                self.in_body[k] = origin;
+                self.links[self.body_of[k]]
+                    .merged
+                    .push(urdf_link.name.clone());
             }
-            Some(j) => {
-                let joint = &robot.joints[j];
-                let parent = tree.index[joint.parent.link.as_str()];
-                let origin = in_body[parent] * pose(&joint.origin);
-                match &joint.joint_type {
-                    urdf_rs::JointType::Fixed => {
-                        body_of[k] = body_of[parent];
-                        in_body[k] = origin;
-                        links[body_of[k]].merged.push(urdf_link.name.clone());
-                    }
-                    urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
-                        let axis = DVec3::from_array(joint.axis.xyz.0);
-                        if !(axis.is_finite() && axis.length() > 1e-9) {
-                            return Err(format!(
-                                "joint `{}`: <axis xyz> must have a non-zero length, got {axis}",
-                                joint.name
-                            ));
-                        }
-                        let (mut lower, mut upper) =
-                            if matches!(joint.joint_type, urdf_rs::JointType::Continuous) {
-                                (f64::NEG_INFINITY, f64::INFINITY)
-                            } else {
-                                (joint.limit.lower, joint.limit.upper)
-                            };
-                        // a CAD exporter's placeholders (lower = upper = 0, effort = 0; also
-                        // what a missing <limit> reads as): the limits are absent
-                        if lower == 0.0 && upper == 0.0 {
-                            (lower, upper) = (-UNSTATED_RANGE, UNSTATED_RANGE);
-                            unstated.range.push(joint.name.clone());
-                        }
-                        let ordered = lower < upper;
-                        if !ordered {
-                            return Err(format!(
-                                "joint `{}`: a revolute joint needs <limit lower=… upper=…> with lower < upper, got lower = {lower}, upper = {upper}",
-                                joint.name
-                            ));
-                        }
-                        let mut effort = joint.limit.effort;
-                        if effort == 0.0 {
-                            effort = f64::NAN; // fitted to the robot's weight once its legs are known
-                            unstated.effort.push(joint.name.clone());
-                        }
-                        if !(effort.is_nan() || effort.is_finite() && effort > 0.0) {
-                            return Err(format!(
-                                "joint `{}`: <limit effort> (the servo's torque limit, N·m) must be > 0, got {effort}",
-                                joint.name
-                            ));
-                        }
-                        body_of[k] = links.len();
-                        links.push(empty_link(&urdf_link.name, Some(joints.len())));
-                        shapes.push(Default::default());
-                        joints.push(Joint {
-                            name: joint.name.clone(),
-                            parent: body_of[parent],
-                            child: body_of[k],
-                            origin,
-                            axis: axis.normalize(),
-                            lower,
-                            upper,
-                            effort,
-                        });
-                    }
-                    other => {
-                        return Err(format!(
-                            "joint `{}`: type {other:?} is not supported (hexsim's legs are chains of revolute joints; use fixed for rigid attachments)",
-                            joint.name
-                        ));
-                    }
-                }
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
+                let (axis, lower, upper, effort) = revolute(joint, &mut self.unstated)?;
+                self.body_of[k] = self.links.len();
+                self.links
+                    .push(empty_link(&urdf_link.name, Some(self.joints.len())));
+                self.shapes.push(Default::default());
+                self.joints.push(Joint {
+                    name: joint.name.clone(),
+                    parent: self.body_of[parent],
+                    child: self.body_of[k],
+                    origin,
+                    axis,
+                    lower,
+                    upper,
+                    effort,
+                });
+            }
+            other => {
+                return Err(format!(
+                    "joint `{}`: type {other:?} is not supported (hexsim's legs are chains of revolute joints; use fixed for rigid attachments)",
+                    joint.name
+                ));
             }
         }
-        // fold this URDF link's inertial, visuals and foot into its body
+        Ok(())
+    }
+
+    /// Folds URDF link `k`'s inertial, visuals, shapes and foot sphere into its body.
+    fn fold(&mut self, k: usize) -> Result<(), String> {
+        let urdf_link = &self.robot.links[k];
         let (mass, com, inertia) = check_inertial(urdf_link)?;
-        let frame = in_body[k];
-        let body = &mut links[body_of[k]];
+        let frame = self.in_body[k];
+        let body = &mut self.links[self.body_of[k]];
         add_mass(
             body,
             mass,
@@ -557,22 +600,22 @@ fn build(
             .find(|c| !matches!(c.geometry, urdf_rs::Geometry::Mesh { .. }))
             .map(|c| {
                 let ignored = &mut MeshProblems::default();
-                shape(&c.geometry, base, &urdf_link.name, &None, ignored)
+                shape(&c.geometry, self.base, &urdf_link.name, &None, ignored)
             });
         for visual in &urdf_link.visual {
             body.visuals.push(Visual {
                 origin: frame * pose(&visual.origin),
                 shape: shape(
                     &visual.geometry,
-                    base,
+                    self.base,
                     &urdf_link.name,
                     &collision_shape,
-                    &mut mesh_problems,
+                    &mut self.mesh_problems,
                 ),
-                color: color_of(robot, &visual.material),
+                color: color_of(self.robot, &visual.material),
             });
         }
-        if let Some(feet) = feet
+        if let Some(feet) = self.feet
             && feet.links.contains(&urdf_link.name)
         {
             body.foot = Some(Foot {
@@ -585,7 +628,7 @@ fn build(
             origin: frame * pose(origin),
             geometry: geometry.clone(),
         };
-        let (collisions, visuals) = &mut shapes[body_of[k]];
+        let (collisions, visuals) = &mut self.shapes[self.body_of[k]];
         collisions.extend(
             urdf_link
                 .collision
@@ -598,7 +641,7 @@ fn build(
                 .iter()
                 .map(|v| placed(&v.origin, &v.geometry)),
         );
-        for collision in urdf_link.collision.iter().filter(|_| feet.is_none()) {
+        for collision in urdf_link.collision.iter().filter(|_| self.feet.is_none()) {
             if let urdf_rs::Geometry::Sphere { radius } = collision.geometry {
                 if !(radius.is_finite() && radius > 0.0) {
                     return Err(format!(
@@ -615,10 +658,58 @@ fn build(
                 }
             }
         }
-        for &j in &tree.children[k] {
-            order.push(tree.index[robot.joints[j].child.link.as_str()]);
-        }
+        Ok(())
     }
+}
+
+/// A revolute (or continuous) joint's unit axis, limits and effort. A CAD exporter's placeholder
+/// limits (lower = upper = 0, also what a missing `<limit>` reads as) are absent: a stated
+/// default range; a zero effort is fitted to the robot's weight once its legs are known (NaN
+/// until then). Both are noted in `unstated`, for one warning each.
+fn revolute(
+    joint: &urdf_rs::Joint,
+    unstated: &mut Unstated,
+) -> Result<(DVec3, f64, f64, f64), String> {
+    let axis = DVec3::from_array(joint.axis.xyz.0);
+    if !(axis.is_finite() && axis.length() > 1e-9) {
+        return Err(format!(
+            "joint `{}`: <axis xyz> must have a non-zero length, got {axis}",
+            joint.name
+        ));
+    }
+    let (mut lower, mut upper) = if matches!(joint.joint_type, urdf_rs::JointType::Continuous) {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    } else {
+        (joint.limit.lower, joint.limit.upper)
+    };
+    if lower == 0.0 && upper == 0.0 {
+        (lower, upper) = (-UNSTATED_RANGE, UNSTATED_RANGE);
+        unstated.range.push(joint.name.clone());
+    }
+    let ordered = lower < upper; // false for NaN too
+    if !ordered {
+        return Err(format!(
+            "joint `{}`: a revolute joint needs <limit lower=… upper=…> with lower < upper, got lower = {lower}, upper = {upper}",
+            joint.name
+        ));
+    }
+    let mut effort = joint.limit.effort;
+    if effort == 0.0 {
+        effort = f64::NAN;
+        unstated.effort.push(joint.name.clone());
+    }
+    if !(effort.is_nan() || effort.is_finite() && effort > 0.0) {
+        return Err(format!(
+            "joint `{}`: <limit effort> (the servo's torque limit, N·m) must be > 0, got {effort}",
+            joint.name
+        ));
+    }
+    Ok((axis.normalize(), lower, upper, effort))
+}
+
+/// Every body needs a mass and a positive-definite inertia; a URDF with none at all is a
+/// description for drawing, and is refused as such rather than by its first link.
+fn check_masses(links: &[Link]) -> Result<(), String> {
     if links.iter().all(|l| l.mass <= 0.0) {
         return Err(
             "no link has a mass: the URDF has no <inertial> elements (a description for drawing, as RViz reads it); hexsim needs each link's <mass> and <inertia>".into(),
@@ -629,9 +720,8 @@ fn build(
             "no link states an inertia (every <inertia> is zero or missing); hexsim needs each link's inertia tensor (kg·m²)".into(),
         );
     }
-    for link in &links {
-        let massive = link.mass > 0.0;
-        if !massive {
+    for link in links {
+        if link.mass <= 0.0 {
             return Err(format!(
                 "link `{}`: mass must be > 0 (a link moved by a joint needs inertia; give it an <inertial>)",
                 link.name
@@ -645,69 +735,65 @@ fn build(
             ));
         }
     }
+    Ok(())
+}
+
+/// One warning naming the bodies whose principal moments break the triangle inequality.
+fn impossible_inertia_warning(links: &[Link]) -> Option<String> {
     let impossible: Vec<(&str, [f64; 3])> = links
         .iter()
         .filter_map(|l| Some((l.name.as_str(), impossible_inertia(&l.inertia)?)))
         .collect();
-    if let Some((first, [a, b, c])) = impossible.first() {
-        let others: Vec<&str> = impossible[1..].iter().map(|(name, _)| *name).collect();
-        let more = if others.is_empty() {
-            String::new()
-        } else {
-            format!(", and so do {} more: {}", others.len(), others.join(", "))
-        };
-        warnings.push(format!(
-            "link `{first}`: principal moments of inertia {a:.3e}, {b:.3e}, {c:.3e} kg·m² break \
-             A + B ≥ C, which no rigid body can (MuJoCo refuses such a link unless told to \
-             balance it){more}; simulated as given"
-        ));
-    }
-    warnings.extend(mesh_problems.warnings());
-    // a leg's last link without a foot sphere (and no robot file naming its feet): find the foot
-    // at the tip of its geometry
+    let (first, [a, b, c]) = impossible.first()?;
+    let others: Vec<&str> = impossible[1..].iter().map(|(name, _)| *name).collect();
+    let more = if others.is_empty() {
+        String::new()
+    } else {
+        format!(", and so do {} more: {}", others.len(), others.join(", "))
+    };
+    Some(format!(
+        "link `{first}`: principal moments of inertia {a:.3e}, {b:.3e}, {c:.3e} kg·m² break \
+         A + B ≥ C, which no rigid body can (MuJoCo refuses such a link unless told to \
+         balance it){more}; simulated as given"
+    ))
+}
+
+/// Finds the foot at the tip of the geometry of every chain's last body that has no foot sphere
+/// (`foot::find`). Returns the bodies where none was found, with why (the leg finder names them
+/// if they end a leg), and a warning if some feet came from the visual geometry because the
+/// collision geometry could not be read.
+fn find_feet(
+    links: &mut [Link],
+    joints: &[Joint],
+    shapes: &[(Vec<Placed>, Vec<Placed>)],
+    base: &Path,
+) -> (Vec<(String, String)>, Option<String>) {
     let mut unfound = Vec::new();
     let mut unread: Vec<(String, String)> = Vec::new();
-    if feet.is_none() {
-        for (k, link) in links.iter_mut().enumerate() {
-            let leaf = k != 0 && !joints.iter().any(|j| j.parent == k);
-            if !leaf || link.foot.is_some() {
-                continue;
-            }
-            let knee = link.parent_joint.map_or(DVec3::Z, |j| joints[j].axis);
-            let (collisions, visuals) = &shapes[k];
-            match foot::find(collisions, visuals, knee, base) {
-                Ok(found) => {
-                    if let Some(first) = found.unread.first() {
-                        unread.push((link.name.clone(), first.clone()));
-                    }
-                    link.foot = Some(found.foot);
+    for (k, link) in links.iter_mut().enumerate() {
+        let leaf = k != 0 && !joints.iter().any(|j| j.parent == k);
+        if !leaf || link.foot.is_some() {
+            continue;
+        }
+        let knee = link.parent_joint.map_or(DVec3::Z, |j| joints[j].axis);
+        let (collisions, visuals) = &shapes[k];
+        match foot::find(collisions, visuals, knee, base) {
+            Ok(found) => {
+                if let Some(first) = found.unread.first() {
+                    unread.push((link.name.clone(), first.clone()));
                 }
-                Err(why) => unfound.push((link.name.clone(), why)),
+                link.foot = Some(found.foot);
             }
+            Err(why) => unfound.push((link.name.clone(), why)),
         }
     }
-    if let Some((link, why)) = unread.first() {
-        let n = unread.len();
-        warnings.push(format!(
-            "{n} feet found from their link's visual geometry, the collision geometry unreadable (e.g. link `{link}`: its collision {why})"
-        ));
-    }
-    let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
-    legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
-    let mut model = RobotModel {
-        name: robot.name.clone(),
-        source: PathBuf::new(),
-        links,
-        joints,
-        legs,
-        forward,
-        gait_hints,
-        warnings,
-    };
-    check_size(&model)?;
-    warn_implausible_inertias(&mut model);
-    unstated.fill(&mut model);
-    Ok(model)
+    let warning = unread.first().map(|(link, why)| {
+        format!(
+            "{} feet found from their link's visual geometry, the collision geometry unreadable (e.g. link `{link}`: its collision {why})",
+            unread.len()
+        )
+    });
+    (unfound, warning)
 }
 
 /// A link's radius of gyration k = √(I_max/m) (its mass's spread about its centre) against the
