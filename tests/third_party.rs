@@ -38,7 +38,13 @@ fn walk(robot: &str, terrain: &str, name: &str) -> serde_json::Value {
 /// from a small body and are mounted ahead of their hips (an offset femur), and its placeholder
 /// leg inertias (1e-2 kg·m²) need servos stiffer than hex18's (fitted). Kraby's round body has
 /// its legs 45° apart on two sides of its URDF's y axis, so hexsim walks it along +y (chosen
-/// from the legs), and its base link's origin is on the ground, 0.2 m below its hips.
+/// from the legs), and its base link's origin is on the ground, 0.2 m below its hips. Five more
+/// come as published, with no robot file (issue 25): the arrg hexapod, a SolidWorks export whose
+/// 18 joints have empty limits and efforts and whose feet are the tips of its tibia meshes; the
+/// MIT WORMS hexapod, xacro output, 79 kg on 1 m legs with pad feet (its ground and time step
+/// fitted to its weight and its landing feet); hexaross, xacro output with rubber-tip meshes
+/// merged into its tibias; pexod, xacro output; the harika hexapod, a SolidWorks export with mesh
+/// feet.
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -55,6 +61,26 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
             "tests/data/third_party/mushroom_hexapod/hexapod.urdf",
         ),
         ("kraby", "tests/data/third_party/kraby/hexapod.urdf"),
+        (
+            "arrg",
+            "tests/data/third_party/arrg_hexapod/hexapod_description/urdf/hexapod_description.urdf",
+        ),
+        (
+            "worms",
+            "tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf",
+        ),
+        (
+            "hexaross",
+            "tests/data/third_party/hexaross/hexapod_description/urdf/hexapod.urdf",
+        ),
+        (
+            "pexod",
+            "tests/data/third_party/pexod/hexapod_description/urdf/pexod.urdf",
+        ),
+        (
+            "harika",
+            "tests/data/third_party/harika_hexapod/hexapod/urdf/hexapod.urdf",
+        ),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));
         let stance = &flat["stance"];
@@ -100,6 +126,11 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         println!("{name} on the natural terrain: tilt ≤ {tilt:.2}°");
         assert!(tilt < 20.0, "{name} tilted {tilt:.1}°");
         assert_eq!(natural["complete"], true);
+        let forward = natural["forward_distance"].as_f64().unwrap();
+        assert!(
+            forward >= 0.6 * nominal,
+            "{name} walked {forward:.3} m of {nominal:.3} on the natural terrain"
+        );
     }
 }
 

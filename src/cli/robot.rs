@@ -210,7 +210,10 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             .iter()
             .map(|j| format!("[{}, {}]", deg(j.lower), deg(j.upper)))
             .collect();
-        let efforts: Vec<String> = joints.iter().map(|j| format!("{}", j.effort)).collect();
+        let efforts: Vec<String> = joints
+            .iter()
+            .map(|j| format!("{}", (j.effort * 1e4).round() / 1e4))
+            .collect();
         let _ = writeln!(
             out,
             "        limits {}; effort {} N·m",

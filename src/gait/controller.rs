@@ -291,6 +291,19 @@ fn swing_profile(shape: SwingShape, s: f64, end_slope: f64) -> (f64, f64) {
     }
 }
 
+impl Gait {
+    /// The vertical speed (m/s) at which a swinging foot meets level ground: the step height
+    /// times the lift's slope at the swing's end over the swing's duration — π·h/T_swing for
+    /// the sine, 3·h/T_swing for the rectangle, 0 for the cycloid, which lands softly.
+    pub fn touchdown_speed(&self) -> f64 {
+        let swing_time = (1.0 - self.duty_factor) * self.period;
+        let ds = 1e-6;
+        let (_, before) = swing_profile(self.swing, 1.0 - ds, 0.0);
+        let (_, end) = swing_profile(self.swing, 1.0, 0.0);
+        self.step_height * ((before - end) / ds).max(0.0) / swing_time
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -307,7 +307,10 @@ fn resolve_walk(
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .ok_or("the robot has no legs")?;
-    let what = format!("the lightest foot link (`{foot}`, {foot_mass} kg)");
+    let what = format!(
+        "the lightest foot link (`{foot}`, {} kg)",
+        four_digits(foot_mass)
+    );
     if spec.dt.is_some() {
         check_stable_dt(spec, contact, foot_mass, robot.legs[0].foot.radius, &what)?;
     }
@@ -324,6 +327,11 @@ fn resolve_walk(
                 "the paper variant's explicit damper on {what} needs c·dt/m ≤ 1 (half its bound)"
             ),
         };
+    }
+    if let Some(touchdown) = touchdown_step(&gait.gait, contact, &robot, support)
+        && touchdown.limit < contact_step.limit
+    {
+        contact_step = touchdown;
     }
     let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
     if !(settle.is_finite() && settle >= 0.0) {
@@ -489,6 +497,49 @@ struct ContactStep {
     what: String,
 }
 
+/// `x` to four decimals, as short as they allow (20, 61.8926): a fitted value in a message.
+fn four_digits(x: f64) -> f64 {
+    (x * 1e4).round() / 1e4
+}
+
+/// The most a foot's load may rise in one step as it lands, as a share of its standing load
+/// (the robot's weight over the gait's fewest feet). A foot landing at speed v presses the
+/// ground spring v·dt deeper each step, so its load rises by k·v·dt — v·dt/δ of the standing
+/// load, δ the static sink — while the friction holding it is bounded by the load a step
+/// before: the faster the load rises per step, the more a landing foot slides. hex18's tripod
+/// lands at 0.19 m/s on a 0.41 mm sink: 0.46 at 1 ms. Measured on a 79 kg hexapod with 1 m legs
+/// (tests/data/third_party/worms: 0.76 m/s, 1.85 at 1 ms), its worst foot's slide over 10 s on
+/// flat ground: 0.124 m at 1 ms, 0.092 m at 0.5 ms (0.93) and at 0.25 ms (0.46), so converged
+/// once the share is about hex18's.
+pub const TOUCHDOWN_STEP_LIMIT: f64 = 0.5;
+
+/// The largest step [`TOUCHDOWN_STEP_LIMIT`] allows the gait's landing feet, if it binds at all
+/// (a cycloid swing lands at no speed).
+fn touchdown_step(
+    gait: &Gait,
+    contact: &ContactModel,
+    robot: &RobotModel,
+    support: usize,
+) -> Option<ContactStep> {
+    let speed = gait.touchdown_speed();
+    let standing = robot.total_mass() * STANDARD_GRAVITY / support.max(1) as f64;
+    let sink = contact.normal.static_sink(standing);
+    if !(speed > 0.0 && sink > 0.0) {
+        return None;
+    }
+    Some(ContactStep {
+        limit: TOUCHDOWN_STEP_LIMIT * sink / speed,
+        what: format!(
+            "the feet land at {speed:.2} m/s (the gait's {} swing, {:.3} m high), so their load \
+             must rise by at most {TOUCHDOWN_STEP_LIMIT} of its standing share ({standing:.1} N, a \
+             {:.2} mm sink) a step: v·dt ≤ {TOUCHDOWN_STEP_LIMIT}·δ",
+            format!("{:?}", gait.swing).to_lowercase(),
+            gait.step_height,
+            sink * 1e3
+        ),
+    })
+}
+
 /// The largest ω·dt a servo tolerates, ω = √(k/I) on the lightest joint (I: the inertia of the
 /// links outboard of it about its axis). Above it the knee's fast mode and the step-explicit
 /// contact force feed each other: the stance feet's load alternates step to step and they slide.
@@ -532,8 +583,9 @@ fn walk_time_step(
     let name = &robot.joints[joint].name;
     let mut limit = SERVO_STEP_LIMIT / omega;
     let mut why = format!(
-        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {k} N·m/rad: ω = {omega:.0} rad/s) \
-         needs ω·dt ≤ {SERVO_STEP_LIMIT}"
+        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {} N·m/rad: ω = {omega:.0} rad/s) \
+         needs ω·dt ≤ {SERVO_STEP_LIMIT}",
+        four_digits(k)
     );
     if spec.articulation.unwrap_or_default() == crate::sim::Articulation::Impulse {
         // the root of k·dt² + d·dt = limit·I
@@ -542,8 +594,10 @@ fn walk_time_step(
             limit = explicit;
             why = format!(
                 "the impulse joints' explicit servo on `{name}` ({inertia:.2e} kg·m² outboard, \
-                 {k} N·m/rad, {d} N·m·s/rad) needs (k·dt + d)·dt/I ≤ {EXPLICIT_SERVO_LIMIT} \
-                 (the multibody articulation's implicit servo allows a larger step)"
+                 {} N·m/rad, {} N·m·s/rad) needs (k·dt + d)·dt/I ≤ {EXPLICIT_SERVO_LIMIT} \
+                 (the multibody articulation's implicit servo allows a larger step)",
+                four_digits(k),
+                four_digits(d)
             );
         }
     }
