@@ -5,8 +5,8 @@
 //! bit. Errors are the library's messages, raised as `hexsim.HexsimError`.
 
 use hexsim::gait::VelocityCommand;
+use hexsim::runner::Outputs;
 use hexsim::runner::walk::WalkSession;
-use hexsim::runner::{Output, Outputs};
 use hexsim::scenario::{self, Scenario};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::create_exception;
@@ -187,10 +187,11 @@ impl Simulation {
     }
 
     fn start(&mut self) -> PyResult<()> {
-        let outputs = Outputs::new()
-            .with_some(self.record.clone().map(Output::Recording))
-            .with_some(self.trajectory.clone().map(Output::Trajectory))
-            .with_some(self.metrics_file.clone().map(Output::Metrics));
+        let outputs = Outputs::files(
+            self.record.clone(),
+            self.trajectory.clone(),
+            self.metrics_file.clone(),
+        );
         self.session = Some(self.current().start_walk(outputs).map_err(error)?);
         self.final_metrics = None;
         Ok(())

@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::{Args, Parser};
 use hexsim::scenario::spec::{BALL_LOG_RATE, BallSpec, ContactSpec, DEFAULT_DT, RecordSpec};
-use hexsim::scenario::{FileOr, Kind, Metrics, Output, Outputs, Scenario, ScenarioSpec};
+use hexsim::scenario::{FileOr, Kind, Metrics, Outputs, Scenario, ScenarioSpec};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -120,12 +120,12 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
     };
     let scenario = Scenario::resolve(spec, "ball".into(), Path::new(COMMAND_LINE))?;
     let terrain_name = scenario.terrain_name().to_string();
-    let report = scenario.run(
-        Outputs::new()
-            .with_some((!args.no_record).then(|| Output::Recording(args.record.clone())))
-            .with_some(args.trajectory.clone().map(Output::Trajectory))
-            .with_some(args.metrics.clone().map(Output::Metrics)),
-    )?;
+    let record = (!args.no_record).then(|| args.record.clone());
+    let report = scenario.run(Outputs::files(
+        record,
+        args.trajectory.clone(),
+        args.metrics.clone(),
+    ))?;
     let Metrics::Ball(m) = &report.metrics else {
         unreachable!("a ball scenario reports ball metrics")
     };

@@ -162,14 +162,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         scenario.total_steps(),
         format!("{} s", args.settle + args.duration),
     );
-    let outputs = Outputs::new()
-        .with_some((!args.no_record).then(|| Output::Recording(args.record.clone())))
-        .with_some(args.trajectory.clone().map(Output::Trajectory))
-        .with_some(args.metrics.clone().map(Output::Metrics))
-        .with_some(
-            bar.clone()
-                .map(|b| Output::Progress(Box::new(move |done: u64| b.set_position(done)))),
-        );
+    let record = (!args.no_record).then(|| args.record.clone());
+    let outputs = Outputs::files(record, args.trajectory.clone(), args.metrics.clone()).with_some(
+        bar.clone()
+            .map(|b| Output::Progress(Box::new(move |done: u64| b.set_position(done)))),
+    );
     let report = scenario.run(outputs);
     if let Some(bar) = bar {
         bar.finish_and_clear();

@@ -46,26 +46,44 @@ const WALK_PLOTS: [&str; 6] = [
 ];
 
 /// What the runs move: every setting's robot (the same model) or ball.
-enum Body {
+enum Kind {
     Robot(Arc<RobotModel>),
     Ball { radius: f64 },
 }
 
+/// The moving body and the size the camera frames and the labels stand above (the robot's
+/// radius, or ten ball radii), found once.
+struct Body {
+    kind: Kind,
+    size: f64,
+}
+
 impl Body {
-    fn plots(&self) -> &'static [&'static str] {
-        match self {
-            Body::Robot(_) => &WALK_PLOTS,
-            Body::Ball { .. } => &BALL_PLOTS,
-        }
+    fn new(kind: Kind) -> Self {
+        let size = match &kind {
+            Kind::Robot(model) => crate::record::hexapod::robot_radius(model),
+            Kind::Ball { radius } => 10.0 * radius,
+        };
+        Body { kind, size }
     }
 
-    /// The size the camera frames.
-    fn size(&self) -> f64 {
-        match self {
-            Body::Robot(model) => crate::record::hexapod::robot_radius(model),
-            Body::Ball { radius } => 10.0 * radius,
+    fn plots(&self) -> &'static [&'static str] {
+        match self.kind {
+            Kind::Robot(_) => &WALK_PLOTS,
+            Kind::Ball { .. } => &BALL_PLOTS,
         }
     }
+}
+
+/// Where a plot's value comes from in a trajectory row.
+enum Source {
+    Height,
+    Forward,
+    Speed,
+    /// A column times a factor (mm from m, degrees from radians, or as it is).
+    Column(usize, f64),
+    /// The sum of columns: the feet's normal forces, or their slip speeds.
+    Sum(Vec<usize>),
 }
 
 /// A setting's trajectory with the columns the recording reads found once by name: a column the
@@ -75,8 +93,8 @@ struct Track<'a> {
     time: usize,
     position: [usize; 3],
     velocity: [usize; 3],
-    /// Each plot's columns: the one it shows, or those it sums or converts.
-    plots: Vec<Vec<usize>>,
+    /// Each plot's source, in the order of the body's plots.
+    plots: Vec<Source>,
     /// A walk's roll, pitch, yaw and its joint angles by model joint.
     attitude: Option<[usize; 3]>,
     joints: Vec<usize>,
@@ -85,7 +103,6 @@ struct Track<'a> {
 impl<'a> Track<'a> {
     fn new(table: &'a Table, body: &Body) -> Result<Self> {
         let col = |name: &str| table.column(name);
-        let cols = |names: &[&str]| names.iter().map(|n| col(n)).collect::<Result<Vec<_>>>();
         let feet = |quantity: &str| -> Result<Vec<usize>> {
             crate::robot::LEG_NAMES
                 .iter()
@@ -95,18 +112,19 @@ impl<'a> Track<'a> {
         let mut plots = Vec::new();
         for &plot in body.plots() {
             plots.push(match plot {
-                "height" | "forward_x" | "body_z" => Vec::new(), // from the position
-                "speed" => Vec::new(),                           // from the velocity
-                "penetration_mm" => cols(&["penetration"])?,
-                "roll_deg" => cols(&["roll"])?,
-                "pitch_deg" => cols(&["pitch"])?,
-                "feet_normal_force" => feet("normal")?,
-                "feet_slip" => feet("slip")?,
-                other => cols(&[other])?,
+                "height" | "body_z" => Source::Height,
+                "forward_x" => Source::Forward,
+                "speed" => Source::Speed,
+                "penetration_mm" => Source::Column(col("penetration")?, 1e3),
+                "roll_deg" => Source::Column(col("roll")?, 1f64.to_degrees()),
+                "pitch_deg" => Source::Column(col("pitch")?, 1f64.to_degrees()),
+                "feet_normal_force" => Source::Sum(feet("normal")?),
+                "feet_slip" => Source::Sum(feet("slip")?),
+                other => Source::Column(col(other)?, 1.0),
             });
         }
-        let (attitude, joints) = match body {
-            Body::Robot(model) => (
+        let (attitude, joints) = match &body.kind {
+            Kind::Robot(model) => (
                 Some([col("roll")?, col("pitch")?, col("yaw")?]),
                 model
                     .joints
@@ -114,7 +132,7 @@ impl<'a> Track<'a> {
                     .map(|j| col(&format!("{}_angle", j.name)))
                     .collect::<Result<_>>()?,
             ),
-            Body::Ball { .. } => (None, Vec::new()),
+            Kind::Ball { .. } => (None, Vec::new()),
         };
         Ok(Track {
             table,
@@ -136,17 +154,13 @@ impl<'a> Track<'a> {
     }
 
     /// Plot `k`'s value at `row`.
-    fn plot(&self, body: &Body, k: usize, row: &[f64]) -> f64 {
-        let columns = &self.plots[k];
-        match body.plots()[k] {
-            "height" | "body_z" => self.position(row).z,
-            "forward_x" => self.position(row).x,
-            "speed" => Self::vector(row, self.velocity).length(),
-            "penetration_mm" => 1e3 * row[columns[0]],
-            "roll_deg" | "pitch_deg" => row[columns[0]].to_degrees(),
-            // the feet's normal forces, and their slip speeds (how much the stance feet slide),
-            // summed
-            _ => columns.iter().map(|&c| row[c]).sum(),
+    fn plot(&self, k: usize, row: &[f64]) -> f64 {
+        match &self.plots[k] {
+            Source::Height => self.position(row).z,
+            Source::Forward => self.position(row).x,
+            Source::Speed => Self::vector(row, self.velocity).length(),
+            Source::Column(c, factor) => row[*c] * factor,
+            Source::Sum(columns) => columns.iter().map(|&c| row[c]).sum(),
         }
     }
 
@@ -198,13 +212,13 @@ pub fn write_titled(
         .settings
         .first()
         .context("a comparison has settings")?;
-    let body = match (first.robot(), first.ball()) {
-        (Some(model), _) => Body::Robot(Arc::new(model.clone())),
-        (None, Some(ball)) => Body::Ball {
+    let body = Body::new(match (first.robot(), first.ball()) {
+        (Some(model), _) => Kind::Robot(Arc::new(model.clone())),
+        (None, Some(ball)) => Kind::Ball {
             radius: ball.radius,
         },
         (None, None) => anyhow::bail!("a comparison's scenario is a walk or a ball"),
-    };
+    });
     let dt = first.spec.dt();
     let name = comparison
         .file
@@ -228,7 +242,7 @@ pub fn write_titled(
             Err(_) => None,
         });
     }
-    frame_every_path(&recording, &tracks, body.size())?;
+    frame_every_path(&recording, &tracks, body.size)?;
     let rows = tracks
         .iter()
         .flatten()
@@ -287,12 +301,12 @@ fn log_setting(
         format!("world/paths/{entity}"),
         &rerun::LineStrips3D::update_fields().with_colors([color]),
     )?;
-    let tree = match body {
-        Body::Robot(model) => {
+    let tree = match &body.kind {
+        Kind::Robot(model) => {
             let root = format!("world/{entity}/robot");
             Some(LinkTree::log_tinted(rec, model, &root, Some(color))?)
         }
-        Body::Ball { radius } => {
+        Kind::Ball { radius } => {
             rec.log_static(
                 format!("world/{entity}/ball"),
                 &rerun::Ellipsoids3D::from_radii([*radius as f32])
@@ -366,22 +380,22 @@ fn log_row(
     }
     *path_end = Some(point);
     let k = setting.index as f64;
-    let label_at = match body {
-        Body::Robot(model) => {
+    let label_at = match &body.kind {
+        Kind::Robot(model) => {
             if let (Some(tree), Some((pose, q))) = (setting.tree, track.pose(values)) {
                 let frames: Vec<DAffine3> =
                     model.link_poses(&q).into_iter().map(|f| pose * f).collect();
                 tree.log_frames(rec, model, &frames, false, false)?;
             }
             // stacked above the body, one line per setting, as the robots overlap
-            position + DVec3::Z * (body.size() * (0.6 + 0.12 * k))
+            position + DVec3::Z * (body.size * (0.6 + 0.12 * k))
         }
-        Body::Ball { .. } => {
+        Kind::Ball { .. } => {
             rec.log(
                 format!("world/{name}/ball"),
                 &rerun::Transform3D::from_translation(point),
             )?;
-            position + DVec3::Z * (body.size() * (0.3 + 0.06 * k))
+            position + DVec3::Z * (body.size * (0.3 + 0.06 * k))
         }
     };
     rec.log(
@@ -391,7 +405,7 @@ fn log_row(
     for (p, plot) in body.plots().iter().enumerate() {
         rec.log(
             format!("plots/{plot}/{name}"),
-            &rerun::Scalars::new([track.plot(body, p, values)]),
+            &rerun::Scalars::new([track.plot(p, values)]),
         )?;
     }
     Ok(())

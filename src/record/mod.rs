@@ -108,6 +108,19 @@ impl Outputs {
         }
     }
 
+    /// The files of a run's command-line options: a recording, a trajectory CSV, a metrics
+    /// JSON, each if given.
+    pub fn files(
+        record: Option<PathBuf>,
+        trajectory: Option<PathBuf>,
+        metrics: Option<PathBuf>,
+    ) -> Self {
+        Self::new()
+            .with_some(record.map(Output::Recording))
+            .with_some(trajectory.map(Output::Trajectory))
+            .with_some(metrics.map(Output::Metrics))
+    }
+
     /// Checks, before a simulation starts, that every file can be written.
     pub fn check_writable(&self) -> Result<()> {
         for path in self.0.iter().filter_map(Output::path) {

@@ -464,7 +464,7 @@ fn build(
     }
     let Bodies {
         mut links,
-        joints,
+        mut joints,
         shapes,
         mesh_problems,
         unstated,
@@ -481,7 +481,6 @@ fn build(
         Vec::new()
     };
     let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
-    let mut joints = joints;
     legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
     let mut model = RobotModel {
         name: robot.name.clone(),
