@@ -77,6 +77,42 @@ pub fn natural(
     )
 }
 
+/// The natural terrain repeated `tiles` = [along x, along y] times: the first copy is
+/// [`natural`]'s grid where it would be (`size` centred on `center`), the others continue it
+/// toward +x and +y, where a walk goes.
+///
+/// Eq. 7's surface is the magnitude of an inverse DFT, so it is periodic: the sample after the
+/// last would be the first again. The copies therefore meet without a seam — the tiled grid is
+/// the same surface sampled further — and a robot whose 10 s walk is longer than the paper's
+/// 4 m can walk it on the paper's terrain instead of on the flat apron past its edge.
+pub fn natural_tiled(
+    seed: u32,
+    n: usize,
+    size: [f64; 2],
+    center: [f64; 2],
+    peak_to_peak: f64,
+    tiles: [usize; 2],
+) -> Result<HeightGrid, GridError> {
+    let tile = natural(seed, n, size, center, peak_to_peak)?;
+    if tiles == [1, 1] {
+        return Ok(tile);
+    }
+    let (cols, rows) = (n.saturating_mul(tiles[0]), n.saturating_mul(tiles[1]));
+    check_samples(rows, cols)?;
+    let heights = (0..rows * cols)
+        .map(|k| tile.sample((k / cols) % n, (k % cols) % n))
+        .collect();
+    let (dx, dy) = tile.spacing();
+    let ([x0, _], [y0, _]) = (tile.x_range(), tile.y_range());
+    HeightGrid::new(
+        rows,
+        cols,
+        [x0, x0 + (cols - 1) as f64 * dx],
+        [y0, y0 + (rows - 1) as f64 * dy],
+        heights,
+    )
+}
+
 /// In-place 2-D inverse DFT of a row-major n×n array (unnormalised; the caller rescales).
 fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) {
     let fft = FftPlanner::new().plan_fft_inverse(n);
@@ -293,6 +329,39 @@ mod tests {
         assert_eq!(lo, 0.0);
         assert!((hi - 0.05).abs() < 1e-15);
         assert_ne!(a, natural(8, 32, [2.0, 2.0], [0.0, 0.0], 0.05).unwrap());
+    }
+
+    /// The copies meet without a seam: no step between neighbouring samples across a seam is
+    /// larger than the largest inside a tile (an aperiodic surface would jump there by up to its
+    /// whole peak-to-peak), and the tiled grid is the tile again at every copy.
+    #[test]
+    fn tiled_natural_terrain_is_seamless() {
+        let n = 32;
+        let tile = natural(7, n, [2.0, 2.0], [0.0, 0.0], 0.05).unwrap();
+        let tiled = natural_tiled(7, n, [2.0, 2.0], [0.0, 0.0], 0.05, [3, 2]).unwrap();
+        assert_eq!((tiled.rows(), tiled.cols()), (2 * n, 3 * n));
+        assert_eq!(tiled.spacing(), tile.spacing());
+        // the first copy is the tile, in place
+        assert_eq!(tiled.x_range()[0], tile.x_range()[0]);
+        assert_eq!(tiled.y_range()[0], tile.y_range()[0]);
+        assert_eq!(tiled.height(0.3, -0.2), tile.height(0.3, -0.2));
+        for i in 0..2 * n {
+            for j in 0..3 * n {
+                assert_eq!(tiled.sample(i, j), tile.sample(i % n, j % n));
+            }
+        }
+        let step = |g: &HeightGrid, i: usize, j: usize| (g.sample(i, j + 1) - g.sample(i, j)).abs();
+        let inside = (0..n)
+            .flat_map(|i| (0..n - 1).map(move |j| (i, j)))
+            .map(|(i, j)| step(&tile, i, j))
+            .fold(0.0, f64::max);
+        let seam = (0..n).map(|i| step(&tiled, i, n - 1)).fold(0.0, f64::max);
+        assert!(seam <= inside, "seam step {seam}, inside {inside}");
+        // one tile is the paper's grid unchanged
+        assert_eq!(
+            natural_tiled(7, n, [2.0, 2.0], [0.0, 0.0], 0.05, [1, 1]).unwrap(),
+            tile
+        );
     }
 
     #[test]

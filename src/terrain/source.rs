@@ -167,6 +167,10 @@ pub struct Natural {
     /// The hexapod's scale by default (0.04 m).
     #[serde(default = "Natural::peak_to_peak")]
     pub peak_to_peak: f64,
+    /// Copies along x and y, the first in place and the others toward +x and +y (the surface is
+    /// periodic, so they meet without a seam); [1, 1]: one.
+    #[serde(default = "Natural::one_tile")]
+    pub tiles: [usize; 2],
 }
 
 impl Natural {
@@ -182,6 +186,9 @@ impl Natural {
     fn peak_to_peak() -> f64 {
         0.04
     }
+    fn one_tile() -> [usize; 2] {
+        [1, 1]
+    }
 }
 
 impl HeightSource for Natural {
@@ -195,16 +202,23 @@ impl HeightSource for Natural {
                 format!("expected a finite number ≥ 0, got {}", self.peak_to_peak),
             ));
         }
+        if self.tiles.contains(&0) {
+            return Err((
+                "tiles",
+                format!("expected [x, y] copies of at least 1, got {:?}", self.tiles),
+            ));
+        }
         Ok(())
     }
 
     fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
-        generate::natural(
+        generate::natural_tiled(
             self.seed,
             self.samples,
             self.size,
             self.center,
             self.peak_to_peak,
+            self.tiles,
         )
         .map_err(BuildError::Grid)
     }
