@@ -225,6 +225,30 @@ fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
         stderr.contains("dt: 0.333 ms, not the default 1 ms"),
         "{stderr}"
     );
+    // the bound a refusal prints is allowed, rounded down: pexod's is 4.994e-4 s, which read
+    // 5.00e-4 and refused the 5e-4 a user then tried
+    for robot in [
+        kraby,
+        "tests/data/third_party/pexod/hexapod_description/urdf/pexod.urdf",
+    ] {
+        let out = hexsim()
+            .args(["run", "--robot", robot, "--dt", "0.001", "--no-record"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let bound = stderr
+            .split(", dt ≤ ")
+            .nth(1)
+            .and_then(|rest| rest.split(' ').next())
+            .unwrap_or_else(|| panic!("no bound in {stderr}"));
+        let out = hexsim()
+            .args(["run", "--robot", robot, "--dt", bound])
+            .args(["--duration", "0.05", "--no-record"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{robot} at dt {bound}: {stderr}");
+    }
     // the impulse joints' servo is explicit in the step: smaller still
     let out = hexsim()
         .args(["run", "--robot", kraby, "--articulation", "impulse"])

@@ -204,8 +204,9 @@ fn check_stable_dt(
     let limit = contact.normal.stable_time_step(mass, radius * 0.1);
     if spec.dt() >= limit && !spec.allow_unstable_dt {
         return Err(format!(
-            "dt = {} s is too large for the contact spring on {what}: the explicit spring needs dt < {limit:.2e} s (2/√(k/m)); reduce dt or the stiffness (or set allow_unstable_dt = true to run it anyway)",
-            spec.dt()
+            "dt = {} s is too large for the contact spring on {what}: the explicit spring needs dt < {} s (2/√(k/m)); reduce dt or the stiffness (or set allow_unstable_dt = true to run it anyway)",
+            spec.dt(),
+            rounded_down(limit)
         ));
     }
     if let Some(limit) = explicit_damper_step(contact, mass)
@@ -213,8 +214,9 @@ fn check_stable_dt(
         && !spec.allow_unstable_dt
     {
         return Err(format!(
-            "dt = {} s is too large for the paper variant's explicit damper on {what}: it needs c·dt/m < 2, dt < {limit:.2e} s; reduce dt or the damping, or use hexsim's contact, whose damper is exact over a step (or set allow_unstable_dt = true to run it anyway)",
-            spec.dt()
+            "dt = {} s is too large for the paper variant's explicit damper on {what}: it needs c·dt/m < 2, dt < {} s; reduce dt or the damping, or use hexsim's contact, whose damper is exact over a step (or set allow_unstable_dt = true to run it anyway)",
+            spec.dt(),
+            rounded_down(limit)
         ));
     }
     Ok(())
@@ -497,6 +499,18 @@ struct ContactStep {
     what: String,
 }
 
+/// A step bound for a message, to three significant digits and rounded down: a dt copied from
+/// it is allowed, below a strict bound too (4.996e-4 printed as 5.00e-4 refused the 5e-4 a user
+/// then tried).
+fn rounded_down(limit: f64) -> String {
+    let unit = 10f64.powf(limit.log10().floor() - 2.0);
+    let mut shown = (limit / unit).floor() * unit;
+    if shown >= limit {
+        shown -= unit;
+    }
+    format!("{shown:.2e}")
+}
+
 /// `x` to four decimals, as short as they allow (20, 61.8926): a fitted value in a message.
 fn four_digits(x: f64) -> f64 {
     (x * 1e4).round() / 1e4
@@ -608,8 +622,9 @@ fn walk_time_step(
     }
     match spec.dt {
         Some(dt) if dt > servo_limit && !spec.allow_unstable_dt => Err(format!(
-            "dt = {dt} s is too large: {servo_why}, dt ≤ {servo_limit:.2e} s; reduce dt or the \
-             servo stiffness (or set allow_unstable_dt = true to run it anyway)"
+            "dt = {dt} s is too large: {servo_why}, dt ≤ {} s; reduce dt or the \
+             servo stiffness (or set allow_unstable_dt = true to run it anyway)",
+            rounded_down(servo_limit)
         )),
         Some(dt) => Ok(dt),
         None if DEFAULT_DT <= limit => Ok(DEFAULT_DT),
