@@ -404,3 +404,46 @@ fn a_cad_exports_empty_efforts_are_fitted_to_the_weight() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("treated as errors"), "{stderr}");
 }
+
+/// WORMS is published without its glTF meshes: each link is drawn as its collision shape (boxes
+/// and cylinders) at that shape's own origin, not as a 1 cm sphere that hides a 79 kg robot.
+#[test]
+fn missing_meshes_are_drawn_as_collision_shapes() {
+    use hexsim::robot::Shape;
+    let model = hexsim::robot::load(std::path::Path::new(
+        "tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf",
+    ))
+    .unwrap();
+    let visuals: Vec<_> = model.links.iter().flat_map(|l| &l.visuals).collect();
+    assert!(visuals.len() >= 30, "{} visuals", visuals.len());
+    let boxes = visuals
+        .iter()
+        .filter(|v| matches!(v.shape, Shape::Box { .. }))
+        .count();
+    let cylinders = visuals
+        .iter()
+        .filter(|v| matches!(v.shape, Shape::Cylinder { .. }))
+        .count();
+    let spheres = visuals
+        .iter()
+        .filter(|v| matches!(v.shape, Shape::Sphere { .. }))
+        .count();
+    assert!(
+        boxes > 0 && cylinders > 0,
+        "{boxes} boxes, {cylinders} cylinders"
+    );
+    assert_eq!(spheres, 0, "{spheres} links drawn as small spheres");
+    let out = hexsim()
+        .args([
+            "robot",
+            "tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf",
+        ])
+        .output()
+        .unwrap();
+    // `hexsim robot` lists the model's warnings with its report
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("not found") && stdout.contains("drawn as its collision shape"),
+        "{stdout}"
+    );
+}

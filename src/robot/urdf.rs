@@ -379,7 +379,7 @@ impl MeshProblems {
             let mut warning = first.clone();
             if self.missing.len() > 1 {
                 warning.push_str(&format!(
-                    "; {} more visual meshes not found, drawn as small spheres too",
+                    "; {} more visual meshes not found, drawn as their links' collision shapes (or small spheres)",
                     self.missing.len() - 1
                 ));
             }
@@ -389,15 +389,17 @@ impl MeshProblems {
     }
 }
 
-/// A visual's shape. `fallback`: the link's collision shape, for a mesh the recording cannot draw.
+/// A visual's shape, or None for a mesh the recording cannot draw (missing, or a format rerun
+/// does not read), noted in `problems`: the caller draws the link's collision shape instead
+/// where it has one (`has_fallback`), else a small sphere.
 fn shape(
     geometry: &urdf_rs::Geometry,
     base: &Path,
     link: &str,
-    fallback: &Option<Shape>,
+    has_fallback: bool,
     problems: &mut MeshProblems,
-) -> Shape {
-    match geometry {
+) -> Option<Shape> {
+    Some(match geometry {
         urdf_rs::Geometry::Box { size } => Shape::Box {
             half_extents: DVec3::from_array(size.0) * 0.5,
         },
@@ -418,20 +420,26 @@ fn shape(
                 Ok(path) if mesh::drawable(&path) => Shape::Mesh { path, scale },
                 Ok(path) => {
                     problems.undrawable.push((link.to_string(), path));
-                    fallback.clone().unwrap_or(Shape::Sphere { radius: 0.01 })
+                    return None;
                 }
                 Err(tried) => {
                     let tried: Vec<String> =
                         tried.iter().map(|p| p.display().to_string()).collect();
+                    // a robot whose meshes were not shipped with it still shows its shape
+                    let drawn = if has_fallback {
+                        "its collision shape"
+                    } else {
+                        "a small sphere"
+                    };
                     problems.missing.push(format!(
-                        "link `{link}`: visual mesh {filename} not found (looked in {}); drawn as a small sphere",
+                        "link `{link}`: visual mesh {filename} not found (looked in {}); drawn as {drawn}",
                         tried.join(", ")
                     ));
-                    Shape::Sphere { radius: 0.01 }
+                    return None;
                 }
             }
         }
-    }
+    })
 }
 
 /// The model of a parsed URDF, in named steps: its bodies (links welded by fixed joints merged),
@@ -593,24 +601,30 @@ impl<'a> Bodies<'a> {
             frame.matrix3 * inertia * frame.matrix3.transpose(),
         );
         // the first collision that is not a mesh stands in for a visual mesh rerun cannot draw
-        let collision_shape = urdf_link
-            .collision
-            .iter()
-            .find(|c| !matches!(c.geometry, urdf_rs::Geometry::Mesh { .. }))
-            .map(|c| {
-                let ignored = &mut MeshProblems::default();
-                shape(&c.geometry, self.base, &urdf_link.name, &None, ignored)
-            });
+        // the first collision primitive, drawn (at its own origin) for a mesh that cannot be
+        let collision_shape = urdf_link.collision.iter().find_map(|c| {
+            let ignored = &mut MeshProblems::default();
+            let shape = shape(&c.geometry, self.base, &urdf_link.name, false, ignored)
+                .filter(|s| !matches!(s, Shape::Mesh { .. }))?;
+            Some((frame * pose(&c.origin), shape))
+        });
         for visual in &urdf_link.visual {
+            let origin = frame * pose(&visual.origin);
+            let drawn = shape(
+                &visual.geometry,
+                self.base,
+                &urdf_link.name,
+                collision_shape.is_some(),
+                &mut self.mesh_problems,
+            );
+            let (origin, shape) = match (drawn, &collision_shape) {
+                (Some(shape), _) => (origin, shape),
+                (None, Some(fallback)) => fallback.clone(),
+                (None, None) => (origin, Shape::Sphere { radius: 0.01 }),
+            };
             body.visuals.push(Visual {
-                origin: frame * pose(&visual.origin),
-                shape: shape(
-                    &visual.geometry,
-                    self.base,
-                    &urdf_link.name,
-                    &collision_shape,
-                    &mut self.mesh_problems,
-                ),
+                origin,
+                shape,
                 color: color_of(self.robot, &visual.material),
             });
         }

@@ -503,10 +503,14 @@ struct ContactStep {
 /// it is allowed, below a strict bound too (4.996e-4 printed as 5.00e-4 refused the 5e-4 a user
 /// then tried).
 fn rounded_down(limit: f64) -> String {
-    let unit = 10f64.powf(limit.log10().floor() - 2.0);
-    let mut shown = (limit / unit).floor() * unit;
+    let digits = |x: f64| {
+        let unit = 10f64.powf(x.log10().floor() - 2.0);
+        (x / unit).floor() * unit
+    };
+    let mut shown = digits(limit);
     if shown >= limit {
-        shown -= unit;
+        // a bound of exactly 1.00e-3 shows as 9.99e-4
+        shown = digits(limit * (1.0 - 1e-9));
     }
     format!("{shown:.2e}")
 }
