@@ -97,10 +97,23 @@ fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
     use std::fmt::Write;
     let pose = &fitted.standing_pose;
     let torques = statics::standing_torques(model, pose, STANDARD_GRAVITY, 6);
-    let (stiffness, damping) = robot::servo::fitted_gains(model, pose);
+    let gait = &fitted.gait;
+    let support = hexsim::gait::minimum_support(&gait.offsets, gait.duty_factor);
+    let load = model.total_mass() * STANDARD_GRAVITY / support.max(1) as f64;
+    let (stiffness, damping, reason) =
+        robot::servo::fitted_gains(model, pose, load, gait.step_height);
+    let why = match reason {
+        robot::servo::FittedFor::Reference => "hex18's".to_string(),
+        robot::servo::FittedFor::Bandwidth => "the reference bandwidth on these legs".to_string(),
+        robot::servo::FittedFor::Sag => format!(
+            "stiff enough that a foot on {support} feet sags at most {:.0} % of the {:.3} m step",
+            robot::servo::SAG_LIMIT * 100.0,
+            gait.step_height
+        ),
+    };
     let _ = writeln!(
         out,
-        "  servo gains for these legs (unless a scenario or the command line sets them): {stiffness:.1} N·m/rad, {damping:.3} N·m·s/rad"
+        "  servo gains for these legs (unless a scenario or the command line sets them): {stiffness:.1} N·m/rad, {damping:.3} N·m·s/rad ({why})"
     );
     let _ = writeln!(
         out,

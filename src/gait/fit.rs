@@ -615,6 +615,24 @@ mod tests {
         );
     }
 
+    /// A load ten times hex18's on its legs: the servos are stiffened until a foot, free to
+    /// slide, sags [`SAG_LIMIT`] of the step and no more; hex18's own load leaves them alone.
+    #[test]
+    fn servos_are_stiffened_against_sag() {
+        use crate::robot::servo::{FittedFor, SAG_LIMIT, fitted_gains, vertical_compliance};
+        let model = crate::robot::hex18_for_tests();
+        let pose = fit(&model, &tripod()).unwrap().standing_pose;
+        let load = model.total_mass() * 9.81 / 3.0;
+        let compliance = vertical_compliance(&model, &pose);
+        let (k, _, why) = fitted_gains(&model, &pose, load, 0.03);
+        assert_ne!(why, FittedFor::Sag);
+        assert!(load * compliance / k < SAG_LIMIT * 0.03);
+        let (k, d, why) = fitted_gains(&model, &pose, 10.0 * load, 0.03);
+        assert_eq!(why, FittedFor::Sag);
+        assert!((10.0 * load * compliance / k - SAG_LIMIT * 0.03).abs() < 1e-12);
+        assert!((d / k - crate::robot::servo::REFERENCE_DAMPING / 20.0).abs() < 1e-15);
+    }
+
     /// hex18 standing in its fitted pose gets the reference servo; legs ten times as heavy get
     /// ten times the stiffness and damping (same bandwidth, same damping time).
     #[test]
@@ -624,7 +642,9 @@ mod tests {
         };
         let model = crate::robot::hex18_for_tests();
         let pose = fit(&model, &tripod()).unwrap().standing_pose;
-        let (k, d) = fitted_gains(&model, &pose);
+        // hex18's load on three feet and step: its sag does not bind
+        let load = model.total_mass() * 9.81 / 3.0;
+        let (k, d, _) = fitted_gains(&model, &pose, load, 0.03);
         let coxa = outboard_inertias(&model, &pose)[model.legs[0].joints[0]];
         assert!(BANDWIDTH * BANDWIDTH * coxa < REFERENCE_STIFFNESS * 1.05);
         assert_eq!((k, d), (REFERENCE_STIFFNESS, REFERENCE_DAMPING));
@@ -636,7 +656,7 @@ mod tests {
                 link.inertia *= 10.0;
             }
         }
-        let (k10, d10) = fitted_gains(&heavy, &pose);
+        let (k10, d10, _) = fitted_gains(&heavy, &pose, heavy.total_mass() * 9.81 / 3.0, 0.03);
         let heavy_coxa = outboard_inertias(&heavy, &pose)[model.legs[0].joints[0]];
         assert!((heavy_coxa / coxa - 10.0).abs() < 1e-9);
         assert!((k10 - BANDWIDTH * BANDWIDTH * heavy_coxa).abs() < 1e-9);

@@ -43,16 +43,80 @@ pub fn outboard_inertias(model: &RobotModel, pose: &[f64]) -> Vec<f64> {
     inertias
 }
 
-/// Stiffness and damping that give the robot's legs, standing in `pose`, the reference servo's
-/// bandwidth and damping time (see the module's doc), and never less than the reference.
-pub fn fitted_gains(model: &RobotModel, pose: &[f64]) -> (f64, f64) {
+/// The most a standing foot may sag under its share of the weight on the gait's fewest feet,
+/// through its servos' compliance ([`vertical_compliance`], free to slide), as a fraction of the
+/// step height. A foot that sags by much of its step lands early and lifts off late while it
+/// still moves, so it is dragged: a 2.6 kg hexapod (enjoykin-ua's) with 0.13 m tibias sags
+/// 15.3 mm of its 30 mm step (51 %) on the bandwidth's 21.6 N·m/rad, and its feet slid 0.30 m
+/// each in 10 s on flat ground. hex18 on the reference servo: 15 %, kept.
+pub const SAG_LIMIT: f64 = 0.2;
+
+/// The vertical compliance Σ_j (∂z_foot/∂q_j)² (m²) of the leg that yields most: a foot pushed
+/// up by F on servos of stiffness k, free to slide, lets its hip sink F/k times it (the z row of
+/// the leg's compliance J·K⁻¹·Jᵀ, K = k·I). Free to slide, because a sagging tripod splays its
+/// legs, and once the splay's push passes friction the feet do slide: the 2.6 kg hexapod of
+/// [`SAG_LIMIT`] sagged 13.7 mm where this predicts 15.3 mm. A foot friction holds sags less
+/// (hex18: 1.6 mm measured, 4.4 mm predicted), so this bounds the sag from above.
+pub fn vertical_compliance(model: &RobotModel, pose: &[f64]) -> f64 {
+    let poses = model.link_poses(pose);
+    model
+        .legs
+        .iter()
+        .map(|leg| {
+            let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
+            leg.joints
+                .iter()
+                .map(|&j| {
+                    let joint = &model.joints[j];
+                    let frame = poses[joint.parent] * joint.origin;
+                    let axis = (frame.matrix3 * joint.axis).normalize();
+                    axis.cross(foot - frame.translation).z.powi(2)
+                })
+                .sum::<f64>()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// What the fit chose its stiffness for (see [`fitted_gains`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FittedFor {
+    /// hex18's servo: the reference.
+    Reference,
+    /// The reference bandwidth on heavier legs.
+    Bandwidth,
+    /// A standing foot's sag within [`SAG_LIMIT`] of the step.
+    Sag,
+}
+
+/// Stiffness and damping for the robot's legs standing in `pose`, each foot loaded with `load`
+/// (N: the weight over the gait's fewest feet) and lifted `step_height` (m) by the gait: the
+/// reference servo's bandwidth and damping time (see the module's doc), stiff enough that no foot
+/// sags more than [`SAG_LIMIT`] of the step, and never less than the reference.
+pub fn fitted_gains(
+    model: &RobotModel,
+    pose: &[f64],
+    load: f64,
+    step_height: f64,
+) -> (f64, f64, FittedFor) {
     let inertia = outboard_inertias(model, pose)
         .into_iter()
         .fold(0.0, f64::max);
-    let stiffness = (BANDWIDTH * BANDWIDTH * inertia).max(REFERENCE_STIFFNESS);
+    let bandwidth = BANDWIDTH * BANDWIDTH * inertia;
+    let sag = load * vertical_compliance(model, pose) / (SAG_LIMIT * step_height);
+    let (stiffness, reason) = [
+        (REFERENCE_STIFFNESS, FittedFor::Reference),
+        (bandwidth, FittedFor::Bandwidth),
+        (sag, FittedFor::Sag),
+    ]
+    .into_iter()
+    .filter(|(k, _)| k.is_finite())
+    .fold((0.0, FittedFor::Reference), |best, c| {
+        if c.0 > best.0 { c } else { best }
+    });
     (
         stiffness,
         stiffness * REFERENCE_DAMPING / REFERENCE_STIFFNESS,
+        reason,
     )
 }
 

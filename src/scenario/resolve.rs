@@ -347,7 +347,14 @@ fn resolve_walk(
     if spec.pgs_iterations == Some(0) {
         return Err("pgs_iterations: expected at least 1".into());
     }
-    let gains = resolve_servo(spec.servo.unwrap_or_default(), &robot, &gait.standing_pose)?;
+    let load = robot.total_mass() * crate::sim::STANDARD_GRAVITY / support.max(1) as f64;
+    let gains = resolve_servo(
+        spec.servo.unwrap_or_default(),
+        &robot,
+        &gait.standing_pose,
+        load,
+        gait.gait.step_height,
+    )?;
     let dt = walk_time_step(
         spec,
         &robot,
@@ -644,10 +651,20 @@ fn walk_time_step(
     }
 }
 
-/// The servo gains: as given, else fitted to the robot standing in `pose` (the gait's).
-fn resolve_servo(servo: ServoSpec, robot: &RobotModel, pose: &[f64]) -> Result<ServoGains, String> {
+/// The servo gains: as given, else fitted to the robot standing in `pose` (the gait's), each
+/// foot carrying `load` (N) and lifted `step_height` (m).
+fn resolve_servo(
+    servo: ServoSpec,
+    robot: &RobotModel,
+    pose: &[f64],
+    load: f64,
+    step_height: f64,
+) -> Result<ServoGains, String> {
     use crate::robot::servo::{REFERENCE_DAMPING, REFERENCE_STIFFNESS, fitted_gains};
-    let fitted = || fitted_gains(robot, pose);
+    let fitted = || {
+        let (k, d, _) = fitted_gains(robot, pose, load, step_height);
+        (k, d)
+    };
     let (stiffness, damping) = match (servo.stiffness, servo.damping) {
         (Some(k), Some(d)) => (k, d),
         (Some(k), None) => (k, k * REFERENCE_DAMPING / REFERENCE_STIFFNESS),
