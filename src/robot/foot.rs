@@ -64,7 +64,7 @@ pub fn find(
         "it has no collision or visual geometry to find its tip from".to_string()
     } else {
         format!(
-            "its geometry could not be read to find its tip ({}; hexsim reads STL meshes and the URDF's shapes)",
+            "its geometry could not be read to find its tip ({}; hexsim reads STL, COLLADA and OBJ meshes and the URDF's shapes)",
             unread.join(", ")
         )
     })
@@ -99,11 +99,11 @@ fn points(pieces: &[Placed], base: &Path, unread: &mut Vec<String>) -> Vec<DVec3
                     .as_ref()
                     .map_or(DVec3::ONE, |s| DVec3::from_array(s.0));
                 match mesh::resolve(filename, base) {
-                    Ok(path) => match mesh::stl_vertices(&path) {
+                    Ok(path) => match mesh::mesh_vertices(&path) {
                         Some(vertices) => vertices.into_iter().map(|v| v * scale).collect(),
                         None => {
                             unread.push(format!(
-                                "mesh {filename} is not an STL file hexsim can read"
+                                "mesh {filename} is not a mesh file hexsim can read (STL, COLLADA, OBJ)"
                             ));
                             Vec::new()
                         }

@@ -52,23 +52,36 @@ pub fn drawable(path: &Path) -> bool {
         .is_some_and(|e| DRAWABLE.contains(&e.to_ascii_lowercase().as_str()))
 }
 
-/// The vertices of an STL mesh file (in its own units), or None if it cannot be read (the
-/// caller falls back to what it knows without the mesh).
-pub fn stl_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
-    let is_stl = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
-    if !is_stl {
-        return None;
+/// The vertices of a mesh file (in its own units; COLLADA's node transforms and `<unit>` applied
+/// by mesh-loader — to the vertices, not to node translations: a node's −10 cm was read as
+/// −10 m, so only a mesh placed by nodes in a unit other than metres comes out misplaced)
+/// — STL, COLLADA (`.dae`, as Phobos and many ROS packages write them) or Wavefront OBJ — or
+/// None if it cannot be read (the caller falls back to what it knows without the mesh).
+pub fn mesh_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
+    let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+    let to_f64 = |v: [f32; 3]| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+    match extension.as_str() {
+        "stl" => {
+            let mut file = std::fs::File::open(path).ok()?;
+            let mesh = stl_io::read_stl(&mut file).ok()?;
+            Some(mesh.vertices.iter().map(|v| to_f64(v.0)).collect())
+        }
+        "dae" | "obj" => {
+            let loader = mesh_loader::Loader::default();
+            let scene = match extension.as_str() {
+                "dae" => loader.load_collada(path),
+                _ => loader.load_obj(path),
+            }
+            .ok()?;
+            let vertices: Vec<glam::DVec3> = scene
+                .meshes
+                .iter()
+                .flat_map(|m| m.vertices.iter().map(|&v| to_f64(v)))
+                .collect();
+            (!vertices.is_empty()).then_some(vertices)
+        }
+        _ => None,
     }
-    let mut file = std::fs::File::open(path).ok()?;
-    let mesh = stl_io::read_stl(&mut file).ok()?;
-    Some(
-        mesh.vertices
-            .iter()
-            .map(|v| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-            .collect(),
-    )
 }
 
 #[cfg(test)]
@@ -111,5 +124,24 @@ mod tests {
             root.join("a.obj")
         );
         assert_eq!(resolve("a.obj", root).unwrap(), root.join("a.obj"));
+    }
+
+    /// A COLLADA mesh drawn in centimetres is read in metres (its `<unit>` applied by
+    /// mesh-loader); a format hexsim does not read gives None.
+    #[test]
+    fn collada_vertices_are_read_in_metres() {
+        let dae = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes/tip_cm.dae");
+        let mut found = mesh_vertices(&dae).unwrap();
+        found.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        let expected = [
+            glam::DVec3::new(0.0, 0.0, -0.1),
+            glam::DVec3::new(0.0, 0.03, -0.1),
+            glam::DVec3::new(0.02, 0.0, -0.1),
+        ];
+        assert_eq!(found.len(), 3, "{found:?}");
+        for (f, e) in found.iter().zip(expected) {
+            assert!(f.distance(e) < 1e-6, "{found:?}");
+        }
+        assert_eq!(mesh_vertices(Path::new("robot.ply")), None);
     }
 }

@@ -231,7 +231,7 @@ impl RobotModel {
                 Shape::Sphere { radius } => Some(frame.translation.z - radius),
                 Shape::Cylinder { radius, length } => Some(ends(*length) - disc(*radius)),
                 Shape::Capsule { radius, length } => Some(ends(*length) - radius),
-                Shape::Mesh { path, scale } => super::mesh::stl_vertices(path)?
+                Shape::Mesh { path, scale } => super::mesh::mesh_vertices(path)?
                     .into_iter()
                     .map(|v| frame.transform_point3(v * *scale).z)
                     .reduce(f64::min),
