@@ -56,7 +56,8 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
 /// MIT WORMS hexapod, xacro output, 79 kg on 1 m legs with pad feet (its ground and time step
 /// fitted to its weight and its landing feet); hexaross, xacro output with rubber-tip meshes
 /// merged into its tibias; pexod, xacro output; the harika hexapod, a SolidWorks export with mesh
-/// feet.
+/// feet; frank1789's Phobos export, its body on a floating joint from a 1 g root, its feet the
+/// tips of COLLADA tibias.
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -92,6 +93,10 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         (
             "harika",
             "tests/data/third_party/harika_hexapod/hexapod/urdf/hexapod.urdf",
+        ),
+        (
+            "phobos",
+            "tests/data/third_party/phobos_hexapod/hexapod_description/urdf/Hexapod.urdf",
         ),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));
