@@ -99,7 +99,7 @@ fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
     let torques = statics::standing_torques(model, pose, STANDARD_GRAVITY, 6);
     let gait = &fitted.gait;
     let support = hexsim::gait::minimum_support(&gait.offsets, gait.duty_factor);
-    let load = model.total_mass() * STANDARD_GRAVITY / support.max(1) as f64;
+    let load = statics::foot_load(model, STANDARD_GRAVITY, support);
     let (stiffness, damping, reason) =
         robot::servo::fitted_gains(model, pose, load, gait.step_height);
     let why = match reason {

@@ -59,29 +59,33 @@ pub fn drawable(path: &Path) -> bool {
 /// None if it cannot be read (the caller falls back to what it knows without the mesh).
 pub fn mesh_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
     let extension = path.extension()?.to_str()?.to_ascii_lowercase();
-    let to_f64 = |v: [f32; 3]| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
     match extension.as_str() {
         "stl" => {
             let mut file = std::fs::File::open(path).ok()?;
             let mesh = stl_io::read_stl(&mut file).ok()?;
-            Some(mesh.vertices.iter().map(|v| to_f64(v.0)).collect())
+            Some(
+                mesh.vertices
+                    .iter()
+                    .map(|v| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
+                    .collect(),
+            )
         }
-        "dae" | "obj" => {
-            let loader = mesh_loader::Loader::default();
-            let scene = match extension.as_str() {
-                "dae" => loader.load_collada(path),
-                _ => loader.load_obj(path),
-            }
-            .ok()?;
-            let vertices: Vec<glam::DVec3> = scene
-                .meshes
-                .iter()
-                .flat_map(|m| m.vertices.iter().map(|&v| to_f64(v)))
-                .collect();
-            (!vertices.is_empty()).then_some(vertices)
-        }
+        "dae" => scene_vertices(mesh_loader::Loader::default().load_collada(path)),
+        "obj" => scene_vertices(mesh_loader::Loader::default().load_obj(path)),
         _ => None,
     }
+}
+
+/// Every vertex of a scene mesh-loader read, or None if it failed or holds none.
+fn scene_vertices(scene: std::io::Result<mesh_loader::Scene>) -> Option<Vec<glam::DVec3>> {
+    let vertices: Vec<glam::DVec3> = scene
+        .ok()?
+        .meshes
+        .iter()
+        .flat_map(|m| m.vertices.iter())
+        .map(|v| glam::DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
+        .collect();
+    (!vertices.is_empty()).then_some(vertices)
 }
 
 #[cfg(test)]

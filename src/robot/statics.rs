@@ -18,11 +18,7 @@ pub fn standing_torques(
 ) -> Vec<f64> {
     let poses = model.link_poses(pose);
     let g = DVec3::new(0.0, 0.0, -gravity);
-    let ground_force = DVec3::new(
-        0.0,
-        0.0,
-        model.total_mass() * gravity / feet_down.max(1) as f64,
-    );
+    let ground_force = DVec3::new(0.0, 0.0, foot_load(model, gravity, feet_down));
     let mut torques = vec![0.0; model.joints.len()];
     for leg in &model.legs {
         let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
@@ -40,6 +36,12 @@ pub fn standing_torques(
         }
     }
     torques
+}
+
+/// Each foot's share (N) of the robot's weight under `gravity` (m/s²), standing on `feet_down`
+/// feet (at least one).
+pub fn foot_load(model: &RobotModel, gravity: f64, feet_down: usize) -> f64 {
+    model.total_mass() * gravity / feet_down.max(1) as f64
 }
 
 /// A leg's segments with its joints at zero: hip to second joint, second to third, third to the

@@ -668,8 +668,7 @@ impl<'a> Bodies<'a> {
             frame.transform_point3(com),
             frame.matrix3 * inertia * frame.matrix3.transpose(),
         );
-        // the first collision that is not a mesh stands in for a visual mesh rerun cannot draw
-        // the first collision primitive, drawn (at its own origin) for a mesh that cannot be
+        // the first collision primitive, drawn (at its own origin) for a visual mesh that cannot be
         let collision_shape = urdf_link.collision.iter().find_map(|c| {
             let ignored = &mut MeshProblems::default();
             let shape = shape(&c.geometry, self.base, &urdf_link.name, false, ignored)

@@ -9,6 +9,7 @@ use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
 use crate::contact::{ContactModel, NormalLaw};
 use crate::gait::{CommandChange, CommandSchedule, Gait, GaitSpec, VelocityCommand};
 use crate::robot::RobotModel;
+use crate::robot::statics::foot_load;
 use crate::sim::{
     BallConfig, DEFAULT_SOLVER_ITERATIONS, HexapodSettings, STANDARD_GRAVITY, ServoGains,
 };
@@ -347,7 +348,7 @@ fn resolve_walk(
     if spec.pgs_iterations == Some(0) {
         return Err("pgs_iterations: expected at least 1".into());
     }
-    let load = robot.total_mass() * crate::sim::STANDARD_GRAVITY / support.max(1) as f64;
+    let load = foot_load(&robot, STANDARD_GRAVITY, support);
     let gains = resolve_servo(
         spec.servo.unwrap_or_default(),
         &robot,
@@ -458,7 +459,7 @@ fn fit_ground(
         };
     }
     if given.stiffness.is_some() && support > 0 {
-        let load = robot.total_mass() * STANDARD_GRAVITY / support as f64;
+        let load = foot_load(robot, STANDARD_GRAVITY, support);
         let radius = robot
             .legs
             .iter()
@@ -547,7 +548,7 @@ fn touchdown_step(
     support: usize,
 ) -> Option<ContactStep> {
     let speed = gait.touchdown_speed();
-    let standing = robot.total_mass() * STANDARD_GRAVITY / support.max(1) as f64;
+    let standing = foot_load(robot, STANDARD_GRAVITY, support);
     let sink = contact.normal.static_sink(standing);
     if !(speed > 0.0 && sink > 0.0) {
         return None;

@@ -77,30 +77,23 @@ pub fn natural(
     )
 }
 
-/// The natural terrain repeated `tiles` = [along x, along y] times: the first copy is
-/// [`natural`]'s grid where it would be (`size` centred on `center`), the others continue it
-/// toward +x and +y, where a walk goes.
+/// A periodic terrain's grid (one period: [`natural`]'s) repeated `tiles` = [along x, along y]
+/// times: the first copy where the tile is, the others continuing it toward +x and +y, where a
+/// walk goes.
 ///
 /// Eq. 7's surface is the magnitude of an inverse DFT, so it is periodic: the sample after the
 /// last would be the first again. The copies therefore meet without a seam — the tiled grid is
 /// the same surface sampled further — and a robot whose 10 s walk is longer than the paper's
 /// 4 m can walk it on the paper's terrain instead of on the flat apron past its edge.
-pub fn natural_tiled(
-    seed: u32,
-    n: usize,
-    size: [f64; 2],
-    center: [f64; 2],
-    peak_to_peak: f64,
-    tiles: [usize; 2],
-) -> Result<HeightGrid, GridError> {
-    let tile = natural(seed, n, size, center, peak_to_peak)?;
+pub fn tiled(tile: HeightGrid, tiles: [usize; 2]) -> Result<HeightGrid, GridError> {
     if tiles == [1, 1] {
         return Ok(tile);
     }
-    let (cols, rows) = (n.saturating_mul(tiles[0]), n.saturating_mul(tiles[1]));
+    let (nx, ny) = (tile.cols(), tile.rows());
+    let (cols, rows) = (nx.saturating_mul(tiles[0]), ny.saturating_mul(tiles[1]));
     check_samples(rows, cols)?;
     let heights = (0..rows * cols)
-        .map(|k| tile.sample((k / cols) % n, (k % cols) % n))
+        .map(|k| tile.sample((k / cols) % ny, (k % cols) % nx))
         .collect();
     let (dx, dy) = tile.spacing();
     let ([x0, _], [y0, _]) = (tile.x_range(), tile.y_range());
@@ -338,7 +331,7 @@ mod tests {
     fn tiled_natural_terrain_is_seamless() {
         let n = 32;
         let tile = natural(7, n, [2.0, 2.0], [0.0, 0.0], 0.05).unwrap();
-        let tiled = natural_tiled(7, n, [2.0, 2.0], [0.0, 0.0], 0.05, [3, 2]).unwrap();
+        let tiled = tiled(tile.clone(), [3, 2]).unwrap();
         assert_eq!((tiled.rows(), tiled.cols()), (2 * n, 3 * n));
         assert_eq!(tiled.spacing(), tile.spacing());
         // the first copy is the tile, in place
@@ -358,10 +351,7 @@ mod tests {
         let seam = (0..n).map(|i| step(&tiled, i, n - 1)).fold(0.0, f64::max);
         assert!(seam <= inside, "seam step {seam}, inside {inside}");
         // one tile is the paper's grid unchanged
-        assert_eq!(
-            natural_tiled(7, n, [2.0, 2.0], [0.0, 0.0], 0.05, [1, 1]).unwrap(),
-            tile
-        );
+        assert_eq!(super::tiled(tile.clone(), [1, 1]).unwrap(), tile);
     }
 
     #[test]

@@ -212,14 +212,14 @@ impl HeightSource for Natural {
     }
 
     fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
-        generate::natural_tiled(
+        generate::natural(
             self.seed,
             self.samples,
             self.size,
             self.center,
             self.peak_to_peak,
-            self.tiles,
         )
+        .and_then(|tile| generate::tiled(tile, self.tiles))
         .map_err(BuildError::Grid)
     }
 
