@@ -217,7 +217,7 @@ fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
     assert!(
         stderr.contains("dt = 0.001 s is too large")
             && stderr.contains("`servomotor_")
-            && stderr.contains("dt ≤ 3.85e-4 s"),
+            && stderr.contains("dt ≤ 2.88e-4 s"),
         "{stderr}"
     );
     let out = hexsim()
@@ -227,7 +227,7 @@ fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(
-        stderr.contains("dt: 0.333 ms, not the default 1 ms"),
+        stderr.contains("dt: 0.250 ms, not the default 1 ms"),
         "{stderr}"
     );
     // the bound a refusal prints is allowed, rounded down: pexod's is 4.994e-4 s, which read

@@ -807,3 +807,55 @@ fn servo_torques_hold_the_standing_robot(articulation: Articulation) {
         );
     }
 }
+
+/// The load feed-forward (`Walker::load_feedforward`): a position servo of stiffness k holding
+/// torque τ stands τ/k short of its target, so hex18 on the reference servo sags below the gait's
+/// stance height, standing (0.9 mm) and more in the tripod's stance (2.2 mm: half the feet carry
+/// the weight). With each target moved on by τ/k it stands within 0.5 mm of that height — the
+/// ground spring's static sink (0.2 mm) and the feet's friction, which the statics of vertical
+/// foot forces leave out, are what remains — and the sag is at least halved.
+#[test]
+fn the_load_feedforward_holds_the_stance_height() {
+    // the hips' mean height over the 0.2 s before `seconds` (1 s standing first)
+    let height = |feedforward: bool, seconds: f64| {
+        let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
+        let place = Placement {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        };
+        let mut w = walker(
+            hex18(),
+            ground,
+            place,
+            tripod(),
+            1.0,
+            Articulation::Multibody,
+        );
+        w.load_feedforward = feedforward;
+        let samples: Vec<HexapodSample> = (0..(seconds / DT).round() as usize)
+            .map(|_| w.step().robot)
+            .collect();
+        let tail = &samples[samples.len() - (0.2 / DT) as usize..];
+        tail.iter().map(|s| s.body_height).sum::<f64>() / tail.len() as f64
+    };
+    let stance = tripod().stance_height;
+    // standing at the end of the settle; the first half of a tripod's stance, 1.25 s into the walk
+    for (what, seconds) in [("standing", 1.0), ("in the tripod's stance", 2.25)] {
+        let (held, sagged) = (
+            height(true, seconds) - stance,
+            height(false, seconds) - stance,
+        );
+        println!(
+            "{what}: {:+.3} mm with, {:+.3} mm without",
+            held * 1e3,
+            sagged * 1e3
+        );
+        assert!(
+            held.abs() < 0.5e-3 && held.abs() < 0.5 * sagged.abs(),
+            "{what}: {:+.3} mm off the stance height with the feed-forward, {:+.3} mm without",
+            held * 1e3,
+            sagged * 1e3
+        );
+    }
+}

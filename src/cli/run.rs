@@ -64,6 +64,11 @@ pub struct RunArgs {
     /// Servo damping (N·m·s/rad). Default: 2.5 ms of the stiffness (hex18: the reference's 0.05).
     #[arg(long)]
     servo_damping: Option<f64>,
+    /// Servo targets exactly the gait's joint angles: no load feed-forward (by default each
+    /// target is moved on by the torque the joint holds over the stiffness, so the legs do not
+    /// sag under the weight).
+    #[arg(long)]
+    no_feedforward: bool,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
     /// impulse joints (about 1.1× faster; the joints drift apart by up to ~0.4 mm)
     #[arg(long, value_enum, default_value_t = Articulation::default())]
@@ -133,6 +138,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         servo: Some(ServoSpec {
             stiffness: args.servo_stiffness,
             damping: args.servo_damping,
+            feedforward: args.no_feedforward.then_some(false),
         }),
         start: Some(StartSpec {
             x: args.start.as_ref().map(|v| v[0]),

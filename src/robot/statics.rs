@@ -1,26 +1,39 @@
-//! The robot standing still, level, its weight shared equally by the six feet: the torque each
-//! joint's servo must hold (statics of each leg: the moment about the joint axis of the leg's
-//! outboard weights and of its foot's ground force), and each leg's segment lengths.
+//! The robot standing still and level on some of its feet: how its weight is shared among them,
+//! the torque each joint's servo must hold (statics of each leg: the moment about the joint axis
+//! of the leg's outboard weights and of its foot's ground force), and each leg's segment lengths.
 
 use super::model::{Leg, RobotModel};
-use glam::DVec3;
+use glam::{DAffine3, DVec3};
 
 /// Per model joint, the servo torque (N·m, about the joint axis, on the child) that holds `pose`
 /// (joint angles per model joint) standing level under `gravity` (m/s²), the weight shared
-/// equally by `feet_down` feet (6 standing; 3 in a tripod's stance): τ_j = −a_j·[Σ_k (c_k − o_j)
-/// × m_k·g + (f − o_j) × F], the sum over the leg's links outboard of joint j, F = m·g/feet_down
-/// (every leg is given the ground force: the loaded legs' torques, whichever they are).
+/// equally by `feet_down` feet (6 standing; 3 in a tripod's stance): every leg is given the
+/// ground force m·g/feet_down (the loaded legs' torques, whichever they are). See
+/// [`holding_torques`].
 pub fn standing_torques(
     model: &RobotModel,
     pose: &[f64],
     gravity: f64,
     feet_down: usize,
 ) -> Vec<f64> {
-    let poses = model.link_poses(pose);
+    let load = foot_load(model, gravity, feet_down);
+    holding_torques(model, &model.link_poses(pose), gravity, &[load; 6])
+}
+
+/// Per model joint, the servo torque (N·m, about the joint axis, on the child) that holds the
+/// links at `poses` (the model's link poses, body frame, z up) under `gravity` (m/s²), each
+/// leg's foot pushed up by `loads` (N, in `legs` order): τ_j = −a_j·[Σ_k (c_k − o_j) × m_k·g +
+/// (f − o_j) × F], the sum over the leg's links outboard of joint j.
+pub fn holding_torques(
+    model: &RobotModel,
+    poses: &[DAffine3],
+    gravity: f64,
+    loads: &[f64; 6],
+) -> Vec<f64> {
     let g = DVec3::new(0.0, 0.0, -gravity);
-    let ground_force = DVec3::new(0.0, 0.0, foot_load(model, gravity, feet_down));
     let mut torques = vec![0.0; model.joints.len()];
-    for leg in &model.legs {
+    for (leg, &load) in model.legs.iter().zip(loads) {
+        let ground_force = DVec3::new(0.0, 0.0, load);
         let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
         for (i, &j) in leg.joints.iter().enumerate() {
             let joint = &model.joints[j];
@@ -36,6 +49,70 @@ pub fn standing_torques(
         }
     }
     torques
+}
+
+/// Each foot's vertical force (N, in `legs` order) holding the robot still and level on the
+/// feet in `stance`, its links at `poses` (body frame, z up): the forces F_i that balance the
+/// weight and its moments about the centre of mass, ΣF_i = m·g, ΣF_i·(x_i − x_c) = 0,
+/// ΣF_i·(y_i − y_c) = 0 — exact on three feet, the least-squares (minimum ΣF_i²) solution on
+/// more. A tripod's lone middle foot carries nearly half the weight, not a third. A foot the
+/// balance would pull on (the centre of mass outside the support) is given none, the rest
+/// scaled to the weight; feet in a line share it equally.
+pub fn stance_loads(
+    model: &RobotModel,
+    poses: &[DAffine3],
+    gravity: f64,
+    stance: [bool; 6],
+) -> [f64; 6] {
+    let weight = model.total_mass() * gravity;
+    let com = model
+        .links
+        .iter()
+        .zip(poses)
+        .map(|(link, pose)| pose.transform_point3(link.com) * link.mass)
+        .sum::<DVec3>()
+        / model.total_mass();
+    let feet: [DVec3; 6] = std::array::from_fn(|k| {
+        let leg = &model.legs[k];
+        poses[leg.foot_link].transform_point3(leg.foot.center) - com
+    });
+    let down = stance.iter().filter(|&&s| s).count();
+    if down == 0 {
+        return [0.0; 6];
+    }
+    let equal = weight / down as f64;
+    // F = Aᵀ(AAᵀ)⁻¹b with A's columns (1, x_i, y_i) and b = (m·g, 0, 0)
+    let row = |k: usize| DVec3::new(1.0, feet[k].x, feet[k].y);
+    let normal = (0..6)
+        .filter(|&k| stance[k])
+        .map(|k| {
+            let a = row(k);
+            glam::DMat3::from_cols(a * a.x, a * a.y, a * a.z)
+        })
+        .fold(glam::DMat3::ZERO, |sum, m| sum + m);
+    let scale = feet
+        .iter()
+        .map(|f| f.truncate().length_squared())
+        .sum::<f64>()
+        + 1e-12;
+    if normal.determinant().abs() <= 1e-9 * scale * scale {
+        return std::array::from_fn(|k| if stance[k] { equal } else { 0.0 });
+    }
+    let lambda = normal.inverse() * DVec3::new(weight, 0.0, 0.0);
+    let mut loads: [f64; 6] = std::array::from_fn(|k| {
+        if stance[k] {
+            row(k).dot(lambda).max(0.0)
+        } else {
+            0.0
+        }
+    });
+    let total: f64 = loads.iter().sum();
+    if total > 0.0 {
+        loads.iter_mut().for_each(|f| *f *= weight / total);
+        loads
+    } else {
+        std::array::from_fn(|k| if stance[k] { equal } else { 0.0 })
+    }
 }
 
 /// Each foot's share (N) of the robot's weight under `gravity` (m/s²), standing on `feet_down`
@@ -138,6 +215,54 @@ mod tests {
                 leg.name,
                 torques[j]
             );
+        }
+    }
+
+    /// Three feet: the loads are the unique ones that balance the weight and its moments about
+    /// the centre of mass (the robot does not tip); hex18's tripod puts nearly half on the lone
+    /// middle foot. Six: balanced too. Two (a line): an equal split, the balance undetermined.
+    #[test]
+    fn stance_loads_balance_the_weight_and_its_moments() {
+        let model = hex18();
+        let g = 9.81;
+        let poses = model.link_poses(&vec![0.0; model.joints.len()]);
+        let weight = model.total_mass() * g;
+        let com = model
+            .links
+            .iter()
+            .zip(&poses)
+            .map(|(l, p)| p.transform_point3(l.com) * l.mass)
+            .sum::<DVec3>()
+            / model.total_mass();
+        let names: Vec<&str> = model.legs.iter().map(|l| l.name).collect();
+        let tripod: [bool; 6] = std::array::from_fn(|k| matches!(names[k], "lf" | "rm" | "lr"));
+        for stance in [tripod, [true; 6]] {
+            let loads = stance_loads(&model, &poses, g, stance);
+            let mut sum = DVec3::ZERO;
+            for (k, leg) in model.legs.iter().enumerate() {
+                let foot = poses[leg.foot_link].transform_point3(leg.foot.center) - com;
+                sum += DVec3::new(loads[k], loads[k] * foot.x, loads[k] * foot.y);
+                assert!(
+                    stance[k] || loads[k] == 0.0,
+                    "{} in swing: {loads:?}",
+                    leg.name
+                );
+            }
+            assert!((sum.x - weight).abs() < 1e-9 * weight, "{sum} of {weight}");
+            assert!(sum.y.abs() < 1e-9 && sum.z.abs() < 1e-9, "moments {sum}");
+        }
+        let loads = stance_loads(&model, &poses, g, tripod);
+        let middle = names.iter().position(|&n| n == "rm").unwrap();
+        assert!(
+            loads[middle] > 0.4 * weight && loads[middle] < 0.5 * weight,
+            "the middle foot carries {} of {weight} N",
+            loads[middle]
+        );
+        let two: [bool; 6] = std::array::from_fn(|k| matches!(names[k], "lf" | "rr"));
+        let loads = stance_loads(&model, &poses, g, two);
+        for k in 0..6 {
+            let expected = if two[k] { weight / 2.0 } else { 0.0 };
+            assert!((loads[k] - expected).abs() < 1e-9, "{loads:?}");
         }
     }
 }

@@ -34,6 +34,8 @@ pub struct WalkRun {
     pub settle_time: f64,
     /// Keep the body level by following the terrain under the feet.
     pub terrain_following: bool,
+    /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
+    pub load_feedforward: bool,
     /// Seconds walked.
     pub duration: f64,
     /// Samples per second in the recording and trajectory.
@@ -107,6 +109,7 @@ impl WalkRun {
         );
         let mut walker = Walker::new(hexapod, controller, self.commands.at(0.0), self.settle_time);
         walker.terrain_following = self.terrain_following;
+        walker.load_feedforward = self.load_feedforward;
         let every = decimation(self.log_rate, dt);
 
         let name = match self.settings.articulation {

@@ -83,6 +83,8 @@ struct WalkSetup {
     settings: HexapodSettings,
     settle: f64,
     follow_terrain: bool,
+    /// Servo targets held against the load (see `sim::Walker::load_feedforward`).
+    feedforward: bool,
     start: spec::StartSpec,
     /// The contact's stiffness and damping and where they came from.
     ground: crate::metrics::GroundMetrics,
@@ -292,6 +294,7 @@ impl Scenario {
             settings: w.settings,
             settle_time: w.settle,
             terrain_following: w.follow_terrain,
+            load_feedforward: w.feedforward,
             duration: self.spec.duration,
             log_rate: self.log_rate,
             outputs,

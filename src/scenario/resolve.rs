@@ -397,6 +397,7 @@ fn resolve_walk(
         },
         settle,
         follow_terrain: spec.follow_terrain.unwrap_or(false),
+        feedforward: spec.servo.and_then(|s| s.feedforward).unwrap_or(true),
         start: spec.start.unwrap_or_default(),
         ground,
     })
@@ -572,8 +573,11 @@ fn touchdown_step(
 /// Measured on Kraby (tibia I = 1.85e-5 kg·m², k = 20 N·m/rad, ω = 1040 rad/s): at ω·dt = 1.04
 /// (1 ms) each foot slides 0.6–0.95 m over an 8 s walk on flat ground, at 0.52 (0.5 ms) still
 /// 0.7–1.3 m, at 0.42 (0.4 ms) 0.02–0.06 m like the other robots; hex18's is 0.28, the other
-/// third-party robots' 0.20–0.37.
-pub const SERVO_STEP_LIMIT: f64 = 0.4;
+/// third-party robots' 0.20–0.37. With the load feed-forward (`sim::Walker::load_feedforward`)
+/// the legs stand straighter and the mode is less damped: on the natural terrain Kraby's front
+/// foot chattered (its load alternating 9 N / 0 step to step) and slid 0.205 m at 0.35 (0.333
+/// ms), 0.097 m at 0.31 (0.3 ms), 0.042 m at 0.26 (0.25 ms) and 0.039 m at 0.21 (0.2 ms).
+pub const SERVO_STEP_LIMIT: f64 = 0.3;
 
 /// The largest (k·dt + d)·dt / I of the impulse joints' servo, whose torque is explicit in the
 /// step, τ = k·(q* − q) − (k·dt + d)·q̇ (`sim::articulation`): each step multiplies the joint's

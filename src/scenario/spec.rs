@@ -378,6 +378,10 @@ pub struct ServoSpec {
     /// N·m·s/rad.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub damping: Option<f64>,
+    /// Move each joint's target on by the torque it holds over the stiffness, so the legs do not
+    /// sag under the weight (default true; see `sim::Walker::load_feedforward`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub feedforward: Option<bool>,
 }
 
 /// Where the body starts; unset x/y: [`START_INSET`] inside the terrain's −x edge, centred in y.

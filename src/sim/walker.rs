@@ -1,7 +1,9 @@
 //! A hexapod driven by a gait: settle in the standing pose, then walk to a velocity command.
 
+use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
 use crate::gait::{GaitController, GaitTargets, VelocityCommand};
+use crate::robot::statics;
 
 /// The walking robot: a [`Hexapod`] and the [`GaitController`] that sets its servo targets.
 pub struct Walker {
@@ -17,6 +19,10 @@ pub struct Walker {
     /// Follow the terrain under the feet (see [`GaitController::targets`]); off: every foot path
     /// is planned for level ground.
     pub terrain_following: bool,
+    /// Offset each joint's target by the torque it holds over the servo's stiffness (see
+    /// [`Walker::hold_load`]; on by default); off: the targets are the gait's angles and the legs
+    /// sag under load.
+    pub load_feedforward: bool,
     /// Joint targets given from outside (rad, by model joint), in place of the gait's.
     given_targets: Option<Vec<f64>>,
 }
@@ -48,6 +54,7 @@ impl Walker {
             last_targets: None,
             clamped_steps: 0,
             terrain_following: false,
+            load_feedforward: true,
             given_targets: None,
         }
     }
@@ -85,15 +92,38 @@ impl Walker {
         }
     }
 
-    fn set_leg_targets(&mut self, angles: [[f64; 3]; 6]) {
+    /// Sets the servos' targets to the legs' `angles`, held against the load of the feet in
+    /// `stance` when [`Self::load_feedforward`] is on.
+    fn set_leg_targets(&mut self, angles: [[f64; 3]; 6], stance: [bool; 6]) {
         for (leg, angles) in self.hexapod.model().legs.iter().zip(angles) {
             for (j, a) in leg.joints.iter().zip(angles) {
                 self.targets_by_joint[*j] = a;
             }
         }
+        if self.load_feedforward {
+            self.hold_load(stance);
+        }
         let targets_by_joint = std::mem::take(&mut self.targets_by_joint);
         self.hexapod.set_targets(&targets_by_joint);
         self.targets_by_joint = targets_by_joint;
+    }
+
+    /// A position servo under load stands τ/k short of its target (τ = k·(q* − q) at rest), so
+    /// a stance leg sags and, with three legs pushing against each other, splays and slides.
+    /// Feed-forward: with the robot standing level in the target pose, each joint's target is
+    /// moved on by τ/k, τ the torque it holds (`statics::holding_torques`) — its outboard links'
+    /// weight and its foot's share of the body's weight (`statics::stance_loads`: force and
+    /// moment balance on the feet the gait has down, none on a foot in swing). The servo then
+    /// comes to rest on the gait's angle under the planned load.
+    fn hold_load(&mut self, stance: [bool; 6]) {
+        let model = self.hexapod.model();
+        let poses = model.link_poses(&self.targets_by_joint);
+        let loads = statics::stance_loads(model, &poses, STANDARD_GRAVITY, stance);
+        let torques = statics::holding_torques(model, &poses, STANDARD_GRAVITY, &loads);
+        let stiffness = self.hexapod.gains().stiffness;
+        for (target, torque) in self.targets_by_joint.iter_mut().zip(torques) {
+            *target += torque / stiffness;
+        }
     }
 
     /// Drives the servos to `targets` (rad, one per model joint, in the model's joint order) from
@@ -141,7 +171,7 @@ impl Walker {
             } else {
                 self.controller.targets(t, self.command, blend, |_| 0.0)
             };
-            self.set_leg_targets(targets.joint_angles);
+            self.set_leg_targets(targets.joint_angles, targets.phases.map(|p| p.is_stance()));
             if targets.clamped.iter().any(|&c| c) {
                 self.clamped_steps += 1;
             }
@@ -150,7 +180,10 @@ impl Walker {
             // stand level from the start, so the walk does not begin tilted with the ground
             let ground = Self::ground_relative(&self.hexapod);
             let angles = self.controller.standing_on(ground);
-            self.set_leg_targets(angles);
+            self.set_leg_targets(angles, [true; 6]);
+        } else if self.load_feedforward {
+            let angles = self.controller.standing_on(|_| 0.0);
+            self.set_leg_targets(angles, [true; 6]);
         }
         let robot = self.hexapod.step();
         WalkSample {
