@@ -153,6 +153,46 @@ fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
             }
         );
     }
+    feedforward(out, model, fitted, stiffness);
+}
+
+/// What the servos' load feed-forward (`sim::Walker::load_feedforward`) does over the gait's
+/// cycle in the standing pose: the largest share of the weight a foot carries (force and moment
+/// balance on the feet down) and the largest target offset τ/k.
+fn feedforward(out: &mut String, model: &RobotModel, fitted: &Fitted, stiffness: f64) {
+    use std::fmt::Write;
+    let gait = &fitted.gait;
+    let poses = model.link_poses(&fitted.standing_pose);
+    let weight = model.total_mass() * STANDARD_GRAVITY;
+    let (mut most_load, mut most_offset) = ((0.0, ""), (0.0, String::new()));
+    for k in 0..100 {
+        let t = k as f64 / 100.0;
+        let stance = std::array::from_fn(|l| {
+            hexsim::gait::leg_phase(t, 1.0, gait.duty_factor, gait.offsets[l]).is_stance()
+        });
+        let loads = statics::stance_loads(model, &poses, STANDARD_GRAVITY, stance);
+        for (leg, &load) in model.legs.iter().zip(&loads) {
+            if load > most_load.0 {
+                most_load = (load, leg.name);
+            }
+        }
+        let torques = statics::holding_torques(model, &poses, STANDARD_GRAVITY, &loads);
+        for (joint, torque) in model.joints.iter().zip(torques) {
+            let offset = (torque / stiffness).abs();
+            if offset > most_offset.0 {
+                most_offset = (offset, joint.name.clone());
+            }
+        }
+    }
+    let _ = writeln!(
+        out,
+        "  load feed-forward (unless turned off): over the {}'s cycle a foot carries up to {:.0} % of the weight ({}; force and moment balance on the feet down), and a servo's target is moved on by up to {:.1}° ({}) so that it comes to rest on the gait's angle",
+        gait.name,
+        100.0 * most_load.0 / weight,
+        most_load.1,
+        most_offset.0.to_degrees(),
+        most_offset.1
+    );
 }
 
 /// The report, as printed.
