@@ -544,10 +544,22 @@ fn build(
         shapes,
         mesh_problems,
         unstated,
+        slides_welded,
+        point_masses,
         ..
     } = bodies;
-    check_masses(&links)?;
+    check_masses(&links, &point_masses)?;
     let mut warnings: Vec<String> = impossible_inertia_warning(&links).into_iter().collect();
+    if !slides_welded.is_empty() {
+        warnings.push(format!(
+            "{} prismatic joint{} travel{} at most {:.0} mm (a force sensor's mount, as simulators' descriptions have them): read as fixed at zero: {}",
+            slides_welded.len(),
+            if slides_welded.len() == 1 { "" } else { "s" },
+            if slides_welded.len() == 1 { "s" } else { "" },
+            SLIDE_AS_FIXED * 1e3,
+            slides_welded.join(", ")
+        ));
+    }
     warnings.extend(mesh_problems.warnings());
     let unfound = if feet.is_none() {
         let (unfound, warning) = find_feet(&mut links, &joints, &shapes, base);
@@ -590,6 +602,26 @@ struct Bodies<'a> {
     shapes: Vec<(Vec<Placed>, Vec<Placed>)>,
     mesh_problems: MeshProblems,
     unstated: Unstated,
+    /// Prismatic joints of negligible travel read as fixed ([`SLIDE_AS_FIXED`]), by name.
+    slides_welded: Vec<String>,
+    /// URDF links with a mass but a zero inertia tensor, by name: named if a body then has no
+    /// inertia about some axis.
+    point_masses: Vec<String>,
+}
+
+/// The most a prismatic joint may travel (m) to be read as fixed: simulators' descriptions mount a
+/// foot's force sensor on a slide of ±0.1 mm (elkapod's `legN_FCP_joint`, a Gazebo
+/// force-torque sensor), which holds the foot rigidly in all but name.
+pub const SLIDE_AS_FIXED: f64 = 1e-3;
+
+/// How far a prismatic joint can move (m): its limit's range; unbounded without one.
+fn slide_travel(joint: &urdf_rs::Joint) -> f64 {
+    let range = (joint.limit.upper - joint.limit.lower).abs();
+    if range.is_finite() && (joint.limit.upper != 0.0 || joint.limit.lower != 0.0) {
+        range
+    } else {
+        f64::INFINITY
+    }
 }
 
 impl<'a> Bodies<'a> {
@@ -605,6 +637,8 @@ impl<'a> Bodies<'a> {
             shapes: Vec::new(),
             mesh_problems: MeshProblems::default(),
             unstated: Unstated::default(),
+            slides_welded: Vec::new(),
+            point_masses: Vec::new(),
         }
     }
 
@@ -621,14 +655,27 @@ impl<'a> Bodies<'a> {
         let joint = &self.robot.joints[j];
         let parent = tree.index[joint.parent.link.as_str()];
         let origin = self.in_body[parent] * pose(&joint.origin);
-        match &joint.joint_type {
-            urdf_rs::JointType::Fixed => {
-                self.body_of[k] = self.body_of[parent];
-                self.in_body[k] = origin;
-                self.links[self.body_of[k]]
-                    .merged
-                    .push(urdf_link.name.clone());
+        let welded = match &joint.joint_type {
+            urdf_rs::JointType::Fixed => true,
+            urdf_rs::JointType::Prismatic if slide_travel(joint) <= SLIDE_AS_FIXED => {
+                self.slides_welded.push(joint.name.clone());
+                true
             }
+            _ => false,
+        };
+        if welded {
+            // a slide held at its zero, or at the end of its range nearest it
+            let limit = &joint.limit;
+            let at = 0.0_f64.clamp(limit.lower.min(limit.upper), limit.upper.max(limit.lower));
+            let axis = DVec3::from_array(joint.axis.xyz.0).normalize_or_zero();
+            self.body_of[k] = self.body_of[parent];
+            self.in_body[k] = origin * DAffine3::from_translation(axis * at);
+            self.links[self.body_of[k]]
+                .merged
+                .push(urdf_link.name.clone());
+            return Ok(());
+        }
+        match &joint.joint_type {
             urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
                 let (axis, lower, upper, effort) = revolute(joint, &mut self.unstated)?;
                 self.body_of[k] = self.links.len();
@@ -646,6 +693,14 @@ impl<'a> Bodies<'a> {
                     effort,
                 });
             }
+            urdf_rs::JointType::Prismatic => {
+                return Err(format!(
+                    "joint `{}`: a prismatic joint travelling {:.1} mm is not supported (hexsim's legs are chains of revolute joints; a slide of at most {:.0} mm, such as a foot's force-sensor mount, is read as fixed; use fixed for rigid attachments)",
+                    joint.name,
+                    slide_travel(joint) * 1e3,
+                    SLIDE_AS_FIXED * 1e3
+                ));
+            }
             other => {
                 return Err(format!(
                     "joint `{}`: type {other:?} is not supported (hexsim's legs are chains of revolute joints; use fixed for rigid attachments)",
@@ -660,6 +715,9 @@ impl<'a> Bodies<'a> {
     fn fold(&mut self, k: usize) -> Result<(), String> {
         let urdf_link = &self.robot.links[k];
         let (mass, com, inertia) = check_inertial(urdf_link)?;
+        if mass > 0.0 && inertia == DMat3::ZERO {
+            self.point_masses.push(urdf_link.name.clone());
+        }
         let frame = self.in_body[k];
         let body = &mut self.links[self.body_of[k]];
         add_mass(
@@ -788,8 +846,10 @@ fn revolute(
 }
 
 /// Every body needs a mass and a positive-definite inertia; a URDF with none at all is a
-/// description for drawing, and is refused as such rather than by its first link.
-fn check_masses(links: &[Link]) -> Result<(), String> {
+/// description for drawing, and is refused as such rather than by its first link. A body whose
+/// tensor is singular because its URDF links are point masses (`point_masses`: a mass, every
+/// moment zero) is refused naming that cause, not only the merged tensor it leads to.
+fn check_masses(links: &[Link], point_masses: &[String]) -> Result<(), String> {
     if links.iter().all(|l| l.mass <= 0.0) {
         return Err(
             "no link has a mass: the URDF has no <inertial> elements (a description for drawing, as RViz reads it); hexsim needs each link's <mass> and <inertia>".into(),
@@ -808,8 +868,20 @@ fn check_masses(links: &[Link]) -> Result<(), String> {
             ));
         }
         if !positive_definite(&link.inertia) {
+            let cause = if point_masses.is_empty() {
+                String::new()
+            } else {
+                let shown: Vec<&str> = point_masses.iter().take(4).map(String::as_str).collect();
+                format!(
+                    "; the URDF gives {} link{} a mass but a zero inertia tensor (ixx = iyy = izz = 0: {}{}), point masses that cannot turn: give each link its inertia (kg·m²)",
+                    point_masses.len(),
+                    if point_masses.len() == 1 { "" } else { "s" },
+                    shown.join(", "),
+                    if point_masses.len() > 4 { ", …" } else { "" }
+                )
+            };
             return Err(format!(
-                "link `{}`: the inertia tensor is not positive definite ({:?})",
+                "link `{}`: the inertia tensor is not positive definite ({:?}){cause}",
                 link.name,
                 link.inertia.to_cols_array()
             ));
@@ -1132,5 +1204,48 @@ mod tests {
             assert!((got - want).abs() < 1e-9, "{found:?}");
         }
         assert_eq!(impossible_inertia(&(turn * solid * turn.transpose())), None);
+    }
+
+    /// A prismatic joint of negligible travel (a foot's force-sensor mount, ±0.1 mm) is read as
+    /// fixed, with a warning naming it; one that travels 5 mm is refused, saying so.
+    #[test]
+    fn a_slide_of_negligible_travel_is_read_as_fixed() {
+        let hex18 = include_str!("../../robots/hex18.urdf");
+        let with_slide = |travel: f64| {
+            let sensor = format!(
+                r#"<link name="lf_fsr"/>
+  <joint name="lf_fsr_joint" type="prismatic"><parent link="lf_tibia"/><child link="lf_fsr"/>
+    <origin xyz="0.1 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="{}" upper="{}" effort="1000" velocity="30"/></joint>
+</robot>"#,
+                -travel / 2.0,
+                travel / 2.0
+            );
+            hex18.replacen("</robot>", &sensor, 1)
+        };
+        let model = from_str(&with_slide(2e-4), Path::new("hex18_fsr.urdf")).unwrap();
+        assert_eq!(model.joints.len(), 18);
+        let tibia = model.links.iter().find(|l| l.name == "lf_tibia").unwrap();
+        assert!(
+            tibia.merged.contains(&"lf_fsr".to_string()),
+            "{:?}",
+            tibia.merged
+        );
+        assert!(
+            model
+                .warnings
+                .iter()
+                .any(|w| w.contains("1 prismatic joint travels at most 1 mm")
+                    && w.contains("lf_fsr_joint")),
+            "{:?}",
+            model.warnings
+        );
+        let error = from_str(&with_slide(5e-3), Path::new("hex18_fsr.urdf"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("`lf_fsr_joint`: a prismatic joint travelling 5.0 mm is not supported"),
+            "{error}"
+        );
     }
 }
