@@ -8,7 +8,8 @@
 //! - stance height and reach: the pair that leaves the joints the most room over a whole cycle at
 //!   the nominal speed on level ground — the largest least distance of any joint to a limit, plus
 //!   a tenth of the mean over the joints to choose among stances whose tightest joint is the same
-//!   — among the stances where every foot target is reached, the servos hold the robot standing on
+//!   — among the stances where every foot target is reached (at the search's instants and at the
+//!   report's finer ones, [`cycle_margins`]), the servos hold the robot standing on
 //!   the gait's fewest feet with half their effort to spare ([`TORQUE_SHARE`]), and the body's
 //!   lowest point clears the ground by a step height (what a foot steps over the body passes).
 //!   A grid over h ∈ [0.05, 0.95]·L, r ∈ [0.05, 1]·L, refined twice around the best cell.
@@ -433,7 +434,14 @@ impl Search<'_> {
                 return judged(Err(Problem::Stance(e)), penalty);
             }
         };
-        if let Some(u) = margins.unreached {
+        // the report's finer cycle must reach every target too: between the search's instants a
+        // leg can pass out of reach (ant_bot's front right, 0.47 s into the cycle)
+        let unreached = margins.unreached.or_else(|| {
+            cycle_margins(self.model, &gait)
+                .ok()
+                .and_then(|fine| fine.unreached)
+        });
+        if let Some(u) = unreached {
             return judged(
                 Err(Problem::Cycle {
                     leg: u.leg,
