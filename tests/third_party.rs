@@ -50,7 +50,7 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
 /// from a small body and are mounted ahead of their hips (an offset femur), and its placeholder
 /// leg inertias (1e-2 kg·m²) need servos stiffer than hex18's (fitted). Kraby's round body has
 /// its legs 45° apart on two sides of its URDF's y axis, so hexsim walks it along +y (chosen
-/// from the legs), and its base link's origin is on the ground, 0.2 m below its hips. Seven more
+/// from the legs), and its base link's origin is on the ground, 0.2 m below its hips. Nine more
 /// come as published, with no robot file (issue 25): the arrg hexapod, a SolidWorks export whose
 /// 18 joints have empty limits and efforts and whose feet are the tips of its tibia meshes; the
 /// MIT WORMS hexapod, xacro output, 79 kg on 1 m legs with pad feet (its ground and time step
@@ -59,7 +59,9 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
 /// feet; frank1789's Phobos export, its body on a floating joint from a 1 g root, its feet the
 /// tips of COLLADA tibias; enjoykin-ua's, xacro output standing low and sprawling, whose stance
 /// legs sagged under the weight and splayed until the servos were fitted to its sag and their
-/// targets held against the load (without the feed-forward its feet slide 0.090 / 0.120 m).
+/// targets held against the load (without the feed-forward its feet slide 0.090 / 0.120 m);
+/// olli-io's, xacro output that reads its lengths from a YAML file; elkapod, whose feet hang from
+/// their tibias by ±0.1 mm prismatic joints (a force sensor's mount), read as fixed.
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -103,6 +105,14 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         (
             "enjoykin",
             "tests/data/third_party/enjoykin_hexapod/hexapod_description/urdf/hexapod.urdf",
+        ),
+        (
+            "olli",
+            "tests/data/third_party/olli_hexa/hexa_description/urdf/hexapod.urdf",
+        ),
+        (
+            "elkapod",
+            "tests/data/third_party/elkapod/elkapod_description/urdf/elkapod.urdf",
         ),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));
