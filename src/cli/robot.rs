@@ -165,6 +165,7 @@ fn feedforward(out: &mut String, model: &RobotModel, fitted: &Fitted, stiffness:
     let poses = model.link_poses(&fitted.standing_pose);
     let weight = model.total_mass() * STANDARD_GRAVITY;
     let (mut most_load, mut most_offset) = ((0.0, ""), (0.0, String::new()));
+    let mut torques = vec![0.0; model.joints.len()];
     for k in 0..100 {
         let t = k as f64 / 100.0;
         let stance = std::array::from_fn(|l| {
@@ -176,8 +177,8 @@ fn feedforward(out: &mut String, model: &RobotModel, fitted: &Fitted, stiffness:
                 most_load = (load, leg.name);
             }
         }
-        let torques = statics::holding_torques(model, &poses, STANDARD_GRAVITY, &loads);
-        for (joint, torque) in model.joints.iter().zip(torques) {
+        statics::holding_torques(model, &poses, STANDARD_GRAVITY, &loads, &mut torques);
+        for (joint, torque) in model.joints.iter().zip(&torques) {
             let offset = (torque / stiffness).abs();
             if offset > most_offset.0 {
                 most_offset = (offset, joint.name.clone());

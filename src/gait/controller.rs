@@ -72,14 +72,7 @@ const CENTRING_TOLERANCE: f64 = 1e-6;
 
 /// The robot's centre of mass in the body frame with its legs at `angles`.
 fn centre_of_mass(model: &RobotModel, angles: &[[f64; 3]; 6]) -> DVec3 {
-    let poses = model.link_poses(&model.pose_from_legs(angles));
-    let weighted: DVec3 = model
-        .links
-        .iter()
-        .zip(&poses)
-        .map(|(link, p)| p.transform_point3(link.com) * link.mass)
-        .sum();
-    weighted / model.total_mass()
+    model.centre_of_mass(&model.link_poses(&model.pose_from_legs(angles)))
 }
 
 /// Farther than this from its target (m), an IK answer counts as clamped.

@@ -246,13 +246,39 @@ impl RobotModel {
 
     /// The pose of every link relative to the root for joint angles `q` (indexed like `joints`).
     pub fn link_poses(&self, q: &[f64]) -> Vec<DAffine3> {
-        let mut poses = vec![DAffine3::IDENTITY; self.links.len()];
+        let mut poses = Vec::new();
+        self.link_poses_into(q, &mut poses);
+        poses
+    }
+
+    /// [`Self::link_poses`] into `poses`, reusing its allocation (every step of a walk).
+    pub fn link_poses_into(&self, q: &[f64], poses: &mut Vec<DAffine3>) {
+        poses.clear();
+        poses.resize(self.links.len(), DAffine3::IDENTITY);
         for (k, link) in self.links.iter().enumerate() {
             if let Some(ji) = link.parent_joint {
                 let j = &self.joints[ji];
                 poses[k] = poses[j.parent] * j.origin * DAffine3::from_axis_angle(j.axis, q[ji]);
             }
         }
-        poses
+    }
+
+    /// Joint `j`'s origin and axis (as the URDF scales it) in the frame of `poses`
+    /// ([`Self::link_poses`]).
+    pub fn joint_axis(&self, poses: &[DAffine3], j: usize) -> (DVec3, DVec3) {
+        let joint = &self.joints[j];
+        let frame = poses[joint.parent] * joint.origin;
+        (frame.translation, frame.matrix3 * joint.axis)
+    }
+
+    /// The centre of mass in the frame of `poses` ([`Self::link_poses`]).
+    pub fn centre_of_mass(&self, poses: &[DAffine3]) -> DVec3 {
+        let weighted: DVec3 = self
+            .links
+            .iter()
+            .zip(poses)
+            .map(|(link, p)| p.transform_point3(link.com) * link.mass)
+            .sum();
+        weighted / self.total_mass()
     }
 }

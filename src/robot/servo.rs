@@ -23,9 +23,8 @@ pub fn outboard_inertias(model: &RobotModel, pose: &[f64]) -> Vec<f64> {
     let mut inertias = vec![0.0; model.joints.len()];
     for leg in &model.legs {
         for (i, &j) in leg.joints.iter().enumerate() {
-            let joint = &model.joints[j];
-            let frame = poses[joint.parent] * joint.origin;
-            let (origin, axis) = (frame.translation, (frame.matrix3 * joint.axis).normalize());
+            let (origin, axis) = model.joint_axis(&poses, j);
+            let axis = axis.normalize();
             inertias[j] = leg.joints[i..]
                 .iter()
                 .map(|&outboard| {
@@ -67,10 +66,8 @@ pub fn vertical_compliance(model: &RobotModel, pose: &[f64]) -> f64 {
             leg.joints
                 .iter()
                 .map(|&j| {
-                    let joint = &model.joints[j];
-                    let frame = poses[joint.parent] * joint.origin;
-                    let axis = (frame.matrix3 * joint.axis).normalize();
-                    axis.cross(foot - frame.translation).z.powi(2)
+                    let (origin, axis) = model.joint_axis(&poses, j);
+                    axis.normalize().cross(foot - origin).z.powi(2)
                 })
                 .sum::<f64>()
         })

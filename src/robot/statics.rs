@@ -17,28 +17,35 @@ pub fn standing_torques(
     feet_down: usize,
 ) -> Vec<f64> {
     let load = foot_load(model, gravity, feet_down);
-    holding_torques(model, &model.link_poses(pose), gravity, &[load; 6])
+    let mut torques = vec![0.0; model.joints.len()];
+    holding_torques(
+        model,
+        &model.link_poses(pose),
+        gravity,
+        &[load; 6],
+        &mut torques,
+    );
+    torques
 }
 
-/// Per model joint, the servo torque (N·m, about the joint axis, on the child) that holds the
-/// links at `poses` (the model's link poses, body frame, z up) under `gravity` (m/s²), each
-/// leg's foot pushed up by `loads` (N, in `legs` order): τ_j = −a_j·[Σ_k (c_k − o_j) × m_k·g +
-/// (f − o_j) × F], the sum over the leg's links outboard of joint j.
+/// Into `torques`, per model joint, the servo torque (N·m, about the joint axis, on the child)
+/// that holds the links at `poses` (the model's link poses, body frame, z up) under `gravity`
+/// (m/s²), each leg's foot pushed up by `loads` (N, in `legs` order): τ_j = −a_j·[Σ_k (c_k − o_j)
+/// × m_k·g + (f − o_j) × F], the sum over the leg's links outboard of joint j.
 pub fn holding_torques(
     model: &RobotModel,
     poses: &[DAffine3],
     gravity: f64,
     loads: &[f64; 6],
-) -> Vec<f64> {
+    torques: &mut [f64],
+) {
     let g = DVec3::new(0.0, 0.0, -gravity);
-    let mut torques = vec![0.0; model.joints.len()];
+    torques.fill(0.0);
     for (leg, &load) in model.legs.iter().zip(loads) {
         let ground_force = DVec3::new(0.0, 0.0, load);
         let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
         for (i, &j) in leg.joints.iter().enumerate() {
-            let joint = &model.joints[j];
-            let frame = poses[joint.parent] * joint.origin;
-            let (origin, axis) = (frame.translation, frame.matrix3 * joint.axis);
+            let (origin, axis) = model.joint_axis(poses, j);
             let mut moment = (foot - origin).cross(ground_force);
             for &outboard in &leg.joints[i..] {
                 let link = model.joints[outboard].child;
@@ -48,7 +55,6 @@ pub fn holding_torques(
             torques[j] = -axis.dot(moment);
         }
     }
-    torques
 }
 
 /// Each foot's vertical force (N, in `legs` order) holding the robot still and level on the
@@ -65,13 +71,7 @@ pub fn stance_loads(
     stance: [bool; 6],
 ) -> [f64; 6] {
     let weight = model.total_mass() * gravity;
-    let com = model
-        .links
-        .iter()
-        .zip(poses)
-        .map(|(link, pose)| pose.transform_point3(link.com) * link.mass)
-        .sum::<DVec3>()
-        / model.total_mass();
+    let com = model.centre_of_mass(poses);
     let feet: [DVec3; 6] = std::array::from_fn(|k| {
         let leg = &model.legs[k];
         poses[leg.foot_link].transform_point3(leg.foot.center) - com
@@ -227,13 +227,7 @@ mod tests {
         let g = 9.81;
         let poses = model.link_poses(&vec![0.0; model.joints.len()]);
         let weight = model.total_mass() * g;
-        let com = model
-            .links
-            .iter()
-            .zip(&poses)
-            .map(|(l, p)| p.transform_point3(l.com) * l.mass)
-            .sum::<DVec3>()
-            / model.total_mass();
+        let com = model.centre_of_mass(&poses);
         let names: Vec<&str> = model.legs.iter().map(|l| l.name).collect();
         let tripod: [bool; 6] = std::array::from_fn(|k| matches!(names[k], "lf" | "rm" | "lr"));
         for stance in [tripod, [true; 6]] {

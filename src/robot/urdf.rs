@@ -82,39 +82,26 @@ fn forward_yaw(value: &toml::Value) -> Result<f64, String> {
 
 /// Loads and validates a URDF robot, with the robot file beside it if there is one.
 pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
-    let fail = |message: String| RobotError {
+    let text = std::fs::read_to_string(path).map_err(|e| RobotError {
+        file: path.to_path_buf(),
+        message: format!("cannot read the URDF: {e}"),
+    })?;
+    refuse_xacro(&text, path).map_err(|message| RobotError {
         file: path.to_path_buf(),
         message,
-    };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read the URDF: {e}")))?;
-    refuse_xacro(&text, path).map_err(fail)?;
-    let mut robot =
-        urdf_rs::read_from_string(&text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
-    let dropped = drop_marker_frames(&mut robot);
-    let base = path.parent().unwrap_or(Path::new("."));
+    })?;
     let robot_file = path.with_extension("toml");
-    let settings = if robot_file.is_file() {
-        let fail = |message: String| RobotError {
-            file: robot_file.clone(),
-            message,
-        };
-        let text = std::fs::read_to_string(&robot_file)
-            .map_err(|e| fail(format!("cannot read the robot file: {e}")))?;
-        read_robot_file(&text, &robot, path).map_err(fail)?
+    let robot_text = if robot_file.is_file() {
+        Some(
+            std::fs::read_to_string(&robot_file).map_err(|e| RobotError {
+                file: robot_file.clone(),
+                message: format!("cannot read the robot file: {e}"),
+            })?,
+        )
     } else {
-        RobotFileSettings::default()
+        None
     };
-    let mut model = build(&robot, base, settings).map_err(fail)?;
-    if !dropped.is_empty() {
-        model.warnings.push(format!(
-            "{} floating joint{} to massless frames without shapes dropped ({}): a free base and marker frames, as Phobos writes them; hexsim's base floats anyway",
-            dropped.len(),
-            if dropped.len() == 1 { "" } else { "s" },
-            dropped.join(", ")
-        ));
-    }
-    Ok(model)
+    from_str_with(&text, robot_text.as_deref(), path)
 }
 
 /// Drops a URDF's marker frames: links of negligible mass (under 1 % of the robot's) with no
@@ -227,8 +214,9 @@ pub fn from_str_with(
         file: origin.to_path_buf(),
         message,
     };
-    let robot =
+    let mut robot =
         urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
+    let dropped = drop_marker_frames(&mut robot);
     let settings = match robot_file {
         None => RobotFileSettings::default(),
         Some(file) => read_robot_file(file, &robot, origin).map_err(|message| RobotError {
@@ -236,7 +224,22 @@ pub fn from_str_with(
             message,
         })?,
     };
-    build(&robot, origin.parent().unwrap_or(Path::new(".")), settings).map_err(fail)
+    let mut model =
+        build(&robot, origin.parent().unwrap_or(Path::new(".")), settings).map_err(fail)?;
+    if !dropped.is_empty() {
+        model.warnings.push(format!(
+            "{} floating joint{} to massless frames without shapes dropped ({}): a free base and marker frames, as Phobos writes them; hexsim's base floats anyway",
+            dropped.len(),
+            plural(dropped.len()),
+            dropped.join(", ")
+        ));
+    }
+    Ok(model)
+}
+
+/// The plural ending of a count's noun: "" for one, "s" otherwise.
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
 }
 
 /// Parses URDF text alone (for tests); `origin` resolves mesh paths.
@@ -554,7 +557,7 @@ fn build(
         warnings.push(format!(
             "{} prismatic joint{} travel{} at most {:.0} mm (a force sensor's mount, as simulators' descriptions have them): read as fixed at zero: {}",
             slides_welded.len(),
-            if slides_welded.len() == 1 { "" } else { "s" },
+            plural(slides_welded.len()),
             if slides_welded.len() == 1 { "s" } else { "" },
             SLIDE_AS_FIXED * 1e3,
             slides_welded.join(", ")
@@ -875,7 +878,7 @@ fn check_masses(links: &[Link], point_masses: &[String]) -> Result<(), String> {
                 format!(
                     "; the URDF gives {} link{} a mass but a zero inertia tensor (ixx = iyy = izz = 0: {}{}), point masses that cannot turn: give each link its inertia (kg·m²)",
                     point_masses.len(),
-                    if point_masses.len() == 1 { "" } else { "s" },
+                    plural(point_masses.len()),
                     shown.join(", "),
                     if point_masses.len() > 4 { ", …" } else { "" }
                 )
@@ -989,10 +992,7 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
     let named = |links: &[(String, f64)]| {
         let more = links.len() - 1;
         let others = if more > 0 {
-            format!(
-                " (and {more} more link{})",
-                if more == 1 { "" } else { "s" }
-            )
+            format!(" (and {more} more link{})", plural(more))
         } else {
             String::new()
         };
@@ -1069,7 +1069,7 @@ impl Unstated {
             model.warnings.push(format!(
                 "{} joint{} state{} no range (lower = upper = 0, a CAD exporter's placeholder, or no <limit>): {}; read as absent, ±{:.0}° (a hobby servo's range)",
                 self.range.len(),
-                if self.range.len() == 1 { "" } else { "s" },
+                plural(self.range.len()),
                 if self.range.len() == 1 { "s" } else { "" },
                 list(&self.range),
                 UNSTATED_RANGE.to_degrees()
@@ -1094,7 +1094,7 @@ impl Unstated {
         model.warnings.push(format!(
             "{} joint{} state{} no effort (effort = 0, a CAD exporter's placeholder, or no <limit>): {}; fitted from the robot's weight: {effort:.3} N·m, a third of its {weight:.1} N held at the legs' full {reach:.3} m",
             self.effort.len(),
-            if self.effort.len() == 1 { "" } else { "s" },
+            plural(self.effort.len()),
             if self.effort.len() == 1 { "s" } else { "" },
             list(&self.effort),
         ));

@@ -112,7 +112,6 @@ pub struct Hexapod {
     /// The hips' plane's centre in the body frame (see [`HexapodSample::body_height`]).
     hips_centre: DVec3,
     targets: Vec<f64>,
-    gains: ServoGains,
     /// Joint angles and rates now (read once per step: both the servos and the sample use them).
     angles: Vec<f64>,
     rates: Vec<f64>,
@@ -201,7 +200,6 @@ impl Hexapod {
             root_com,
             hips_centre,
             targets: pose.to_vec(),
-            gains: settings.gains,
             angles: vec![0.0; n],
             rates: vec![0.0; n],
             drift: JointDrift::default(),
@@ -288,7 +286,7 @@ impl Hexapod {
 
     /// The servos' gains.
     pub fn gains(&self) -> ServoGains {
-        self.gains
+        self.joints.gains()
     }
 
     /// Sets the servos' position targets (per model joint), used from the next step on.

@@ -25,6 +25,9 @@ pub struct Walker {
     pub load_feedforward: bool,
     /// Joint targets given from outside (rad, by model joint), in place of the gait's.
     given_targets: Option<Vec<f64>>,
+    /// The feed-forward's link poses and holding torques, kept between steps (no allocation).
+    poses: Vec<glam::DAffine3>,
+    torques: Vec<f64>,
 }
 
 /// A step of the walker: the robot's state and the gait's targets for it.
@@ -56,6 +59,8 @@ impl Walker {
             terrain_following: false,
             load_feedforward: true,
             given_targets: None,
+            poses: Vec::new(),
+            torques: vec![0.0; n],
         }
     }
 
@@ -117,11 +122,17 @@ impl Walker {
     /// comes to rest on the gait's angle under the planned load.
     fn hold_load(&mut self, stance: [bool; 6]) {
         let model = self.hexapod.model();
-        let poses = model.link_poses(&self.targets_by_joint);
-        let loads = statics::stance_loads(model, &poses, STANDARD_GRAVITY, stance);
-        let torques = statics::holding_torques(model, &poses, STANDARD_GRAVITY, &loads);
+        model.link_poses_into(&self.targets_by_joint, &mut self.poses);
+        let loads = statics::stance_loads(model, &self.poses, STANDARD_GRAVITY, stance);
+        statics::holding_torques(
+            model,
+            &self.poses,
+            STANDARD_GRAVITY,
+            &loads,
+            &mut self.torques,
+        );
         let stiffness = self.hexapod.gains().stiffness;
-        for (target, torque) in self.targets_by_joint.iter_mut().zip(torques) {
+        for (target, torque) in self.targets_by_joint.iter_mut().zip(&self.torques) {
             *target += torque / stiffness;
         }
     }

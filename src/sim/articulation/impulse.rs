@@ -112,6 +112,10 @@ impl Joints for ImpulseRobot {
         Articulation::Impulse
     }
 
+    fn gains(&self) -> ServoGains {
+        self.gains
+    }
+
     /// Every joint's angle (rad) and rate (rad/s): the child frame's turn about the joint's x axis
     /// relative to the parent frame. Also keeps each joint's axis for [`Self::drive`].
     fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {

@@ -94,6 +94,9 @@ impl Articulation {
 pub(super) trait Joints: Send {
     fn articulation(&self) -> Articulation;
 
+    /// The servos' gains.
+    fn gains(&self) -> ServoGains;
+
     /// Every joint's angle (rad) and rate (rad/s), per model joint.
     fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]);
 

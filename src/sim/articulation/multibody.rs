@@ -155,6 +155,10 @@ impl Joints for MultibodyRobot {
         Articulation::Multibody
     }
 
+    fn gains(&self) -> ServoGains {
+        self.gains
+    }
+
     /// Every joint's angle (rad) and rate (rad/s): its coordinate and generalized velocity.
     fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
         let mb = self.multibody(engine);
