@@ -61,7 +61,9 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
 /// legs sagged under the weight and splayed until the servos were fitted to its sag and their
 /// targets held against the load (without the feed-forward its feet slide 0.090 / 0.120 m);
 /// olli-io's, xacro output that reads its lengths from a YAML file; elkapod, whose feet hang from
-/// their tibias by ±0.1 mm prismatic joints (a force sensor's mount), read as fixed.
+/// their tibias by ±0.1 mm prismatic joints (a force sensor's mount), read as fixed; ant_bot,
+/// one leg design turned to each place, whose 15.5 mm round feet scrubbed 0.17 / 0.18 m on the
+/// natural terrain until the feet's targets rolled with them (`gait::controller`).
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -113,6 +115,10 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         (
             "elkapod",
             "tests/data/third_party/elkapod/elkapod_description/urdf/elkapod.urdf",
+        ),
+        (
+            "ant_bot",
+            "tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf",
         ),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));
@@ -179,8 +185,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
 /// ant_bot turns one leg design to each place instead of mirroring it. Fitted on the search's
 /// coarser cycle alone, its tripod stood where the report's finer check found a leg's target out
 /// of reach (63 % of the steps clamped, feet sliding 0.56 m in 10 s); the fit now refuses such a
-/// stance, and it walks on flat ground. (On the natural terrain its front feet still slide
-/// 0.17–0.18 m: see its README.)
+/// stance, and no step clamps (it walks in [`third_party_hexapods_walk_with_the_built_in_tripod`]).
 #[test]
 fn a_fitted_tripod_reaches_every_target_over_the_cycle() {
     let robot = "tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf";
@@ -192,12 +197,7 @@ fn a_fitted_tripod_reaches_every_target_over_the_cycle() {
         "{stdout}"
     );
     let flat = walk(robot, "terrains/flat.toml", "ant_bot_flat");
-    let nominal = flat["stance"]["stride_length"].as_f64().unwrap() / 0.5 * 10.0;
-    let forward = flat["forward_distance"].as_f64().unwrap();
-    assert!(forward >= 0.8 * nominal, "{forward:.3} m of {nominal:.3}");
     assert_eq!(flat["clamped_ik_steps"], 0);
-    let slip = foot_slip(&flat);
-    assert!(slip.iter().all(|&s| s < 0.1), "feet slid {slip:.3?} m");
 }
 
 /// `hexsim robot` says what it fitted for the MushroomRL hexapod, whose legs do not reach hex18's

@@ -160,11 +160,37 @@ fn walker(
     settle: f64,
     articulation: Articulation,
 ) -> Walker {
+    let controller = GaitController::new(&model, gait.clone()).unwrap();
+    walker_with(model, ground, placement, controller, settle, articulation)
+}
+
+/// [`walker`] on the multibody after 1 s of settling, its feet rolling or not.
+fn walker_rolling(
+    model: Arc<RobotModel>,
+    ground: HeightGrid,
+    placement: Placement,
+    gait: Gait,
+    rolling: bool,
+) -> Walker {
+    let controller = GaitController::new(&model, gait)
+        .unwrap()
+        .with_rolling_feet(rolling);
+    let articulation = Articulation::Multibody;
+    walker_with(model, ground, placement, controller, 1.0, articulation)
+}
+
+fn walker_with(
+    model: Arc<RobotModel>,
+    ground: HeightGrid,
+    placement: Placement,
+    controller: GaitController,
+    settle: f64,
+    articulation: Articulation,
+) -> Walker {
     let command = VelocityCommand {
-        forward: gait.nominal_speed(),
+        forward: controller.gait().nominal_speed(),
         ..Default::default()
     };
-    let controller = GaitController::new(&model, gait).unwrap();
     let pose = standing_pose(&model, &controller);
     let hexapod = Hexapod::new(
         model,
@@ -175,6 +201,40 @@ fn walker(
         &pose,
     );
     Walker::new(hexapod, controller, command, settle)
+}
+
+/// Rolling feet (gait::controller's doc): the body walks at the commanded speed over feet that
+/// roll as the tibias turn. Planned as if each sphere's centre were its contact, the feet scrub,
+/// and the body rides on them 3.5 % faster than commanded.
+#[test]
+fn rolling_feet_walk_at_the_commanded_speed() {
+    let gait = v12_gait();
+    let command = gait.nominal_speed();
+    // from 2 s into the walk (the stride ramps up over the first period) to 12 s
+    let speed = |rolling: bool| {
+        let ground = terrain::flat([20.0, 20.0], [0.0, 0.0], 0.0).unwrap();
+        let placement = Placement {
+            x: -5.0,
+            y: 0.0,
+            yaw: 0.0,
+        };
+        let mut walker = walker_rolling(hex18(), ground, placement, gait.clone(), rolling);
+        let at = |s: f64| ((1.0 + s) / DT).round() as usize;
+        let samples: Vec<HexapodSample> = (0..=at(12.0)).map(|_| walker.step().robot).collect();
+        (samples[at(12.0)].body.translation.x - samples[at(2.0)].body.translation.x) / 10.0
+    };
+    let (rolling, planned) = (speed(true), speed(false));
+    let off = |v: f64| v / command - 1.0;
+    println!(
+        "commanded {command:.4} m/s: rolling feet {rolling:.5} m/s ({:+.2} %), planned as the contact {planned:.5} m/s ({:+.2} %)",
+        100.0 * off(rolling),
+        100.0 * off(planned)
+    );
+    assert!(
+        off(rolling).abs() < 0.01,
+        "rolling feet walk {rolling:.5} m/s, commanded {command:.4}"
+    );
+    assert!(off(rolling).abs() < 0.5 * off(planned).abs());
 }
 
 /// Walks `seconds` after 1 s of settling; returns the samples from the gait's start.

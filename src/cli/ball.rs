@@ -92,6 +92,7 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
         gait: None,
         settle: None,
         follow_terrain: None,
+        rolling_feet: None,
         articulation: None,
         solver_iterations: None,
         pgs_iterations: None,

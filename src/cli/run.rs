@@ -69,6 +69,11 @@ pub struct RunArgs {
     /// sag under the weight).
     #[arg(long)]
     no_feedforward: bool,
+    /// Foot targets exactly the gait's path: no rolling offset (by default each foot's centre
+    /// target moves with its sphere's rolling as the tibia turns, so the foot rolls instead of
+    /// scrubbing).
+    #[arg(long)]
+    no_rolling: bool,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
     /// impulse joints (about 1.1× faster; the joints drift apart by up to ~0.4 mm)
     #[arg(long, value_enum, default_value_t = Articulation::default())]
@@ -132,6 +137,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         gait: args.gait.clone().map(FileOr::File),
         settle: Some(args.settle),
         follow_terrain: Some(args.follow_terrain),
+        rolling_feet: args.no_rolling.then_some(false),
         articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),
         pgs_iterations: args.pgs_iterations,

@@ -43,7 +43,8 @@ pub(super) fn sampled_margins(
     gait: &Gait,
     samples: usize,
 ) -> Result<CycleMargins, StanceError> {
-    let mut controller = GaitController::new(model, gait.clone())?;
+    // the plan's own path: the fit judges the stance without the feet's rolling offset
+    let mut controller = GaitController::new(model, gait.clone())?.with_rolling_feet(false);
     let command = VelocityCommand {
         forward: gait.nominal_speed(),
         ..Default::default()

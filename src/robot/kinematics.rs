@@ -59,6 +59,15 @@ impl LegChain {
         self.frames(q).1
     }
 
+    /// The foot link's orientation in the body frame for joint angles `q`, up to a constant turn
+    /// (its frame turned so the last joint's axis is z): compare two of them only.
+    pub fn foot_rotation(&self, q: [f64; 3]) -> DMat3 {
+        let frame = (0..3).fold(DAffine3::IDENTITY, |frame, k| {
+            frame * self.origins[k] * DAffine3::from_rotation_z(q[k])
+        });
+        frame.matrix3
+    }
+
     /// Joint positions and axes (body frame), and the foot position.
     fn frames(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3) {
         let mut frame = DAffine3::IDENTITY;

@@ -34,6 +34,8 @@ pub struct WalkRun {
     pub settle_time: f64,
     /// Keep the body level by following the terrain under the feet.
     pub terrain_following: bool,
+    /// Move the feet's targets with their spheres' rolling (see [`crate::gait::controller`]).
+    pub rolling_feet: bool,
     /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
     pub load_feedforward: bool,
     /// Seconds walked.
@@ -96,7 +98,8 @@ impl WalkRun {
     /// [`WalkRun::execute`] is this, every planned step, and [`WalkSession::finish`].
     pub fn start(self) -> Result<WalkSession> {
         let controller = GaitController::new(&self.robot, self.gait.gait.clone())
-            .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?;
+            .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?
+            .with_rolling_feet(self.rolling_feet);
         let pose = self.robot.pose_from_legs(&controller.standing_angles());
         let dt = self.settings.dt;
         let hexapod = Hexapod::new(

@@ -83,6 +83,8 @@ struct WalkSetup {
     settings: HexapodSettings,
     settle: f64,
     follow_terrain: bool,
+    /// Feet targets moved with their spheres' rolling (see `gait::controller`).
+    rolling_feet: bool,
     /// Servo targets held against the load (see `sim::Walker::load_feedforward`).
     feedforward: bool,
     start: spec::StartSpec,
@@ -294,6 +296,7 @@ impl Scenario {
             settings: w.settings,
             settle_time: w.settle,
             terrain_following: w.follow_terrain,
+            rolling_feet: w.rolling_feet,
             load_feedforward: w.feedforward,
             duration: self.spec.duration,
             log_rate: self.log_rate,

@@ -113,6 +113,10 @@ pub struct ScenarioSpec {
     /// Keep the body level by following the terrain under the feet (default false).
     #[serde(default)]
     pub follow_terrain: Option<bool>,
+    /// Move each foot's centre target with the rolling of its sphere, so a turning tibia rolls its
+    /// foot instead of scrubbing it (default true; see `gait::controller`).
+    #[serde(default)]
+    pub rolling_feet: Option<bool>,
     /// How the links are joined: `multibody` (default) or `impulse` (faster; joints drift a little).
     #[serde(default)]
     pub articulation: Option<crate::sim::Articulation>,
