@@ -63,7 +63,8 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
 /// olli-io's, xacro output that reads its lengths from a YAML file; elkapod, whose feet hang from
 /// their tibias by ±0.1 mm prismatic joints (a force sensor's mount), read as fixed; ant_bot,
 /// one leg design turned to each place, whose 15.5 mm round feet scrubbed 0.17 / 0.18 m on the
-/// natural terrain until the feet's targets rolled with them (`gait::controller`).
+/// natural terrain until the feet's targets rolled with them (`gait::controller`); nikita1323's,
+/// xacro around a SolidWorks export, tried unseen and walked at once.
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -119,6 +120,10 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         (
             "ant_bot",
             "tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf",
+        ),
+        (
+            "nikita",
+            "tests/data/third_party/nikita_six_legged/six_legged_robot_description/urdf/six_legged_robot.urdf",
         ),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));

@@ -204,9 +204,10 @@ fn chains(
         }
         if chain.len() != 3 {
             return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",
+                "the foot on link `{}` hangs from the body by {} joint{}, expected 3 (coxa, femur, tibia)",
                 link.name,
-                chain.len()
+                chain.len(),
+                if chain.len() == 1 { "" } else { "s" }
             ));
         }
         found.push(Chain {
