@@ -160,25 +160,11 @@ fn walker(
     settle: f64,
     articulation: Articulation,
 ) -> Walker {
-    let controller = GaitController::new(&model, gait.clone()).unwrap();
+    let controller = GaitController::new(&model, gait).unwrap();
     walker_with(model, ground, placement, controller, settle, articulation)
 }
 
-/// [`walker`] on the multibody after 1 s of settling, its feet rolling or not.
-fn walker_rolling(
-    model: Arc<RobotModel>,
-    ground: HeightGrid,
-    placement: Placement,
-    gait: Gait,
-    rolling: bool,
-) -> Walker {
-    let controller = GaitController::new(&model, gait)
-        .unwrap()
-        .with_rolling_feet(rolling);
-    let articulation = Articulation::Multibody;
-    walker_with(model, ground, placement, controller, 1.0, articulation)
-}
-
+/// [`walker`] with a controller of its own.
 fn walker_with(
     model: Arc<RobotModel>,
     ground: HeightGrid,
@@ -218,7 +204,18 @@ fn rolling_feet_walk_at_the_commanded_speed() {
             y: 0.0,
             yaw: 0.0,
         };
-        let mut walker = walker_rolling(hex18(), ground, placement, gait.clone(), rolling);
+        let model = hex18();
+        let controller = GaitController::new(&model, gait.clone())
+            .unwrap()
+            .with_rolling_feet(rolling);
+        let mut walker = walker_with(
+            model,
+            ground,
+            placement,
+            controller,
+            1.0,
+            Articulation::Multibody,
+        );
         let at = |s: f64| ((1.0 + s) / DT).round() as usize;
         let samples: Vec<HexapodSample> = (0..=at(12.0)).map(|_| walker.step().robot).collect();
         (samples[at(12.0)].body.translation.x - samples[at(2.0)].body.translation.x) / 10.0

@@ -10,20 +10,19 @@
 //! centre moves at r·ω × n over it (n the ground's normal): the sphere rolls. Planning the centre's
 //! path as the contact's own makes every turn of the tibia scrub the contact at r·ω — ant_bot's
 //! 15.5 mm feet slid 0.18 m in 10 s on the natural terrain this way. With rolling on (the
-//! default; [`GaitController::with_rolling_feet`]) the centre target is moved on by r·(Δφ × ẑ), Δφ the
-//! rotation vector that turns the foot link from its standing pose (the stance's middle): its rate
-//! is ω up to a second-order ½·Δφ × ω. The body then moves at the commanded speed over rolling
-//! feet instead of riding on them (hex18: 0.1204 m/s for 0.12 commanded; 0.1242 m/s without). A swinging foot gets the offset of the point under it on the
-//! ground (its path without the lift), so the offset passes smoothly from lift-off to touch-down
-//! and the lift's own turn of the tibia does not swing the foot sideways. The fit plans the
-//! stance without it: the offset is millimetres, an execution detail like the servos' load
-//! feed-forward.
+//! default; [`GaitController::with_rolling_feet`]) the centre target is moved on by r·(Δφ × ẑ),
+//! Δφ the rotation vector that turns the foot link from its standing pose (the stance's middle):
+//! its rate is ω up to a second-order ½·Δφ × ω. The body then moves at the commanded speed over
+//! rolling feet instead of riding on them (hex18: 0.1204 m/s for 0.12 commanded; 0.1242 m/s
+//! without). A swinging foot gets the offset of the point under it on the ground (its path
+//! without the lift), so the offset passes smoothly from lift-off to touch-down and the lift's
+//! own turn of the tibia does not swing the foot sideways. The fit plans the stance without it:
+//! the offset is millimetres, an execution detail like the servos' load feed-forward.
 
 use super::schedule::{LegPhase, leg_phase};
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
-use crate::robot::kinematics::IkSolution;
-use crate::robot::kinematics::LegChain;
+use crate::robot::kinematics::{IkSolution, LegChain};
 use glam::{DMat3, DQuat, DVec3};
 
 /// A velocity command in the body frame.
@@ -291,9 +290,7 @@ impl GaitController {
         }
         out
     }
-}
 
-impl GaitController {
     /// Leg `k`'s foot centre target and joint angles for the planned point `planned`, `lift`
     /// above the ground: with rolling on, moved on by the rolling offset of the point under it
     /// on the ground (see the module's doc).
@@ -305,8 +302,7 @@ impl GaitController {
         // each solve starts from its own last answer, a step's motion away
         let on_ground = chain.solve(planned - DVec3::Z * lift, self.grounded[k]);
         self.grounded[k] = on_ground.angles;
-        let turn =
-            DQuat::from_mat3(&(chain.foot_rotation(on_ground.angles) * self.rest[k].transpose()));
+        let turn = DQuat::from_mat3(&(on_ground.foot_rotation * self.rest[k].transpose()));
         let foot = planned + turn.to_scaled_axis().cross(DVec3::Z) * self.radius[k];
         (foot, chain.solve(foot, self.last[k]))
     }

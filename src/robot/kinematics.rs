@@ -24,6 +24,8 @@ pub struct IkSolution {
     pub angles: [f64; 3],
     /// Distance from the reached foot position to the target (m).
     pub error: f64,
+    /// The foot link's orientation at `angles` ([`LegChain::foot_rotation`]'s).
+    pub foot_rotation: DMat3,
 }
 
 /// The IK answer is accepted as reaching the target within this distance (m).
@@ -62,14 +64,12 @@ impl LegChain {
     /// The foot link's orientation in the body frame for joint angles `q`, up to a constant turn
     /// (its frame turned so the last joint's axis is z): compare two of them only.
     pub fn foot_rotation(&self, q: [f64; 3]) -> DMat3 {
-        let frame = (0..3).fold(DAffine3::IDENTITY, |frame, k| {
-            frame * self.origins[k] * DAffine3::from_rotation_z(q[k])
-        });
-        frame.matrix3
+        self.frames(q).2
     }
 
-    /// Joint positions and axes (body frame), and the foot position.
-    fn frames(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3) {
+    /// Joint positions and axes (body frame), the foot position, and the foot link's orientation
+    /// (turned frame).
+    fn frames(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3, DMat3) {
         let mut frame = DAffine3::IDENTITY;
         let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
         for k in 0..3 {
@@ -80,7 +80,7 @@ impl LegChain {
             let (s, c) = q[k].sin_cos();
             (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
         }
-        (joints, frame.transform_point3(self.foot))
+        (joints, frame.transform_point3(self.foot), frame.matrix3)
     }
 
     fn jacobian_of(joints: &[(DVec3, DVec3); 3], foot: DVec3) -> DMat3 {
@@ -102,9 +102,8 @@ impl LegChain {
     /// also gives the next iteration's Jacobian.)
     pub fn solve(&self, target: DVec3, guess: [f64; 3]) -> IkSolution {
         let mut q = self.clamp(guess);
-        let (mut joints, foot) = self.frames(q);
+        let (mut joints, mut foot, mut rotation) = self.frames(q);
         let mut error = target - foot;
-        let mut foot = foot;
         for _ in 0..50 {
             if error.length() < IK_TOLERANCE * 0.1 {
                 break;
@@ -116,7 +115,7 @@ impl LegChain {
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
             let mut next = self.clamp([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            let (mut next_joints, mut next_foot) = self.frames(next);
+            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames(next);
             if (target - next_foot).length() >= error.length() {
                 // no progress: try a half step once, then stop
                 next = self.clamp([
@@ -124,7 +123,7 @@ impl LegChain {
                     q[1] + 0.5 * step.y,
                     q[2] + 0.5 * step.z,
                 ]);
-                (next_joints, next_foot) = self.frames(next);
+                (next_joints, next_foot, next_rotation) = self.frames(next);
                 if (target - next_foot).length() >= error.length() {
                     break;
                 }
@@ -132,11 +131,13 @@ impl LegChain {
             q = next;
             joints = next_joints;
             foot = next_foot;
+            rotation = next_rotation;
             error = target - foot;
         }
         IkSolution {
             angles: q,
             error: error.length(),
+            foot_rotation: rotation,
         }
     }
 
