@@ -286,6 +286,7 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             foot.from.describe()
         );
     }
+    let _ = writeln!(out, "  {}", contact_spheres(model));
     match fit(model, gait) {
         Err(e) => {
             let _ = writeln!(out, "  gait {}: does not fit: {e}", gait.name);
@@ -337,4 +338,32 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
         let _ = writeln!(out, "  warning: {warning}");
     }
     out
+}
+
+/// "ground contact beyond the feet: 92 spheres on 19 links (body 32, …)": what touches the
+/// terrain besides the feet (`robot::contact_set`).
+fn contact_spheres(model: &RobotModel) -> String {
+    let with: Vec<&robot::Link> = model
+        .links
+        .iter()
+        .filter(|l| !l.contacts.is_empty())
+        .collect();
+    let total: usize = with.iter().map(|l| l.contacts.len()).sum();
+    if total == 0 {
+        return "ground contact: the feet alone (no other link has collision geometry)".to_string();
+    }
+    let radii = with
+        .iter()
+        .flat_map(|l| l.contacts.iter().map(|c| c.radius))
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+            (lo.min(r), hi.max(r))
+        });
+    format!(
+        "ground contact beyond the feet: {total} spheres of {:.1}–{:.1} mm on {} of {} links (body {}), from their collision geometry; links without it do not touch",
+        radii.0 * 1e3,
+        radii.1 * 1e3,
+        with.len(),
+        model.links.len(),
+        model.links[0].contacts.len()
+    )
 }

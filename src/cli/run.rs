@@ -225,6 +225,35 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             m.time_off_terrain
         );
     }
+    if let Some(h) = m.body_height_min.filter(|h| *h < 0.0) {
+        println!(
+            "  warning: the body went {:.1} mm into the ground (its hips below the terrain): the robot collapsed where its links have no collision geometry to hold it",
+            -h * 1e3
+        );
+    }
+    if let Some(t) = m.fell_at {
+        println!(
+            "  warning: the robot fell at {t:.2} s into the walk (its body tilted past {:.0}°)",
+            hexsim::metrics::walk::FALL_TILT.to_degrees()
+        );
+    }
+    if !m.link_contact_time.is_empty() {
+        let links: Vec<String> = m
+            .link_contact_time
+            .iter()
+            .map(|(link, t)| format!("{link} {t:.2} s"))
+            .collect();
+        println!(
+            "  {}: links other than the feet touched the ground ({}), {:.2} mm deep at most",
+            if m.body_contact_time > 0.0 {
+                "warning"
+            } else {
+                "note"
+            },
+            links.join(", "),
+            m.max_link_penetration * 1e3
+        );
+    }
     if m.clamped_ik_steps > 0 {
         println!(
             "  warning: {} steps had foot targets out of reach (IK clamped)",

@@ -14,19 +14,24 @@
 //! contact whose stopping force leaves its friction cone slides, joins K, and the rest are solved
 //! again (at most once per contact). A lone contact gets exactly [`ContactModel::respond`]'s force.
 
-use super::{ContactForce, ContactModel, ContactState, SphereGeometry};
+use super::{ContactForce, ContactModel, ContactState, PendingContact, SphereGeometry};
 use glam::{DMat3, DVec2, DVec3};
 use rapier3d::na;
 
 /// One contact's input to [`respond_jointly`].
-pub struct JointContact<'a> {
-    pub geometry: &'a SphereGeometry,
+pub struct JointContact {
+    pub geometry: SphereGeometry,
     /// Velocity of the body's material point at the contact (world).
     pub velocity: DVec3,
+    /// How many touching contacts share this one's rigid link this step (≥ 1): their normal
+    /// dampers act on the link together, so each damps 1/n of its effective mass — n exact-decay
+    /// dampers c on mass M/n sum to the exact decay of n·c on M (see `normal`), where n dampers
+    /// each sized for M alone would take n times too much velocity out and overshoot.
+    pub sharing: usize,
 }
 
-/// The most contacts solved together: a hexapod's feet (the robot loader requires six legs). The
-/// solve works in fixed-size storage, so a step allocates nothing.
+/// The most sticking contacts solved in fixed-size storage (a hexapod's feet): a step with more
+/// (a belly on the ground) solves in storage it allocates.
 pub const MAX_JOINT_CONTACTS: usize = 6;
 
 /// T_SS for up to [`MAX_JOINT_CONTACTS`] sticking contacts; unused rows and columns hold the
@@ -42,21 +47,33 @@ const SINGULAR: f64 = 1e-9;
 /// The sticking contacts' T_SS·x = rhs: by LU when T_SS is well conditioned, else the
 /// least-squares solution of least norm (contacts that nearly coincide share their force instead
 /// of pulling against each other with huge internal forces). `active`: the rows in use; the
-/// unused ones are padded with the active block's scale, so that the padding neither sets the
-/// cut-off nor hides the block's own. None if even that is not finite (a mobility with NaN).
-fn solve_sticking(mut t_ss: Block, rhs: &Column, active: usize) -> Option<Column> {
+/// unused ones (fixed-size storage) are padded with the active block's scale, so that the padding
+/// neither sets the cut-off nor hides the block's own. None if even that is not finite (a
+/// mobility with NaN).
+fn solve_sticking<D>(
+    mut t_ss: na::OMatrix<f64, D, D>,
+    rhs: &na::OVector<f64, D>,
+    active: usize,
+) -> Option<na::OVector<f64, D>>
+where
+    D: na::DimMin<D, Output = D> + na::DimSub<na::U1>,
+    na::DefaultAllocator: na::allocator::Allocator<D, D>
+        + na::allocator::Allocator<D>
+        + na::allocator::Allocator<na::DimDiff<D, na::U1>>,
+{
     let scale = (0..active).map(|k| t_ss[(k, k)].abs()).fold(0.0, f64::max);
     let scale = if scale.is_finite() && scale > 0.0 {
         scale
     } else {
         1.0
     };
-    for k in active..2 * MAX_JOINT_CONTACTS {
+    for k in active..t_ss.nrows() {
         t_ss[(k, k)] = scale;
     }
-    let finite = |x: &Column| x.iter().all(|v| v.is_finite());
-    let trusted = |x: &Column| x.amax() * scale * SINGULAR <= rhs.amax();
-    t_ss.lu()
+    let finite = |x: &na::OVector<f64, D>| x.iter().all(|v| v.is_finite());
+    let trusted = |x: &na::OVector<f64, D>| x.amax() * scale * SINGULAR <= rhs.amax();
+    t_ss.clone()
+        .lu()
         .solve(rhs)
         .filter(|x| finite(x) && trusted(x))
         .or_else(|| {
@@ -66,9 +83,86 @@ fn solve_sticking(mut t_ss: Block, rhs: &Column, active: usize) -> Option<Column
         })
 }
 
-/// The forces on `contacts` over a step, solved together. `mobility(i, j)` is W_ij in the
-/// contacts' ground-frame axes (t₁, t₂, n): W_ij[a][b] = a_i·M⁻¹·b_j. A contact that does not touch
-/// gives `None` (and its state is reset). At most [`MAX_JOINT_CONTACTS`] contacts.
+/// T_SS·x = rhs for `m` sticking contacts, from their 2×2 blocks: in fixed-size storage up to
+/// [`MAX_JOINT_CONTACTS`], else in storage of their size.
+fn solve_blocks(
+    m: usize,
+    block: impl Fn(usize, usize) -> na::Matrix2<f64>,
+    rhs: impl Fn(usize) -> na::Vector2<f64>,
+) -> Option<Vec2s> {
+    let symmetric = |a: usize, b: usize| (block(a, b) + block(b, a).transpose()) * 0.5;
+    if m <= MAX_JOINT_CONTACTS {
+        let mut t_ss = Block::identity();
+        let mut column = Column::zeros();
+        for a in 0..m {
+            for b in 0..m {
+                t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
+                    .copy_from(&symmetric(a, b));
+            }
+            column.fixed_rows_mut::<2>(2 * a).copy_from(&rhs(a));
+        }
+        let x = solve_sticking(t_ss, &column, 2 * m)?;
+        Some(Vec2s::from_fn(m, |a| DVec2::new(x[2 * a], x[2 * a + 1])))
+    } else {
+        let mut t_ss = na::DMatrix::zeros(2 * m, 2 * m);
+        let mut column = na::DVector::zeros(2 * m);
+        for a in 0..m {
+            for b in 0..m {
+                t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
+                    .copy_from(&symmetric(a, b));
+            }
+            column.fixed_rows_mut::<2>(2 * a).copy_from(&rhs(a));
+        }
+        let x = solve_sticking(t_ss, &column, 2 * m)?;
+        Some(Vec2s::from_fn(m, |a| DVec2::new(x[2 * a], x[2 * a + 1])))
+    }
+}
+
+/// A solution per sticking contact: inline for a hexapod's feet, on the heap beyond.
+struct Vec2s {
+    inline: [DVec2; MAX_JOINT_CONTACTS],
+    heap: Vec<DVec2>,
+}
+
+impl Vec2s {
+    fn from_fn(m: usize, f: impl Fn(usize) -> DVec2) -> Self {
+        if m <= MAX_JOINT_CONTACTS {
+            Vec2s {
+                inline: std::array::from_fn(|a| if a < m { f(a) } else { DVec2::ZERO }),
+                heap: Vec::new(),
+            }
+        } else {
+            Vec2s {
+                inline: [DVec2::ZERO; MAX_JOINT_CONTACTS],
+                heap: (0..m).map(f).collect(),
+            }
+        }
+    }
+
+    fn get(&self, a: usize) -> DVec2 {
+        if self.heap.is_empty() {
+            self.inline[a]
+        } else {
+            self.heap[a]
+        }
+    }
+}
+
+/// Scratch for [`JointSolver::respond`], kept between steps so that a step allocates nothing
+/// once it has seen its largest number of contacts.
+#[derive(Default)]
+pub struct JointSolver {
+    pending: Vec<Option<PendingContact>>,
+    touching: Vec<usize>,
+    /// Per touching contact: its force fixed by the friction law (K), or None while it is taken
+    /// to stick (S).
+    fixed: Vec<Option<DVec2>>,
+    stops: Vec<DVec2>,
+    sticking: Vec<usize>,
+}
+
+/// The forces on `contacts` over a step, solved together (see the module docs), with scratch
+/// of its own: [`JointSolver::respond`] for a loop.
 pub fn respond_jointly(
     model: &ContactModel,
     contacts: &[JointContact],
@@ -77,103 +171,113 @@ pub fn respond_jointly(
     states: &mut [ContactState],
     out: &mut [Option<ContactForce>],
 ) {
-    let n = contacts.len();
-    assert!(
-        n <= MAX_JOINT_CONTACTS,
-        "{n} contacts solved together, at most {MAX_JOINT_CONTACTS}"
-    );
-    let mut pending = [None; MAX_JOINT_CONTACTS];
-    for (i, (c, state)) in contacts.iter().zip(states.iter_mut()).enumerate() {
-        let normal_mass = 1.0 / mobility(i, i).z_axis.z;
-        pending[i] = model.begin(c.geometry, c.velocity, normal_mass, dt, state);
-    }
-    let mut touching = [0; MAX_JOINT_CONTACTS];
-    let mut t = 0;
-    for i in (0..n).filter(|&i| pending[i].is_some()) {
-        touching[t] = i;
-        t += 1;
-    }
-    let touching = &touching[..t];
-    let p = |i: usize| pending[i].as_ref().expect("touching");
-    let in_plane = |w: DMat3| na::Matrix2::new(w.x_axis.x, w.y_axis.x, w.x_axis.y, w.y_axis.y);
-    // force fixed by the friction law (K), or None while the contact is taken to stick (S)
-    let mut fixed = [None; MAX_JOINT_CONTACTS];
-    for (s, &i) in touching.iter().enumerate() {
-        fixed[s] = (p(i).normal_force <= 0.0).then_some(DVec2::ZERO);
-    }
-    let fixed = &mut fixed[..t];
-    let mut stops = [DVec2::ZERO; MAX_JOINT_CONTACTS];
-    for _ in 0..=t {
-        let mut sticking = [0; MAX_JOINT_CONTACTS];
-        let mut m = 0;
-        for s in (0..t).filter(|&s| fixed[s].is_none()) {
-            sticking[m] = s;
-            m += 1;
+    JointSolver::default().respond(model, contacts, mobility, dt, states, out);
+}
+
+impl JointSolver {
+    /// The forces on `contacts` over a step, solved together. `mobility(i, j)` is W_ij in the
+    /// contacts' ground-frame axes (t₁, t₂, n): W_ij[a][b] = a_i·M⁻¹·b_j. A contact that does
+    /// not touch gives `None` (and its state is reset).
+    pub fn respond(
+        &mut self,
+        model: &ContactModel,
+        contacts: &[JointContact],
+        mobility: impl Fn(usize, usize) -> DMat3,
+        dt: f64,
+        states: &mut [ContactState],
+        out: &mut [Option<ContactForce>],
+    ) {
+        let n = contacts.len();
+        let JointSolver {
+            pending,
+            touching,
+            fixed,
+            stops,
+            sticking,
+        } = self;
+        pending.clear();
+        for (i, (c, state)) in contacts.iter().zip(states.iter_mut()).enumerate() {
+            let normal_mass = 1.0 / mobility(i, i).z_axis.z / c.sharing.max(1) as f64;
+            pending.push(model.begin(&c.geometry, c.velocity, normal_mass, dt, state));
         }
-        if m == 0 {
-            break;
-        }
-        let sticking = &sticking[..m];
-        let mut t_ss = Block::identity();
-        let mut rhs = Column::zeros();
-        for (a, &s) in sticking.iter().enumerate() {
-            let i = touching[s];
-            let mut r = na::Vector2::new(p(i).demand.x, p(i).demand.y);
-            // the normal forces' change moves the contact too (last step's load had the old ones)
-            for &j in touching {
-                let w = mobility(i, j);
-                r += na::Vector2::new(w.z_axis.x, w.z_axis.y) * p(j).normal_change;
+        touching.clear();
+        touching.extend((0..n).filter(|&i| pending[i].is_some()));
+        let t = touching.len();
+        let p = |i: usize| pending[i].as_ref().expect("touching");
+        let in_plane = |w: DMat3| na::Matrix2::new(w.x_axis.x, w.y_axis.x, w.x_axis.y, w.y_axis.y);
+        fixed.clear();
+        fixed.extend(
+            touching
+                .iter()
+                .map(|&i| (p(i).normal_force <= 0.0).then_some(DVec2::ZERO)),
+        );
+        stops.clear();
+        stops.resize(t, DVec2::ZERO);
+        for _ in 0..=t {
+            sticking.clear();
+            sticking.extend((0..t).filter(|&s| fixed[s].is_none()));
+            let m = sticking.len();
+            if m == 0 {
+                break;
             }
-            for (b, &s2) in sticking.iter().enumerate() {
-                t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
-                    .copy_from(&in_plane(mobility(i, touching[s2])));
-            }
-            for (k, f) in fixed.iter().enumerate() {
-                if let Some(f) = f {
-                    let j = touching[k];
-                    let g = *f - p(j).previous_friction;
-                    r += in_plane(mobility(i, j)) * na::Vector2::new(g.x, g.y);
+            let rhs = |a: usize| {
+                let i = touching[sticking[a]];
+                let mut r = na::Vector2::new(p(i).demand.x, p(i).demand.y);
+                // the normal forces' change moves the contact too (last step's load had the old
+                // ones)
+                for &j in touching.iter() {
+                    let w = mobility(i, j);
+                    r += na::Vector2::new(w.z_axis.x, w.z_axis.y) * p(j).normal_change;
+                }
+                for (k, f) in fixed.iter().enumerate() {
+                    if let Some(f) = f {
+                        let j = touching[k];
+                        let g = *f - p(j).previous_friction;
+                        r += in_plane(mobility(i, j)) * na::Vector2::new(g.x, g.y);
+                    }
+                }
+                r
+            };
+            // symmetrised: W is symmetric, its numerical copy only nearly. T_SS is singular when
+            // contacts coincide (two spheres on one point): any split of their force stops them,
+            // and the least-squares solution of least norm shares it equally
+            let block = |a: usize, b: usize| {
+                in_plane(mobility(touching[sticking[a]], touching[sticking[b]]))
+            };
+            let Some(x) = solve_blocks(m, block, rhs) else {
+                // not even that (a mobility with NaN): each contact's force as if alone
+                for &s in sticking.iter() {
+                    let pc = p(touching[s]);
+                    let t_ii = in_plane(mobility(touching[s], touching[s]));
+                    stops[s] = match t_ii.try_inverse() {
+                        Some(mass) => {
+                            let u = mass * na::Vector2::new(pc.demand.x, pc.demand.y);
+                            pc.previous_friction - DVec2::new(u.x, u.y)
+                        }
+                        None => DVec2::splat(f64::INFINITY),
+                    };
+                }
+                break;
+            };
+            let mut changed = false;
+            for (a, &s) in sticking.iter().enumerate() {
+                let pc = p(touching[s]);
+                let stop = pc.previous_friction - x.get(a);
+                stops[s] = stop;
+                let outcome = pc.friction(&model.friction, stop);
+                if !outcome.sticking {
+                    fixed[s] = Some(outcome.force);
+                    changed = true;
                 }
             }
-            rhs.fixed_rows_mut::<2>(2 * a).copy_from(&r);
-        }
-        // symmetrise: W is symmetric, its numerical copy only nearly
-        let t_ss = (t_ss + t_ss.transpose()) * 0.5;
-        // T_SS is singular when contacts coincide (two spheres on one point): any split of
-        // their force stops them, and the least-squares solution of least norm shares it equally
-        let Some(x) = solve_sticking(t_ss, &rhs, 2 * m) else {
-            // not even that (a mobility with NaN): each contact's force as if alone
-            for &s in sticking {
-                let pc = p(touching[s]);
-                let t_ii = in_plane(mobility(touching[s], touching[s]));
-                stops[s] = match t_ii.try_inverse() {
-                    Some(mass) => {
-                        let u = mass * na::Vector2::new(pc.demand.x, pc.demand.y);
-                        pc.previous_friction - DVec2::new(u.x, u.y)
-                    }
-                    None => DVec2::splat(f64::INFINITY),
-                };
-            }
-            break;
-        };
-        let mut changed = false;
-        for (a, &s) in sticking.iter().enumerate() {
-            let pc = p(touching[s]);
-            let stop = pc.previous_friction - DVec2::new(x[2 * a], x[2 * a + 1]);
-            stops[s] = stop;
-            let outcome = pc.friction(&model.friction, stop);
-            if !outcome.sticking {
-                fixed[s] = Some(outcome.force);
-                changed = true;
+            if !changed {
+                break;
             }
         }
-        if !changed {
-            break;
+        out[..n].fill(None);
+        for (s, &i) in touching.iter().enumerate() {
+            out[i] = Some(model.finish(p(i), stops[s], dt, &mut states[i]));
         }
-    }
-    out[..n].fill(None);
-    for (s, &i) in touching.iter().enumerate() {
-        out[i] = Some(model.finish(p(i), stops[s], dt, &mut states[i]));
     }
 }
 
@@ -280,8 +384,9 @@ mod tests {
             respond_jointly(
                 &model,
                 &[JointContact {
-                    geometry: &geometry,
+                    geometry,
                     velocity,
+                    sharing: 1,
                 }],
                 |i, j| body.mobility(i, j),
                 DT,
@@ -340,8 +445,9 @@ mod tests {
         let velocities: Vec<DVec3> = (0..2).map(|i| body.axes(i) * slips[i]).collect();
         let geometries = [body.geometry(0, 1e-3), body.geometry(1, 1e-3)];
         let contacts = [0, 1].map(|i| JointContact {
-            geometry: &geometries[i],
+            geometry: geometries[i],
             velocity: velocities[i],
+            sharing: 1,
         });
         let forces = body.respond_pair(&model, &contacts);
         assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
@@ -436,8 +542,9 @@ mod tests {
         let velocity = frame.to_world(DVec3::new(3e-4, -2e-4, -0.01));
         let geometry = body.geometry(0, 1e-3);
         let contacts = [0, 1].map(|_| JointContact {
-            geometry: &geometry,
+            geometry,
             velocity,
+            sharing: 1,
         });
         let forces = body.respond_pair(&model, &contacts);
         assert!(forces.iter().all(|f| f.sticking), "{forces:?}");
@@ -481,8 +588,9 @@ mod tests {
             let velocity = frame.to_world(DVec3::new(3e-4 / m, -2e-4 / m, -0.01));
             let geometry = body.geometry(0, 1e-3);
             let contacts = [0, 1].map(|_| JointContact {
-                geometry: &geometry,
+                geometry,
                 velocity,
+                sharing: 1,
             });
             let forces = body.respond_pair(&model, &contacts);
             assert!(forces.iter().all(|f| f.sticking), "m = {m}: {forces:?}");

@@ -32,6 +32,9 @@ pub struct HexapodMetrics {
     /// Body height above the terrain under it (m).
     pub body_height_mean: f64,
     pub body_height_std: f64,
+    /// The lowest that height came (m): below zero the body has gone into the ground (a robot
+    /// whose body has no collision geometry, collapsed).
+    pub body_height_min: Option<f64>,
     /// Per foot: distance slid while bearing load (m), see [`slid`].
     pub foot_slip: [f64; 6],
     /// Per foot: fraction of the walk on the ground.
@@ -39,6 +42,17 @@ pub struct HexapodMetrics {
     pub peak_normal_force: [f64; 6],
     pub mean_normal_force: [f64; 6],
     pub max_penetration: f64,
+    /// Deepest penetration of any contact sphere of a link other than a foot (m): a shin against
+    /// a riser, the belly on a rock (see `robot::contact_set`).
+    pub max_link_penetration: f64,
+    /// Seconds each link touched the ground with a sphere other than its foot, by link name
+    /// (links that never did are left out).
+    pub link_contact_time: std::collections::BTreeMap<String, f64>,
+    /// Seconds the body (the root link) touched the ground: a walking robot's belly does not.
+    pub body_contact_time: f64,
+    /// When the robot fell (s into the walk): the first time its body tilted past [`FALL_TILT`]
+    /// from upright; None if it never did.
+    pub fell_at: Option<f64>,
     /// Mechanical work done by the servos, ∫Σ|τ·q̇| dt (J), and the cost of transport E/(m·g·d):
     /// none for a robot that did not move (d = 0), whose cost per metre is undefined, not 0 — a
     /// search minimising it must not be rewarded for standing still.
@@ -189,6 +203,8 @@ struct Accumulators {
     near_limit_steps: Vec<u64>,
     /// The terrain grid's x and y ranges, if known.
     terrain: Option<([f64; 2], [f64; 2])>,
+    /// Steps each model link touched the ground with a sphere other than its foot.
+    link_steps: Vec<u64>,
 }
 
 /// How far a contact slid over a step of `dt`: its in-plane speed times `dt`, while it bears load.
@@ -206,6 +222,10 @@ fn slid(contact: &ContactForce, dt: f64) -> f64 {
         0.0
     }
 }
+
+/// A body tilted this far from upright (its z axis from the vertical) has fallen (45°, as
+/// legged_gym's terrain curriculum and the terrain ladder count a fall).
+pub const FALL_TILT: f64 = std::f64::consts::FRAC_PI_4;
 
 /// How close to a limit a joint counts as at it (1°).
 pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
@@ -281,6 +301,12 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         self.walk_time = a.walk_steps as f64 * dt;
         self.mean_speed = self.distance / self.walk_time;
         self.heading_change_deg = a.yaw_total.to_degrees();
+        let tilt = (r.body.matrix3.z_axis.z / r.body.matrix3.z_axis.length())
+            .clamp(-1.0, 1.0)
+            .acos();
+        if tilt > FALL_TILT && self.fell_at.is_none() {
+            self.fell_at = Some(self.walk_time);
+        }
         self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
         self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
         a.roll2 += roll * roll;
@@ -288,6 +314,10 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         let n = a.walk_steps as f64;
         self.rms_roll_deg = (a.roll2 / n).sqrt().to_degrees();
         self.rms_pitch_deg = (a.pitch2 / n).sqrt().to_degrees();
+        self.body_height_min = Some(
+            self.body_height_min
+                .map_or(r.body_height, |h| h.min(r.body_height)),
+        );
         a.height += r.body_height;
         a.height2 += r.body_height * r.body_height;
         self.body_height_mean = a.height / n;
@@ -304,6 +334,23 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             }
             self.stance_fraction[k] = a.stance_steps[k] as f64 / n;
             self.mean_normal_force[k] = a.force_sum[k] / n;
+        }
+        let model = walker.hexapod().model();
+        a.link_steps.resize(model.links.len(), 0);
+        let mut last = None;
+        for c in &r.link_contacts {
+            self.max_link_penetration = self.max_link_penetration.max(c.force.penetration);
+            // contacts come in link order: count each link once a step
+            if last != Some(c.link) {
+                last = Some(c.link);
+                a.link_steps[c.link] += 1;
+                let time = a.link_steps[c.link] as f64 * dt;
+                self.link_contact_time
+                    .insert(model.links[c.link].name.clone(), time);
+                if c.link == 0 {
+                    self.body_contact_time = time;
+                }
+            }
         }
         for ((q, &(lower, upper)), steps) in r
             .joint_angles
@@ -365,6 +412,26 @@ pub const MAX_PENETRATION: Metric<HexapodMetrics> = Metric {
     better: Better::Lower,
     bounds: &[Bound::max("max_penetration_mm").scaled(1e3)],
     value: |m| Value::One(m.max_penetration),
+};
+
+pub const MAX_LINK_PENETRATION: Metric<HexapodMetrics> = Metric {
+    name: "max_link_penetration",
+    unit: "m",
+    what: "deepest penetration into the ground of any link's contact sphere other than a foot",
+    noise: Some(0.0002),
+    better: Better::Lower,
+    bounds: &[Bound::max("max_link_penetration_mm").scaled(1e3)],
+    value: |m| Value::One(m.max_link_penetration),
+};
+
+pub const BODY_CONTACT_TIME: Metric<HexapodMetrics> = Metric {
+    name: "body_contact_time",
+    unit: "s",
+    what: "time the body (root link) touched the ground over the walk",
+    noise: Some(0.01),
+    better: Better::Lower,
+    bounds: &[Bound::max("max_body_contact_s")],
+    value: |m| Value::One(m.body_contact_time),
 };
 
 /// Every metric of a walk.
@@ -483,6 +550,17 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         value: |m| Value::One(m.body_height_std),
     },
     MAX_PENETRATION,
+    MAX_LINK_PENETRATION,
+    BODY_CONTACT_TIME,
+    Metric {
+        name: "fell_at",
+        unit: "s",
+        what: "when the body first tilted past 45° from upright (absent: it never fell)",
+        noise: None,
+        better: Better::Neither,
+        bounds: &[],
+        value: |m| m.fell_at.map_or(Value::Absent, Value::One),
+    },
     Metric {
         name: "foot_slip",
         unit: "m",

@@ -153,6 +153,11 @@ impl HexapodRecorder {
             "world/foot_forces",
             &rerun::Arrows3D::update_fields().with_colors([[40, 120, 255]]),
         )?;
+        // a link other than a foot on the ground (a shin on a riser, the belly) in orange
+        rec.log_static(
+            "world/link_forces",
+            &rerun::Arrows3D::update_fields().with_colors([[255, 140, 0]]),
+        )?;
         rec.log_static(
             "world/body_path",
             &rerun::LineStrips3D::update_fields().with_colors([[240, 200, 60]]),
@@ -350,6 +355,21 @@ impl HexapodRecorder {
             .unzip();
         rec.log(
             "world/foot_forces",
+            &rerun::Arrows3D::from_vectors(vectors).with_origins(origins),
+        )?;
+        let (origins, vectors): (Vec<[f32; 3]>, Vec<[f32; 3]>) = s
+            .robot
+            .link_contacts
+            .iter()
+            .map(|c| {
+                (
+                    c.force.point.as_vec3().to_array(),
+                    (c.force.force * force_scale).as_vec3().to_array(),
+                )
+            })
+            .unzip();
+        rec.log(
+            "world/link_forces",
             &rerun::Arrows3D::from_vectors(vectors).with_origins(origins),
         )?;
         // a dot per frame while a foot is down: a footprint, or a streak where it slips

@@ -95,29 +95,10 @@ fn points(pieces: &[Placed], base: &Path, unread: &mut Vec<String>) -> Vec<DVec3
                 .collect(),
             urdf_rs::Geometry::Sphere { radius } => sphere(*radius, DVec3::ZERO),
             urdf_rs::Geometry::Mesh { filename, scale } => {
-                let scale = scale
-                    .as_ref()
-                    .map_or(DVec3::ONE, |s| DVec3::from_array(s.0));
-                match mesh::resolve(filename, base) {
-                    Ok(path) => match mesh::mesh_vertices(&path) {
-                        Some(vertices) => vertices.into_iter().map(|v| v * scale).collect(),
-                        None => {
-                            unread.push(format!(
-                                "mesh {filename} is not a mesh file hexsim can read (STL, COLLADA, OBJ)"
-                            ));
-                            Vec::new()
-                        }
-                    },
-                    Err(tried) => {
-                        let first = tried
-                            .first()
-                            .map_or(filename.clone(), |p| p.display().to_string());
-                        unread.push(format!(
-                            "mesh {filename} not found ({first} does not exist)"
-                        ));
-                        Vec::new()
-                    }
-                }
+                mesh::scaled_vertices(filename, scale.as_ref(), base).unwrap_or_else(|why| {
+                    unread.push(why);
+                    Vec::new()
+                })
             }
         };
         out.extend(local.into_iter().map(|p| piece.origin.transform_point3(p)));

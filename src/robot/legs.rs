@@ -172,6 +172,9 @@ pub(super) fn turn_to_forward(links: &mut [Link], joints: &mut [Joint], yaw: f64
     if let Some(foot) = &mut root.foot {
         foot.center = rotation * foot.center;
     }
+    for sphere in &mut root.contacts {
+        sphere.center = rotation * sphere.center;
+    }
     for joint in joints.iter_mut().filter(|j| j.parent == 0) {
         joint.origin = turn * joint.origin;
     }

@@ -45,6 +45,32 @@ pub fn resolve(uri: &str, base: &Path) -> Result<PathBuf, Vec<PathBuf>> {
     Err(tried)
 }
 
+/// The vertices of a URDF `<mesh>` (its `filename` resolved against `base`, its `scale` applied),
+/// or why they could not be read (a sentence for a warning).
+pub fn scaled_vertices(
+    filename: &str,
+    scale: Option<&urdf_rs::Vec3>,
+    base: &Path,
+) -> Result<Vec<glam::DVec3>, String> {
+    let scale = scale.map_or(glam::DVec3::ONE, |s| glam::DVec3::from_array(s.0));
+    match resolve(filename, base) {
+        Ok(path) => match mesh_vertices(&path) {
+            Some(vertices) => Ok(vertices.into_iter().map(|v| v * scale).collect()),
+            None => Err(format!(
+                "mesh {filename} is not a mesh file hexsim can read (STL, COLLADA, OBJ)"
+            )),
+        },
+        Err(tried) => {
+            let first = tried
+                .first()
+                .map_or(filename.to_string(), |p| p.display().to_string());
+            Err(format!(
+                "mesh {filename} not found ({first} does not exist)"
+            ))
+        }
+    }
+}
+
 /// Whether the recording can draw this mesh file (by its extension).
 pub fn drawable(path: &Path) -> bool {
     path.extension()

@@ -1,5 +1,6 @@
 //! The robot: URDF loading and validation, leg discovery, and leg kinematics.
 
+pub mod contact_set;
 pub mod foot;
 mod forward;
 pub mod kinematics;
@@ -11,7 +12,8 @@ pub mod statics;
 pub mod urdf;
 
 pub use model::{
-    Foot, FootFrom, GaitHints, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape, Visual,
+    ContactSphere, Foot, FootFrom, GaitHints, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape,
+    Visual,
 };
 
 /// Loads a URDF robot file.

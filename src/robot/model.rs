@@ -72,6 +72,14 @@ impl FootFrom {
     }
 }
 
+/// A sphere of a link's contact set, in the link frame: the link's geometry as the terrain feels
+/// it (see `robot::contact_set`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSphere {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
 /// A rigid link (links joined by fixed joints are merged into one).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Link {
@@ -85,6 +93,8 @@ pub struct Link {
     pub inertia: DMat3,
     pub visuals: Vec<Visual>,
     pub foot: Option<Foot>,
+    /// Where the link touches the ground besides its foot: its collision geometry as spheres.
+    pub contacts: Vec<ContactSphere>,
     /// The URDF links fixed to this one (by fixed joints) and merged into it, by name.
     pub merged: Vec<String>,
 }

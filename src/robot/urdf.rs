@@ -3,6 +3,7 @@
 //!
 //! Every error names the file and the element (link or joint) and says what was expected.
 
+use super::contact_set;
 use super::foot::{self, Placed};
 use super::legs::{self, Forward};
 use super::mesh;
@@ -571,6 +572,7 @@ fn build(
     } else {
         Vec::new()
     };
+    warnings.extend(contact_set::attach(&mut links, &shapes, base).warnings());
     let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
     legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
     let mut model = RobotModel {
@@ -1101,7 +1103,7 @@ impl Unstated {
     }
 }
 
-fn empty_link(name: &str, parent_joint: Option<usize>) -> Link {
+pub(super) fn empty_link(name: &str, parent_joint: Option<usize>) -> Link {
     Link {
         name: name.to_string(),
         parent_joint,
@@ -1110,6 +1112,7 @@ fn empty_link(name: &str, parent_joint: Option<usize>) -> Link {
         inertia: DMat3::ZERO,
         visuals: Vec::new(),
         foot: None,
+        contacts: Vec::new(),
         merged: Vec::new(),
     }
 }

@@ -20,6 +20,8 @@ pub struct Watchdog {
     /// Per foot (or the ball): its name, its radius, and the mass the contact spring acts on at
     /// least (the foot link's; the ball's).
     bodies: Vec<(String, f64, f64)>,
+    /// Every model link's name (a walk's), for a link contact that went through.
+    links: Vec<String>,
     /// Weight carried by the contacts (N), to tell a soft ground from an unstable step.
     weight: f64,
     /// The ball's total energy at the start (J).
@@ -42,6 +44,7 @@ impl Watchdog {
                     )
                 })
                 .collect(),
+            links: robot.links.iter().map(|l| l.name.clone()).collect(),
             weight: robot.total_mass() * gravity / 3.0, // a tripod carries it on three feet
             start_energy: None,
         }
@@ -59,6 +62,7 @@ impl Watchdog {
             dt,
             law,
             bodies: vec![("ball".into(), radius, mass)],
+            links: Vec::new(),
             weight: mass * gravity,
             start_energy: Some(start.total_energy()),
         }
@@ -83,6 +87,17 @@ impl Watchdog {
                     self.bodies[k].1 * 1e3
                 );
                 return Some(self.report(s.time, &what, &self.bodies[k].0, Some(k)));
+            }
+        }
+        for c in &s.link_contacts {
+            if !c.force.force.is_finite() || c.force.penetration > c.radius {
+                let what = format!(
+                    "sank {:.1} mm into the ground, deeper than its {:.1} mm contact sphere",
+                    c.force.penetration * 1e3,
+                    c.radius * 1e3
+                );
+                let place = format!("link {}", self.links[c.link]);
+                return Some(self.report(s.time, &what, &place, None));
             }
         }
         let speed = s.body_velocity.length();

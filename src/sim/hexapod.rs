@@ -4,7 +4,8 @@
 //! with servos at every joint and the paper's contact model under each foot as the only ground force.
 //!
 //! - Links carry no colliders: rapier computes no contacts at all (neither with the ground nor
-//!   between links). Each step, each foot's force from [`crate::contact`] is applied to its link.
+//!   between links). Each step, the force from [`crate::contact`] on each foot and on every other
+//!   link's contact spheres that touch the terrain is applied to its link (`ground_contact`).
 //! - Servos follow the implicit PD law in physical units, τ = k·(q* − q) − d·q̇, limited to the
 //!   URDF's `effort`; the sample carries the torque actually applied.
 //! - Nothing sleeps.
@@ -13,7 +14,8 @@ use super::articulation::{
     Articulation, ContactPoint, JointDrift, Joints, ServoGains, affine_of, pose_of,
 };
 use super::engine::{Engine, STANDARD_GRAVITY};
-use super::foot_contact::FootContacts;
+use super::ground_contact::GroundContacts;
+pub use super::ground_contact::LinkContact;
 use crate::contact::{ContactForce, ContactModel};
 use crate::robot::RobotModel;
 use crate::terrain::{GroundFrame, HeightGrid};
@@ -87,6 +89,8 @@ pub struct HexapodSample {
     /// Per leg, in the model's leg order.
     pub foot_positions: [DVec3; 6],
     pub foot_contacts: [Option<ContactForce>; 6],
+    /// The other links' touching contact spheres (shins, knees, the belly), in link order.
+    pub link_contacts: Vec<LinkContact>,
     /// How far apart the joints have come (zero for the multibody; measured every 10 steps).
     pub joint_drift: JointDrift,
 }
@@ -117,8 +121,11 @@ pub struct Hexapod {
     rates: Vec<f64>,
     /// The joints' drift, measured every [`DRIFT_EVERY`] steps (impulse joints).
     drift: JointDrift,
-    feet: FootContacts,
+    ground: GroundContacts,
     last_contacts: [Option<ContactForce>; 6],
+    last_link_contacts: Vec<LinkContact>,
+    /// Every link's world pose this step (scratch).
+    frames: Vec<DAffine3>,
     step: u64,
     /// Wall-clock seconds spent inside rapier's step (see [`Hexapod::physics_seconds`]).
     physics_seconds: f64,
@@ -126,7 +133,7 @@ pub struct Hexapod {
 
 impl Hexapod {
     /// Builds the robot standing at `placement` with joint angles `pose` (per model joint), its
-    /// lowest foot just touching the terrain.
+    /// lowest point (a foot, or any link's contact sphere) just touching the terrain.
     pub fn new(
         model: Arc<RobotModel>,
         terrain: Arc<HeightGrid>,
@@ -134,6 +141,19 @@ impl Hexapod {
         settings: HexapodSettings,
         placement: Placement,
         pose: &[f64],
+    ) -> Self {
+        Self::dropped(model, terrain, contact, settings, placement, pose, 0.0)
+    }
+
+    /// [`Hexapod::new`] with the robot's lowest point `height` (m) above the terrain: dropped.
+    pub fn dropped(
+        model: Arc<RobotModel>,
+        terrain: Arc<HeightGrid>,
+        contact: ContactModel,
+        settings: HexapodSettings,
+        placement: Placement,
+        pose: &[f64],
+        height: f64,
     ) -> Self {
         let pgs = settings
             .pgs_iterations
@@ -145,18 +165,26 @@ impl Hexapod {
             pgs,
             settings.articulation.stabilization_iterations(),
         );
-        // body height: each foot just above the ground under it
+        // body height: each foot and every link's contact sphere above the ground under it
         let heading = DQuat::from_rotation_z(placement.yaw);
         let link_poses = model.link_poses(pose);
         let mut body_z = f64::NEG_INFINITY;
+        let mut clear = |link: usize, center: DVec3, radius: f64| {
+            let p = heading * link_poses[link].transform_point3(center);
+            let ground = terrain.height(placement.x + p.x, placement.y + p.y);
+            body_z = body_z.max(ground + radius - p.z);
+        };
         for leg in &model.legs {
-            let foot = heading * link_poses[leg.foot_link].transform_point3(leg.foot.center);
-            let ground = terrain.height(placement.x + foot.x, placement.y + foot.y);
-            body_z = body_z.max(ground + leg.foot.radius - foot.z);
+            clear(leg.foot_link, leg.foot.center, leg.foot.radius);
+        }
+        for (k, link) in model.links.iter().enumerate() {
+            for sphere in &link.contacts {
+                clear(k, sphere.center, sphere.radius);
+            }
         }
         let body = DAffine3::from_rotation_translation(
             heading,
-            DVec3::new(placement.x, placement.y, body_z + 1e-3),
+            DVec3::new(placement.x, placement.y, body_z + 1e-3 + height),
         );
         let root_com = model.links[0].com;
         let mut bodies = Vec::with_capacity(model.links.len());
@@ -190,6 +218,7 @@ impl Hexapod {
         );
         let n = model.joints.len();
         let hips_centre = DVec3::new(0.0, 0.0, model.hips_plane());
+        let ground = GroundContacts::new(&model, &terrain);
         let mut hexapod = Hexapod {
             engine,
             model,
@@ -203,8 +232,10 @@ impl Hexapod {
             angles: vec![0.0; n],
             rates: vec![0.0; n],
             drift: JointDrift::default(),
-            feet: FootContacts::default(),
+            ground,
             last_contacts: [None; 6],
+            last_link_contacts: Vec::new(),
+            frames: Vec::new(),
             step: 0,
             physics_seconds: 0.0,
         };
@@ -337,17 +368,20 @@ impl Hexapod {
         }
         self.joints
             .drive(&mut self.engine, &self.targets, &self.angles, &self.rates);
-        let foot_frames: [DAffine3; 6] =
-            std::array::from_fn(|k| self.link_frame(self.model.legs[k].foot_link));
-        let contacts = self.feet.apply(
+        let mut frames = std::mem::take(&mut self.frames);
+        frames.clear();
+        frames.extend((0..self.model.links.len()).map(|k| self.link_frame(k)));
+        let contacts = self.ground.apply(
             &mut self.engine,
             self.joints.as_mut(),
             &self.model,
             &self.bodies,
             &self.terrain,
             &self.contact,
-            &foot_frames,
+            &frames,
+            &mut self.last_link_contacts,
         );
+        self.frames = frames;
         let started = std::time::Instant::now();
         self.engine.step();
         self.physics_seconds += started.elapsed().as_secs_f64();
@@ -394,6 +428,7 @@ impl Hexapod {
             joint_torques,
             foot_positions,
             foot_contacts: self.last_contacts,
+            link_contacts: self.last_link_contacts.clone(),
             joint_drift: self.drift,
         }
     }

@@ -3,7 +3,7 @@
 mod articulation;
 pub mod ball;
 mod engine;
-mod foot_contact;
+mod ground_contact;
 
 pub use articulation::{Articulation, IMPULSE_PGS_ITERATIONS, JointDrift, ServoGains};
 pub use ball::{BallConfig, BallSample, BallSim};

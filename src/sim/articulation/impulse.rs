@@ -162,26 +162,41 @@ impl Joints for ImpulseRobot {
     ) {
         let n = contacts.len();
         mobility[..n * n].fill(DMat3::ZERO);
+        let cross = |r: DVec3| {
+            DMat3::from_cols(
+                DVec3::new(0.0, r.z, -r.y),
+                DVec3::new(-r.z, 0.0, r.x),
+                DVec3::new(r.y, -r.x, 0.0),
+            )
+        };
+        let axes = |c: &ContactPoint| {
+            DMat3::from_cols(c.frame.tangent_x, c.frame.tangent_y, c.frame.normal)
+        };
         for (i, c) in contacts.iter().enumerate() {
             let rb = &engine.bodies[c.body];
             velocities[i] = rb.velocity_at_point(c.point.as_vec3()).as_dvec3();
             let rotation = DMat3::from_quat(rb.position().rotation.as_dquat());
             let inverse_inertia = rotation * self.inverse_inertias[c.link] * rotation.transpose();
-            // a free rigid body: W = 1/m + [r]×ᵀ·I⁻¹·[r]×, in the ground frame's axes
-            let r = c.point - c.com;
-            let cross = DMat3::from_cols(
-                DVec3::new(0.0, r.z, -r.y),
-                DVec3::new(-r.z, 0.0, r.x),
-                DVec3::new(r.y, -r.x, 0.0),
-            );
-            let world = DMat3::from_diagonal(DVec3::splat(1.0 / self.model.links[c.link].mass))
-                + cross.transpose() * inverse_inertia * cross;
-            let axes = DMat3::from_cols(c.frame.tangent_x, c.frame.tangent_y, c.frame.normal);
-            let mut w = axes.transpose() * world * axes;
-            if let Some(&(_, mass)) = self.damper_masses.iter().find(|(l, _)| *l == c.link) {
-                w.z_axis.z = 1.0 / mass;
+            let inverse_mass =
+                DMat3::from_diagonal(DVec3::splat(1.0 / self.model.links[c.link].mass));
+            // a free rigid body: W_ij = 1/m + [r_i]×ᵀ·I⁻¹·[r_j]× between two points on it, in the
+            // ground frames' axes; points on different links are taken as uncoupled
+            let r_i = cross(c.point - c.com);
+            for (j, d) in contacts
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| d.link == c.link)
+            {
+                let r_j = cross(d.point - d.com);
+                let world = inverse_mass + r_i.transpose() * inverse_inertia * r_j;
+                let mut w = axes(c).transpose() * world * axes(d);
+                if i == j
+                    && let Some(&(_, mass)) = self.damper_masses.iter().find(|(l, _)| *l == c.link)
+                {
+                    w.z_axis.z = 1.0 / mass;
+                }
+                mobility[i * n + j] = w;
             }
-            mobility[i * n + i] = w;
         }
     }
 

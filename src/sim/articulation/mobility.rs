@@ -19,38 +19,78 @@ pub const DOFS: usize = 24;
 /// Contact axes are lanes, in chunks of four; six contacts × three axes fit in five chunks.
 const LANE: usize = 4;
 const CHUNKS: usize = 5;
-/// The most contact axes: six feet × (t₁, t₂, n).
-pub const MAX_AXES: usize = LANE * CHUNKS - 2;
+/// The contact axes of one group: six contacts × (t₁, t₂, n), a hexapod's feet. More contacts
+/// (shins, a belly) take more groups.
+pub const GROUP_AXES: usize = LANE * CHUNKS - 2;
 
-/// One degree of freedom's entries for every contact axis (glam's `Vec4` is one SSE register).
+/// One degree of freedom's entries for a group's contact axes (glam's `Vec4` is one SSE register).
 type Row = [Vec4; CHUNKS];
 
-/// Scratch for [`Mobility::compute`], kept between steps so a step allocates nothing.
-pub struct Mobility {
+/// A group of contact axes: their Jacobian and M⁻¹ applied to it.
+#[derive(Clone)]
+struct Group {
     /// Aᵀ: per degree of freedom, each contact axis' Jacobian entry.
     jacobian: [Row; DOFS],
     /// M⁻¹·Aᵀ, solved in place.
     solved: [Row; DOFS],
-    /// W, row by contact axis.
-    product: [Row; MAX_AXES],
+}
+
+impl Default for Group {
+    fn default() -> Self {
+        Group {
+            jacobian: [[Vec4::ZERO; CHUNKS]; DOFS],
+            solved: [[Vec4::ZERO; CHUNKS]; DOFS],
+        }
+    }
+}
+
+/// Scratch for [`Mobility::compute`], kept between steps so a step allocates nothing once it has
+/// seen its most contacts.
+pub struct Mobility {
+    groups: Vec<Group>,
+    /// W, row by contact axis, then by group of columns: `product[a·groups + h]`.
+    product: Vec<Row>,
+    /// Groups in use by the last [`Mobility::compute`].
+    in_use: usize,
 }
 
 impl Default for Mobility {
     fn default() -> Self {
         Mobility {
-            jacobian: [[Vec4::ZERO; CHUNKS]; DOFS],
-            solved: [[Vec4::ZERO; CHUNKS]; DOFS],
-            product: [[Vec4::ZERO; CHUNKS]; MAX_AXES],
+            groups: vec![Group::default()],
+            product: vec![[Vec4::ZERO; CHUNKS]; GROUP_AXES],
+            in_use: 1,
         }
     }
 }
 
 impl Mobility {
-    /// Sets contact axis `axis`'s Jacobian entry for degree of freedom `dof`. Every entry of the
-    /// axes [`Mobility::compute`] is asked for must be set (entries are kept between steps).
+    /// Makes room for `axes` contact axes (allocating only the first time a step has that many).
+    pub fn reserve(&mut self, axes: usize) {
+        let groups = axes.div_ceil(GROUP_AXES).max(1);
+        if groups > self.groups.len() {
+            self.groups.resize_with(groups, Group::default);
+        }
+    }
+
+    /// Sets contact axis `axis`'s Jacobian entry for degree of freedom `dof` (room made by
+    /// [`Mobility::reserve`]). Every entry of the axes [`Mobility::compute`] is asked for must be
+    /// set (entries are kept between steps).
+    #[cfg(test)]
+    fn set(&mut self, dof: usize, axis: usize, value: f32) {
+        let (group, lane) = (axis / GROUP_AXES, axis % GROUP_AXES);
+        self.groups[group].jacobian[dof][lane / LANE][lane % LANE] = value;
+    }
+
+    /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
+    /// room made by [`Mobility::reserve`]): one lookup of its group for all its entries.
     #[inline]
-    pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
-        self.jacobian[dof][axis / LANE][axis % LANE] = value;
+    pub fn contact(&mut self, i: usize) -> ContactAxes<'_> {
+        let first = 3 * i;
+        ContactAxes {
+            jacobian: &mut self.groups[first / GROUP_AXES].jacobian,
+            first: first % GROUP_AXES,
+        }
     }
 
     /// W = A·M⁻¹·Aᵀ for the first `axes` contact axes, given M's tree factors; `w(a, b)` then
@@ -59,61 +99,70 @@ impl Mobility {
         if factors.dim() != DOFS {
             return false;
         }
-        debug_assert!(axes <= MAX_AXES);
-        self.solved = self.jacobian;
-        // one monomorphised solve per width, so every row operation is a fixed run of registers
-        match axes.div_ceil(LANE) {
-            0 => {}
-            1 => self.solve::<1>(factors, axes),
-            2 => self.solve::<2>(factors, axes),
-            3 => self.solve::<3>(factors, axes),
-            4 => self.solve::<4>(factors, axes),
-            _ => self.solve::<CHUNKS>(factors, axes),
+        self.reserve(axes);
+        let groups = axes.div_ceil(GROUP_AXES).max(1);
+        self.in_use = groups;
+        if self.product.len() < axes * groups {
+            self.product.resize(axes * groups, [Vec4::ZERO; CHUNKS]);
+        }
+        if groups == 1 {
+            // a hexapod's feet: one monomorphised solve and product per width, so every row
+            // operation is a fixed run of registers
+            match axes.div_ceil(LANE) {
+                0 => {}
+                1 => self.one_group::<1>(factors, axes),
+                2 => self.one_group::<2>(factors, axes),
+                3 => self.one_group::<3>(factors, axes),
+                4 => self.one_group::<4>(factors, axes),
+                _ => self.one_group::<CHUNKS>(factors, axes),
+            }
+            return true;
+        }
+        // more contacts (shins, a belly): M⁻¹·Aᵀ group by group (each column of Aᵀ is solved on
+        // its own), then W's blocks between every two groups
+        for g in 0..groups {
+            let group = &mut self.groups[g];
+            group.solved = group.jacobian;
+            solve::<CHUNKS>(&mut group.solved, factors);
+        }
+        for row in &mut self.product[..axes * groups] {
+            *row = [Vec4::ZERO; CHUNKS];
+        }
+        for g in 0..groups {
+            let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
+            for d in 0..DOFS {
+                let a_row = self.groups[g].jacobian[d];
+                for a in rows.clone() {
+                    let lane = a - g * GROUP_AXES;
+                    let coefficient = a_row[lane / LANE][lane % LANE];
+                    if coefficient == 0.0 {
+                        continue;
+                    }
+                    for h in 0..groups {
+                        let x_row = &self.groups[h].solved[d];
+                        let w_row = &mut self.product[a * groups + h];
+                        for c in 0..CHUNKS {
+                            w_row[c] += x_row[c] * coefficient;
+                        }
+                    }
+                }
+            }
         }
         true
     }
 
-    /// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of
-    /// freedom and its ancestors), then W = A·X; `C` chunks of lanes.
-    fn solve<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
-        let parents = factors.parents();
-        let a = factors.factors().as_slice();
-        let x = &mut self.solved;
-        // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
-        for k in (0..DOFS).rev() {
-            let yk = x[k];
-            let mut i = parents[k];
-            while i != NO_PARENT {
-                let u = a[i + k * DOFS];
-                for c in 0..C {
-                    x[i][c] -= yk[c] * u;
-                }
-                i = parents[i];
-            }
-        }
-        // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
-        for k in 0..DOFS {
-            let mut row = x[k];
-            let mut j = parents[k];
-            while j != NO_PARENT {
-                let l = a[k + j * DOFS];
-                for c in 0..C {
-                    row[c] -= x[j][c] * l;
-                }
-                j = parents[j];
-            }
-            let inverse = 1.0 / a[k + k * DOFS];
-            for v in &mut row[..C] {
-                *v *= inverse;
-            }
-            x[k] = row;
-        }
+    /// [`Mobility::compute`] for one group of axes, `C` chunks of them.
+    fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
+        let group = &mut self.groups[0];
+        group.solved = group.jacobian;
+        solve::<C>(&mut group.solved, factors);
         // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg)
-        for row in &mut self.product[..axes] {
+        let product = &mut self.product[..axes];
+        for row in product.iter_mut() {
             *row = [Vec4::ZERO; CHUNKS];
         }
-        for (a_row, x_row) in self.jacobian.iter().zip(x.iter()) {
-            for (a, w_row) in self.product[..axes].iter_mut().enumerate() {
+        for (a_row, x_row) in group.jacobian.iter().zip(group.solved.iter()) {
+            for (a, w_row) in product.iter_mut().enumerate() {
                 let coefficient = a_row[a / LANE][a % LANE];
                 if coefficient != 0.0 {
                     for c in 0..C {
@@ -127,7 +176,59 @@ impl Mobility {
     /// W's entry for contact axes `a` and `b`.
     #[inline]
     pub fn w(&self, a: usize, b: usize) -> f32 {
-        self.product[a][b / LANE][b % LANE]
+        let (group, lane) = (b / GROUP_AXES, b % GROUP_AXES);
+        self.product[a * self.in_use + group][lane / LANE][lane % LANE]
+    }
+}
+
+/// One contact's three axes in its group's Jacobian ([`Mobility::contact`]).
+pub struct ContactAxes<'a> {
+    jacobian: &'a mut [Row; DOFS],
+    first: usize,
+}
+
+impl ContactAxes<'_> {
+    /// Sets the contact's axis `axis` (0: t₁, 1: t₂, 2: n) entry for degree of freedom `dof`.
+    #[inline]
+    pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
+        let lane = self.first + axis;
+        self.jacobian[dof][lane / LANE][lane % LANE] = value;
+    }
+}
+
+/// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of freedom
+/// and its ancestors); `C` chunks of lanes.
+fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
+    let parents = factors.parents();
+    let a = factors.factors().as_slice();
+    // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
+    for k in (0..DOFS).rev() {
+        let yk = x[k];
+        let mut i = parents[k];
+        while i != NO_PARENT {
+            let u = a[i + k * DOFS];
+            for c in 0..C {
+                x[i][c] -= yk[c] * u;
+            }
+            i = parents[i];
+        }
+    }
+    // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
+    for k in 0..DOFS {
+        let mut row = x[k];
+        let mut j = parents[k];
+        while j != NO_PARENT {
+            let l = a[k + j * DOFS];
+            for c in 0..C {
+                row[c] -= x[j][c] * l;
+            }
+            j = parents[j];
+        }
+        let inverse = 1.0 / a[k + k * DOFS];
+        for v in &mut row[..C] {
+            *v *= inverse;
+        }
+        x[k] = row;
     }
 }
 
@@ -171,35 +272,41 @@ mod tests {
         m
     }
 
+    /// Six feet's axes (one group) and a belly's too (several groups, W's blocks across them).
     #[test]
     fn matches_a_dense_solve() {
-        let parents = parents();
-        assert_eq!(parents.len(), DOFS);
-        let m = mass(&parents);
-        let mut factors = TreeLu::default();
-        factors.factorize(&m, &parents);
-        let axes = 11;
-        let a = na::DMatrix::<f32>::from_fn(axes, DOFS, |r, d| {
-            // sparse like a foot's row: the root's six and three more
-            if d < 6 || (d - 6) / 3 == r % 6 {
-                ((r * 5 + d * 3) % 17) as f32 / 17.0 - 0.4
-            } else {
-                0.0
+        for axes in [11, 18, 47] {
+            let parents = parents();
+            assert_eq!(parents.len(), DOFS);
+            let m = mass(&parents);
+            let mut factors = TreeLu::default();
+            factors.factorize(&m, &parents);
+            let a = na::DMatrix::<f32>::from_fn(axes, DOFS, |r, d| {
+                // sparse like a foot's row: the root's six and three more
+                if d < 6 || (d - 6) / 3 == r % 6 {
+                    ((r * 5 + d * 3) % 17) as f32 / 17.0 - 0.4
+                } else {
+                    0.0
+                }
+            });
+            let mut mobility = Mobility::default();
+            mobility.reserve(axes);
+            for r in 0..axes {
+                for d in 0..DOFS {
+                    mobility.set(d, r, a[(r, d)]);
+                }
             }
-        });
-        let mut mobility = Mobility::default();
-        for r in 0..axes {
-            for d in 0..DOFS {
-                mobility.set(d, r, a[(r, d)]);
-            }
-        }
-        assert!(mobility.compute(&factors, axes));
-        let expected = &a * m.try_inverse().expect("invertible") * a.transpose();
-        let scale = expected.amax();
-        for r in 0..axes {
-            for c in 0..axes {
-                let error = (mobility.w(r, c) - expected[(r, c)]).abs();
-                assert!(error <= 1e-4 * scale, "W[{r}][{c}] off by {error}");
+            assert!(mobility.compute(&factors, axes));
+            let expected = &a * m.try_inverse().expect("invertible") * a.transpose();
+            let scale = expected.amax();
+            for r in 0..axes {
+                for c in 0..axes {
+                    let error = (mobility.w(r, c) - expected[(r, c)]).abs();
+                    assert!(
+                        error <= 1e-4 * scale,
+                        "{axes} axes: W[{r}][{c}] off by {error}"
+                    );
+                }
             }
         }
     }

@@ -193,6 +193,7 @@ impl Joints for MultibodyRobot {
         let mb = self.multibody(engine);
         let n = contacts.len();
         let q_dot = mb.generalized_velocity();
+        self.scratch.reserve(3 * n);
         for (i, c) in contacts.iter().enumerate() {
             let link = self.multibody_link(engine, c.body);
             // a material point's velocity column per degree of freedom: J_v − [r]×·J_ω, with the
@@ -202,6 +203,7 @@ impl Joints for MultibodyRobot {
             let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
             let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
             let mut velocity = glam::Vec3::ZERO;
+            let mut rows = self.scratch.contact(i);
             let columns = jacobian.as_slice().chunks_exact(6);
             for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
                 let linear = glam::Vec3::from_slice(&column[..3]);
@@ -209,7 +211,7 @@ impl Joints for MultibodyRobot {
                 let point = linear - r.cross(angular);
                 velocity += point * rate;
                 for (a, axis) in axes.iter().enumerate() {
-                    self.scratch.set(dof, 3 * i + a, axis.dot(point));
+                    rows.set(dof, a, axis.dot(point));
                 }
             }
             velocities[i] = velocity.as_dvec3();

@@ -1,0 +1,109 @@
+//! Validation case V19 of `shared/reference/README.md`: every link touches the ground, not only
+//! the feet — hex18 dropped on its belly with its legs folded up comes to rest on its underside.
+
+mod common;
+use common::*;
+use hexsim::contact::ContactModel;
+use hexsim::robot::{self, RobotModel};
+use hexsim::sim::{Articulation, Hexapod, HexapodSample, HexapodSettings, Placement};
+use hexsim::terrain;
+use std::sync::Arc;
+
+fn hex18() -> Arc<RobotModel> {
+    Arc::new(robot::load(&project_file("robots/hex18.urdf")).unwrap())
+}
+
+/// Every leg raised: the femur 60° up, the tibia folded a further 60° up (hex18's positive
+/// femur and tibia angles bend a leg down).
+fn legs_folded_up(model: &RobotModel) -> Vec<f64> {
+    let up = -60f64.to_radians();
+    model.pose_from_legs(&[[0.0, up, up]; 6])
+}
+
+/// The weight every contact carries together, and the deepest any sank, from a sample.
+fn load_and_depth(s: &HexapodSample) -> (f64, f64) {
+    let feet = s.foot_contacts.iter().flatten();
+    let links = s.link_contacts.iter().map(|c| &c.force);
+    feet.chain(links).fold((0.0, 0.0), |(load, depth), c| {
+        (load + c.normal_force, f64::max(depth, c.penetration))
+    })
+}
+
+fn v19_resting_on_the_belly(articulation: Articulation) {
+    let model = hex18();
+    let pose = legs_folded_up(&model);
+    // the legs clear the belly's underside (z = −25 mm in the body frame) by a margin: no foot
+    // can touch before the body does
+    let poses = model.link_poses(&pose);
+    for leg in &model.legs {
+        let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
+        assert!(foot.z - leg.foot.radius > 0.0, "{}: {foot}", leg.name);
+    }
+    let ground = terrain::flat([2.0, 2.0], [0.0, 0.0], 0.0).unwrap();
+    let mut hexapod = Hexapod::dropped(
+        model.clone(),
+        Arc::new(ground),
+        ContactModel::default(),
+        HexapodSettings {
+            articulation,
+            ..Default::default()
+        },
+        Placement {
+            x: 0.0,
+            y: 0.0,
+            yaw: 0.0,
+        },
+        &pose,
+        0.05,
+    );
+    let samples: Vec<HexapodSample> = (0..3000).map(|_| hexapod.step()).collect();
+    let deepest = samples
+        .iter()
+        .map(|s| load_and_depth(s).1)
+        .fold(0.0, f64::max);
+    let tail = &samples[samples.len() - 500..];
+    let load = tail.iter().map(|s| load_and_depth(s).0).sum::<f64>() / tail.len() as f64;
+    let last = samples.last().unwrap();
+    let body_links = last.link_contacts.iter().filter(|c| c.link == 0).count();
+    let foot_load: f64 = samples[1000..]
+        .iter()
+        .flat_map(|s| s.foot_contacts.iter().flatten())
+        .map(|c| c.normal_force)
+        .fold(0.0, f64::max);
+    let (roll, pitch, _) = last.roll_pitch_yaw();
+    let weight = model.total_mass() * G;
+    println!(
+        "V19 {articulation:?}: load {load:.4} N against {weight:.4} N, deepest {:.3} mm, \
+         {body_links} of the body's spheres down, body centre {:.4} m, roll {:.3}°, pitch \
+         {:.3}°, largest foot load after 1 s {foot_load} N",
+        deepest * 1e3,
+        last.body.translation.z,
+        roll.to_degrees(),
+        pitch.to_degrees()
+    );
+    assert!(
+        (load - 24.72).abs() <= 0.01 * 24.72,
+        "the contacts carry {load} N, the robot weighs 24.72 N"
+    );
+    assert!(deepest <= 2e-3, "a contact sank {} mm", deepest * 1e3);
+    assert_eq!(foot_load, 0.0, "a foot carries load");
+    // it rests on the body's underside: the box's half-height above the ground, level, on the
+    // spheres of its bottom face
+    assert!(
+        (last.body.translation.z - 0.025).abs() < 1e-3,
+        "{}",
+        last.body.translation.z
+    );
+    assert!(roll.abs() < 1f64.to_radians() && pitch.abs() < 1f64.to_radians());
+    assert!(body_links >= 4, "{body_links}");
+}
+
+#[test]
+fn v19_resting_on_the_belly_multibody() {
+    v19_resting_on_the_belly(Articulation::Multibody);
+}
+
+#[test]
+fn v19_resting_on_the_belly_impulse() {
+    v19_resting_on_the_belly(Articulation::Impulse);
+}
