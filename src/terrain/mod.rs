@@ -1,6 +1,7 @@
 //! Terrain: a height grid, its interpolated surface and normals, the paper's orientation method,
 //! generators, and height files (CSV, PNG, STL).
 
+mod cliff;
 mod generate;
 mod grid;
 pub mod io;
@@ -8,6 +9,7 @@ mod orientation;
 pub mod source;
 mod spec;
 
+pub use cliff::{CLIFF_RATIO, CLIFF_SLOPE, Wall};
 pub use generate::{MatlabRand, bell, flat, natural, rough, sine, slope, steps};
 pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
 pub use orientation::{GroundFrame, Orientation};

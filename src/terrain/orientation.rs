@@ -37,8 +37,14 @@ pub struct GroundFrame {
 impl GroundFrame {
     /// The frame whose normal is `n` (unit) and whose first tangent is world x projected onto the plane.
     pub fn from_normal(n: DVec3) -> Self {
-        // The terrain is a height field, so n.z > 0 and the projection of x never vanishes.
-        let tangent_x = (DVec3::X - n.x * n).normalize();
+        // On a height field's surface n.z > 0 and the projection of x never vanishes; on a wall
+        // facing ±x (a cliff, `cliff.rs`) it does, and the in-plane x axis is the vertical.
+        let projected = DVec3::X - n.x * n;
+        let tangent_x = if projected.length_squared() > 1e-12 {
+            projected.normalize()
+        } else {
+            (DVec3::Z - n.z * n).normalize()
+        };
         GroundFrame {
             tangent_x,
             tangent_y: n.cross(tangent_x),
