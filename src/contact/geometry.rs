@@ -375,6 +375,41 @@ mod tests {
         }
     }
 
+    /// A box's four sides face out, each horizontally, and its vertical corner edge pushes along
+    /// the diagonal: walls along y as well as x, and where two meet. (Pyramid stairs, two 0.1 m
+    /// steps: risers 0.205 m and 0.405 m from the centre, midway between samples.)
+    #[test]
+    fn a_box_pushes_out_of_each_side_and_its_corner() {
+        let pyramid =
+            crate::terrain::pyramid_stairs([2.0, 2.0], [0.0, 0.0], 2, 0.2, 0.1, 0.41, 0.01)
+                .unwrap();
+        for out in [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y] {
+            let center = (0.405 + 0.048) * out + DVec3::new(0.0, 0.0, 0.05);
+            let g = sphere_geometry(&pyramid, center, 0.05, Orientation::Exact);
+            assert!(
+                (g.penetration - 0.002).abs() < 1e-12,
+                "{out}: {}",
+                g.penetration
+            );
+            assert!(
+                g.frame.normal.abs_diff_eq(out, 1e-12),
+                "{out}: {}",
+                g.frame.normal
+            );
+        }
+        let corner = DVec3::new(0.405, -0.405, 0.05);
+        let diagonal = DVec3::new(1.0, -1.0, 0.0).normalize();
+        let g = sphere_geometry(
+            &pyramid,
+            corner + 0.047 * diagonal,
+            0.05,
+            Orientation::Exact,
+        );
+        assert!((g.penetration - 0.003).abs() < 1e-12, "{}", g.penetration);
+        assert!(g.point.abs_diff_eq(corner, 1e-12), "{}", g.point);
+        assert!(g.frame.normal.abs_diff_eq(diagonal, 1e-12));
+    }
+
     /// A 50 mm ball in a hollow whose curvature radius at the bottom is 61 mm (d·κ ≈ 0.8): the
     /// plain iteration gains a factor 0.8 a step, so three leave the contact point millimetres off
     /// the normal through the centre (the lever that spun a held ball up); iterated to

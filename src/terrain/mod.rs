@@ -10,7 +10,10 @@ pub mod source;
 mod spec;
 
 pub use cliff::{CLIFF_RATIO, CLIFF_SLOPE, Wall};
-pub use generate::{MatlabRand, bell, flat, natural, rough, sine, slope, steps};
+pub use generate::{
+    MatlabRand, bell, discrete_obstacles, flat, gaps, natural, pyramid_stairs, rough, sine, slope,
+    stairs, stepping_stones, steps,
+};
 pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
 pub use orientation::{GroundFrame, Orientation};
 pub use source::Source;

@@ -4,7 +4,8 @@
 //! description = "the paper's natural ground"
 //! interpolation = "bicubic"      # or "bilinear"
 //! [source]
-//! kind = "natural"               # natural | bell | flat | slope | steps | rough | sine | csv | png | stl
+//! kind = "natural"               # natural | bell | flat | slope | steps | stairs | pyramid_stairs |
+//!                                # discrete_obstacles | stepping_stones | gaps | rough | sine | csv | png | stl
 //! seed = 5489
 //! size = [4.0, 4.0]
 //! peak_to_peak = 0.04
