@@ -372,20 +372,10 @@ impl HeightGrid {
     pub fn surface(&self, x: f64, y: f64) -> SurfacePoint {
         let (j, tx, inside_x) = locate(x, self.x0, self.dx, self.nx);
         let (i, ty, inside_y) = locate(y, self.y0, self.dy, self.ny);
-        if let Some((kind, (ex, ey))) = self.cliff_kind(i, j) {
-            let z = self.corners(i, j);
-            let e = match kind {
-                CellKind::Split => {
-                    cliff::tread_corners(z, ex, ey, (ty >= 0.5) as usize, (tx >= 0.5) as usize)
-                }
-                _ => z,
-            };
-            let (h, hx, hy) = cliff::bilinear(e, tx, ty);
-            return SurfacePoint {
-                height: h,
-                slope_x: if inside_x { hx / self.dx } else { 0.0 },
-                slope_y: if inside_y { hy / self.dy } else { 0.0 },
-            };
+        if self.cliffs.is_some()
+            && let Some(point) = self.near_cliff_surface(i, j, tx, ty, inside_x, inside_y)
+        {
+            return point;
         }
         let (wx, dwx) = self.weights(tx);
         let (wy, dwy) = self.weights(ty);
@@ -431,6 +421,35 @@ impl HeightGrid {
             slope_x: if inside_x { hx / self.dx } else { 0.0 },
             slope_y: if inside_y { hy / self.dy } else { 0.0 },
         }
+    }
+
+    /// The surface in cell (i, j) at (tx, ty) if the cell is near a cliff (`cliff.rs`): bilinear,
+    /// or its corner's tread in a split cell. Kept out of line: the hot path is the smooth one.
+    #[cold]
+    #[inline(never)]
+    fn near_cliff_surface(
+        &self,
+        i: usize,
+        j: usize,
+        tx: f64,
+        ty: f64,
+        inside_x: bool,
+        inside_y: bool,
+    ) -> Option<SurfacePoint> {
+        let (kind, (ex, ey)) = self.cliff_kind(i, j)?;
+        let z = self.corners(i, j);
+        let e = match kind {
+            CellKind::Split => {
+                cliff::tread_corners(z, ex, ey, (ty >= 0.5) as usize, (tx >= 0.5) as usize)
+            }
+            _ => z,
+        };
+        let (h, hx, hy) = cliff::bilinear(e, tx, ty);
+        Some(SurfacePoint {
+            height: h,
+            slope_x: if inside_x { hx / self.dx } else { 0.0 },
+            slope_y: if inside_y { hy / self.dy } else { 0.0 },
+        })
     }
 
     /// Interpolation weights and their derivatives (per unit of t) for the local coordinate t ∈ [0, 1].

@@ -40,10 +40,12 @@ impl GroundFrame {
         // On a height field's surface n.z > 0 and the projection of x never vanishes; on a wall
         // facing ±x (a cliff, `cliff.rs`) it does, and the in-plane x axis is the vertical.
         let projected = DVec3::X - n.x * n;
-        let tangent_x = if projected.length_squared() > 1e-12 {
-            projected.normalize()
+        let length_squared = projected.length_squared();
+        // (`normalize`'s own arithmetic, without computing the length twice: the hot path)
+        let tangent_x = if length_squared > 1e-12 {
+            projected * length_squared.sqrt().recip()
         } else {
-            (DVec3::Z - n.z * n).normalize()
+            cold_vertical_tangent(n)
         };
         GroundFrame {
             tangent_x,
@@ -75,6 +77,12 @@ impl GroundFrame {
     pub fn to_world(&self, l: DVec3) -> DVec3 {
         l.x * self.tangent_x + l.y * self.tangent_y + l.z * self.normal
     }
+}
+
+/// The in-plane x axis of a wall facing ±x: the vertical.
+#[cold]
+fn cold_vertical_tangent(n: DVec3) -> DVec3 {
+    (DVec3::Z - n.z * n).normalize()
 }
 
 impl HeightGrid {
