@@ -219,6 +219,176 @@ pub fn steps(
     )
 }
 
+/// A grid of `cell` spacing over the rectangle `size` centred on `center`, sampled from `f`.
+fn sampled(
+    size: [f64; 2],
+    center: [f64; 2],
+    cell: f64,
+    f: impl Fn(f64, f64) -> f64,
+) -> Result<HeightGrid, GridError> {
+    let (cols, rows) = samples_for(size, cell)?;
+    HeightGrid::from_fn(
+        rows,
+        cols,
+        span(center[0], size[0]),
+        span(center[1], size[1]),
+        f,
+    )
+}
+
+/// Stairs along +x, up then down: from x = `first_step`, `count` steps of `step_height` every
+/// `step_length`, a landing `landing` long, and as many down. The sampled risers are walls
+/// midway between the samples either side of them (`cliff.rs`).
+#[allow(clippy::too_many_arguments)]
+pub fn stairs(
+    size: [f64; 2],
+    center: [f64; 2],
+    first_step: f64,
+    count: usize,
+    step_length: f64,
+    step_height: f64,
+    landing: f64,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let n = count as f64;
+    let top = first_step + n * step_length;
+    let down = top + landing;
+    sampled(size, center, cell, |x, _| {
+        let up = if x < first_step {
+            0.0
+        } else {
+            (1.0 + ((x - first_step) / step_length).floor()).min(n)
+        };
+        let off = if x < down {
+            0.0
+        } else {
+            (1.0 + ((x - down) / step_length).floor()).min(n)
+        };
+        step_height * (up - off)
+    })
+}
+
+/// Square pyramid stairs centred on `center`: `count` steps of `step_height` up (negative: down
+/// into a pit) to a square top `top` wide, the rings between `step_width` wide; level 0 outside,
+/// `top + 2·(count − 1)·step_width` across.
+pub fn pyramid_stairs(
+    size: [f64; 2],
+    center: [f64; 2],
+    count: usize,
+    step_width: f64,
+    step_height: f64,
+    top: f64,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let n = count as f64;
+    sampled(size, center, cell, |x, y| {
+        let d = (x - center[0]).abs().max((y - center[1]).abs());
+        let level = if d < 0.5 * top {
+            n
+        } else {
+            (n - 1.0 - ((d - 0.5 * top) / step_width).floor()).max(0.0)
+        };
+        step_height * level
+    })
+}
+
+/// legged_gym's discrete obstacles: `count` boxes, axis-aligned, each side uniform in
+/// `sides` = [min, max], height uniform in `heights` = [min, max] (negative: a hole), centred
+/// uniformly over the terrain (MATLAB's generator seeded `seed`: x side, y side, x, y, height per
+/// box), later ones over earlier ones; the square `platform` wide at the centre (where a robot
+/// starts) is left level, as legged_gym's.
+#[allow(clippy::too_many_arguments)]
+pub fn discrete_obstacles(
+    size: [f64; 2],
+    center: [f64; 2],
+    count: usize,
+    sides: [f64; 2],
+    heights: [f64; 2],
+    platform: f64,
+    seed: u32,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let (cols, rows) = samples_for(size, cell)?;
+    let [x_span, y_span] = [span(center[0], size[0]), span(center[1], size[1])];
+    let (dx, dy) = (
+        (x_span[1] - x_span[0]) / (cols - 1) as f64,
+        (y_span[1] - y_span[0]) / (rows - 1) as f64,
+    );
+    let mut rng = MatlabRand::new(seed);
+    let mut z = vec![0.0; rows * cols];
+    // the samples strictly within half-width `half` of `middle`, along an axis from `origin`
+    let within = |middle: f64, half: f64, origin: f64, step: f64, n: usize| {
+        let first = ((middle - half - origin) / step).floor().max(0.0) as usize;
+        let last = (((middle + half - origin) / step).ceil().max(0.0) as usize).min(n - 1);
+        (first..=last).filter(move |&k| (origin + step * k as f64 - middle).abs() < half)
+    };
+    for _ in 0..count {
+        let mut draw = |[lo, hi]: [f64; 2]| lo + (hi - lo) * rng.next_f64();
+        let (w, l) = (draw(sides), draw(sides));
+        let (x, y) = (draw(x_span), draw(y_span));
+        let h = draw(heights);
+        for i in within(y, 0.5 * l, y_span[0], dy, rows) {
+            for j in within(x, 0.5 * w, x_span[0], dx, cols) {
+                z[i * cols + j] = h;
+            }
+        }
+    }
+    let clear = 0.5 * platform;
+    for i in within(center[1], clear, y_span[0], dy, rows) {
+        for j in within(center[0], clear, x_span[0], dx, cols) {
+            z[i * cols + j] = 0.0;
+        }
+    }
+    HeightGrid::new(rows, cols, x_span, y_span, z)
+}
+
+/// Stepping stones over pits: square stones `stone` wide at level 0, `gap` apart, in a grid
+/// aligned on `center` (a stone there), over pits `depth` deep; a square `platform` wide at the
+/// centre is solid.
+pub fn stepping_stones(
+    size: [f64; 2],
+    center: [f64; 2],
+    stone: f64,
+    gap: f64,
+    depth: f64,
+    platform: f64,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    let pitch = stone + gap;
+    let on_stone = |u: f64| {
+        // distance from the nearest stone's centre, along one axis
+        let k = (u / pitch).round();
+        (u - k * pitch).abs() < 0.5 * stone
+    };
+    sampled(size, center, cell, |x, y| {
+        let (u, v) = (x - center[0], y - center[1]);
+        let solid =
+            (u.abs() < 0.5 * platform && v.abs() < 0.5 * platform) || (on_stone(u) && on_stone(v));
+        if solid { 0.0 } else { -depth }
+    })
+}
+
+/// Gaps: trenches across the way along +x, `width` wide and `depth` deep, the first starting at
+/// x = `first_gap`, one every `spacing`.
+pub fn gaps(
+    size: [f64; 2],
+    center: [f64; 2],
+    first_gap: f64,
+    width: f64,
+    spacing: f64,
+    depth: f64,
+    cell: f64,
+) -> Result<HeightGrid, GridError> {
+    sampled(size, center, cell, |x, _| {
+        let along = x - first_gap;
+        if along >= 0.0 && along - (along / spacing).floor() * spacing < width {
+            -depth
+        } else {
+            0.0
+        }
+    })
+}
+
 /// A rough field: the sum of `waves` sinusoids with seeded random directions, phases and wavelengths
 /// in [`wavelength_min`, `wavelength_max`], scaled to `[0, peak_to_peak]`.
 #[allow(clippy::too_many_arguments)]
@@ -359,6 +529,124 @@ mod tests {
         let g = bell(3.0, 61, 1.0, 1.0).unwrap();
         assert!((g.height(0.0, 0.0) + 1.0).abs() < 1e-12);
         assert!((g.height(1.0, 0.0) + (-0.5f64).exp()).abs() < 1e-12);
+    }
+
+    /// Heights along the row nearest y = 0 (the profile of a terrain uniform along y).
+    fn profile(g: &HeightGrid, x: f64) -> f64 {
+        g.height(x, 0.0)
+    }
+
+    #[test]
+    fn stairs_go_up_then_down_with_walls() {
+        let g = stairs([4.0, 1.0], [0.0, 0.0], 0.305, 3, 0.2, 0.05, 0.4, 0.01).unwrap();
+        assert!(g.has_cliffs());
+        let expected = [
+            (0.0, 0.0),
+            (0.3, 0.0),
+            (0.31, 0.05),
+            (0.6, 0.1),
+            (0.8, 0.15),
+            (1.1, 0.15),
+            (1.3, 0.15),
+            (1.4, 0.1),
+            (1.6, 0.05),
+            (1.75, 0.0),
+            (1.95, 0.0),
+        ];
+        for (x, h) in expected {
+            assert!(
+                (profile(&g, x) - h).abs() < 1e-12,
+                "at {x}: {}",
+                profile(&g, x)
+            );
+        }
+    }
+
+    #[test]
+    fn pyramid_stairs_rise_ring_by_ring_to_the_top() {
+        // top 0.41 m, rings 0.2 m: risers at 0.205, 0.405 and 0.605 from the centre
+        let g = pyramid_stairs([2.0, 2.0], [0.0, 0.0], 3, 0.2, 0.05, 0.41, 0.01).unwrap();
+        assert!(g.has_cliffs());
+        for (d, h) in [
+            (0.0, 0.15),
+            (0.2, 0.15),
+            (0.21, 0.1),
+            (0.5, 0.05),
+            (0.61, 0.0),
+        ] {
+            for (x, y) in [(d, 0.0), (-d, 0.0), (0.0, d), (0.0, -d), (d, -d)] {
+                assert!((g.height(x, y) - h).abs() < 1e-12, "at ({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
+    fn discrete_obstacles_are_seeded_boxes_off_the_platform() {
+        let build = |seed| {
+            discrete_obstacles(
+                [4.0, 4.0],
+                [0.0, 0.0],
+                40,
+                [0.1, 0.3],
+                [0.05, 0.1],
+                1.0,
+                seed,
+                0.01,
+            )
+            .unwrap()
+        };
+        let a = build(3);
+        assert_eq!(a, build(3));
+        assert_ne!(a, build(4));
+        assert!(a.has_cliffs());
+        let boxed = a.samples().iter().filter(|&&h| h != 0.0).count();
+        assert!(boxed > 1000, "{boxed} samples on boxes");
+        assert!(
+            a.samples()
+                .iter()
+                .all(|&h| h == 0.0 || (0.05..=0.1).contains(&h))
+        );
+        // the platform is level
+        for k in 0..=20 {
+            let u = -0.49 + 0.049 * k as f64;
+            assert_eq!(a.height(u, 0.3), 0.0);
+            assert_eq!(a.height(-0.3, u), 0.0);
+        }
+    }
+
+    #[test]
+    fn stepping_stones_stand_over_pits() {
+        let g = stepping_stones([4.0, 4.0], [0.0, 0.0], 0.15, 0.05, 0.1, 1.0, 0.01).unwrap();
+        assert!(g.has_cliffs());
+        // the platform, a stone's middle (pitch 0.2 m), the pit between stones, a stone's corner
+        for ((x, y), h) in [
+            ((0.3, 0.45), 0.0),
+            ((1.2, 1.4), 0.0),
+            ((1.3, 1.4), -0.1),
+            ((1.2, 1.3), -0.1),
+            ((1.26, 1.46), 0.0),
+        ] {
+            assert!((g.height(x, y) - h).abs() < 1e-12, "at ({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn gaps_are_trenches_across_the_way() {
+        let g = gaps([4.0, 1.0], [0.0, 0.0], 0.505, 0.06, 0.4, 0.1, 0.01).unwrap();
+        assert!(g.has_cliffs());
+        for (x, h) in [
+            (0.4, 0.0),
+            (0.53, -0.1),
+            (0.6, 0.0),
+            (0.93, -0.1),
+            (1.0, 0.0),
+        ] {
+            assert!(
+                (profile(&g, x) - h).abs() < 1e-12,
+                "at {x}: {}",
+                profile(&g, x)
+            );
+        }
     }
 
     #[test]

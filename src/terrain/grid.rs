@@ -10,7 +10,8 @@
 //! (coordinates are clamped): a body that walks off the map stands on a level apron instead of
 //! falling through or panicking.
 
-use glam::DVec3;
+use super::cliff::{self, CellEdges, CellKind, Cliffs, Wall};
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// How heights are interpolated between grid samples.
@@ -61,6 +62,9 @@ pub struct HeightGrid {
     interpolation: Interpolation,
     /// Per cell (row-major, (ny − 1)·(nx − 1)), an upper bound of the interpolated surface over it.
     ceilings: Vec<f64>,
+    /// Where neighbouring samples jump like a stair's riser, read as walls (`cliff.rs`); None on
+    /// a grid without any, whose surface is then the interpolation alone.
+    cliffs: Option<Box<Cliffs>>,
 }
 
 /// Why a grid could not be built.
@@ -134,16 +138,22 @@ impl HeightGrid {
                 value: heights[k],
             });
         }
+        let (dx, dy) = (
+            (x_max - x_min) / (cols - 1) as f64,
+            (y_max - y_min) / (rows - 1) as f64,
+        );
+        let cliffs = Cliffs::find(&heights, cols, rows, dx, dy).map(Box::new);
         let mut grid = Self {
             nx: cols,
             ny: rows,
             x0: x_min,
             y0: y_min,
-            dx: (x_max - x_min) / (cols - 1) as f64,
-            dy: (y_max - y_min) / (rows - 1) as f64,
+            dx,
+            dy,
             heights,
             interpolation: Interpolation::default(),
             ceilings: Vec::new(),
+            cliffs,
         };
         grid.ceilings = grid.cell_ceilings();
         Ok(grid)
@@ -201,6 +211,22 @@ impl HeightGrid {
         let mut ceilings = Vec::with_capacity((self.ny - 1) * (self.nx - 1));
         for i in 0..self.ny - 1 {
             for j in 0..self.nx - 1 {
+                if let Some(c) = self.cliff_kind(i, j) {
+                    // bilinear patches peak at a corner, a split cell's quadrants at one of
+                    // their treads' corners
+                    let z = self.corners(i, j);
+                    let (ex, ey) = c.1;
+                    let high = |e: [[f64; 2]; 2]| {
+                        e.iter().flatten().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
+                    };
+                    ceilings.push(match c.0 {
+                        CellKind::Split => (0..4)
+                            .map(|k| high(cliff::tread_corners(z, ex, ey, k / 2, k % 2)))
+                            .fold(f64::NEG_INFINITY, f64::max),
+                        _ => high(z),
+                    });
+                    continue;
+                }
                 let (lo, hi) = match self.interpolation {
                     Interpolation::Bilinear => (0..2)
                         .flat_map(|a| (0..2).map(move |b| (a, b)))
@@ -222,6 +248,59 @@ impl HeightGrid {
             }
         }
         ceilings
+    }
+
+    /// Whether some neighbouring samples jump like a riser (and are read as a wall).
+    pub fn has_cliffs(&self) -> bool {
+        self.cliffs.is_some()
+    }
+
+    /// A cell's kind and cliff edges where it is not the plain interpolation's (None: it is).
+    fn cliff_kind(&self, i: usize, j: usize) -> Option<(CellKind, CellEdges)> {
+        let c = self.cliffs.as_deref()?;
+        match c.cells[i * (self.nx - 1) + j] {
+            CellKind::Smooth => None,
+            kind => Some((kind, c.cell_edges(i, j))),
+        }
+    }
+
+    /// Cell (i, j)'s corner samples, `[row][column]`.
+    fn corners(&self, i: usize, j: usize) -> [[f64; 2]; 2] {
+        [
+            [self.sample(i, j), self.sample(i, j + 1)],
+            [self.sample(i + 1, j), self.sample(i + 1, j + 1)],
+        ]
+    }
+
+    /// Calls `f` with every wall (a cliff's vertical face, [`cliff`]) in the cells the square of
+    /// half-width `r` around (x, y) overlaps; nothing on a grid without cliffs.
+    pub fn walls_near(&self, x: f64, y: f64, r: f64, mut f: impl FnMut(Wall)) {
+        let Some(c) = self.cliffs.as_deref() else {
+            return;
+        };
+        let (j0, _, _) = locate(x - r, self.x0, self.dx, self.nx);
+        let (j1, _, _) = locate(x + r, self.x0, self.dx, self.nx);
+        let (i0, _, _) = locate(y - r, self.y0, self.dy, self.ny);
+        let (i1, _, _) = locate(y + r, self.y0, self.dy, self.ny);
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                if c.cells[i * (self.nx - 1) + j] != CellKind::Split {
+                    continue;
+                }
+                let (ex, ey) = c.cell_edges(i, j);
+                let border = [j == 0, j + 2 == self.nx, i == 0, i + 2 == self.ny];
+                let origin = DVec2::new(self.x_at(j), self.y_at(i));
+                cliff::cell_walls(
+                    self.corners(i, j),
+                    ex,
+                    ey,
+                    origin,
+                    (self.dx, self.dy),
+                    border,
+                    &mut f,
+                );
+            }
+        }
     }
 
     pub fn interpolation(&self) -> Interpolation {
@@ -293,6 +372,11 @@ impl HeightGrid {
     pub fn surface(&self, x: f64, y: f64) -> SurfacePoint {
         let (j, tx, inside_x) = locate(x, self.x0, self.dx, self.nx);
         let (i, ty, inside_y) = locate(y, self.y0, self.dy, self.ny);
+        if self.cliffs.is_some()
+            && let Some(point) = self.near_cliff_surface(i, j, tx, ty, inside_x, inside_y)
+        {
+            return point;
+        }
         let (wx, dwx) = self.weights(tx);
         let (wy, dwy) = self.weights(ty);
         let (mut h, mut hx, mut hy) = (0.0, 0.0, 0.0);
@@ -337,6 +421,35 @@ impl HeightGrid {
             slope_x: if inside_x { hx / self.dx } else { 0.0 },
             slope_y: if inside_y { hy / self.dy } else { 0.0 },
         }
+    }
+
+    /// The surface in cell (i, j) at (tx, ty) if the cell is near a cliff (`cliff.rs`): bilinear,
+    /// or its corner's tread in a split cell. Kept out of line: the hot path is the smooth one.
+    #[cold]
+    #[inline(never)]
+    fn near_cliff_surface(
+        &self,
+        i: usize,
+        j: usize,
+        tx: f64,
+        ty: f64,
+        inside_x: bool,
+        inside_y: bool,
+    ) -> Option<SurfacePoint> {
+        let (kind, (ex, ey)) = self.cliff_kind(i, j)?;
+        let z = self.corners(i, j);
+        let e = match kind {
+            CellKind::Split => {
+                cliff::tread_corners(z, ex, ey, (ty >= 0.5) as usize, (tx >= 0.5) as usize)
+            }
+            _ => z,
+        };
+        let (h, hx, hy) = cliff::bilinear(e, tx, ty);
+        Some(SurfacePoint {
+            height: h,
+            slope_x: if inside_x { hx / self.dx } else { 0.0 },
+            slope_y: if inside_y { hy / self.dy } else { 0.0 },
+        })
     }
 
     /// Interpolation weights and their derivatives (per unit of t) for the local coordinate t ∈ [0, 1].

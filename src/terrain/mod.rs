@@ -1,6 +1,7 @@
 //! Terrain: a height grid, its interpolated surface and normals, the paper's orientation method,
 //! generators, and height files (CSV, PNG, STL).
 
+mod cliff;
 mod generate;
 mod grid;
 pub mod io;
@@ -8,7 +9,11 @@ mod orientation;
 pub mod source;
 mod spec;
 
-pub use generate::{MatlabRand, bell, flat, natural, rough, sine, slope, steps};
+pub use cliff::{CLIFF_RATIO, CLIFF_SLOPE, Wall};
+pub use generate::{
+    MatlabRand, bell, discrete_obstacles, flat, gaps, natural, pyramid_stairs, rough, sine, slope,
+    stairs, stepping_stones, steps,
+};
 pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
 pub use orientation::{GroundFrame, Orientation};
 pub use source::Source;

@@ -37,8 +37,16 @@ pub struct GroundFrame {
 impl GroundFrame {
     /// The frame whose normal is `n` (unit) and whose first tangent is world x projected onto the plane.
     pub fn from_normal(n: DVec3) -> Self {
-        // The terrain is a height field, so n.z > 0 and the projection of x never vanishes.
-        let tangent_x = (DVec3::X - n.x * n).normalize();
+        // On a height field's surface n.z > 0 and the projection of x never vanishes; on a wall
+        // facing ±x (a cliff, `cliff.rs`) it does, and the in-plane x axis is the vertical.
+        let projected = DVec3::X - n.x * n;
+        let length_squared = projected.length_squared();
+        // (`normalize`'s own arithmetic, without computing the length twice: the hot path)
+        let tangent_x = if length_squared > 1e-12 {
+            projected * length_squared.sqrt().recip()
+        } else {
+            cold_vertical_tangent(n)
+        };
         GroundFrame {
             tangent_x,
             tangent_y: n.cross(tangent_x),
@@ -69,6 +77,12 @@ impl GroundFrame {
     pub fn to_world(&self, l: DVec3) -> DVec3 {
         l.x * self.tangent_x + l.y * self.tangent_y + l.z * self.normal
     }
+}
+
+/// The in-plane x axis of a wall facing ±x: the vertical.
+#[cold]
+fn cold_vertical_tangent(n: DVec3) -> DVec3 {
+    (DVec3::Z - n.z * n).normalize()
 }
 
 impl HeightGrid {

@@ -50,6 +50,11 @@ pub enum Source {
     Flat(Flat),
     Slope(Slope),
     Steps(Steps),
+    Stairs(Stairs),
+    PyramidStairs(PyramidStairs),
+    DiscreteObstacles(DiscreteObstacles),
+    SteppingStones(SteppingStones),
+    Gaps(Gaps),
     Rough(Rough),
     Sine(Sine),
     Csv(Csv),
@@ -65,6 +70,11 @@ impl Source {
             Source::Flat(s) => s,
             Source::Slope(s) => s,
             Source::Steps(s) => s,
+            Source::Stairs(s) => s,
+            Source::PyramidStairs(s) => s,
+            Source::DiscreteObstacles(s) => s,
+            Source::SteppingStones(s) => s,
+            Source::Gaps(s) => s,
             Source::Rough(s) => s,
             Source::Sine(s) => s,
             Source::Csv(s) => s,
@@ -80,6 +90,11 @@ impl Source {
             Source::Flat(s) => s,
             Source::Slope(s) => s,
             Source::Steps(s) => s,
+            Source::Stairs(s) => s,
+            Source::PyramidStairs(s) => s,
+            Source::DiscreteObstacles(s) => s,
+            Source::SteppingStones(s) => s,
+            Source::Gaps(s) => s,
             Source::Rough(s) => s,
             Source::Sine(s) => s,
             Source::Csv(s) => s,
@@ -141,6 +156,65 @@ fn range(field: &'static str, r: [f64; 2]) -> Result<(), FieldError> {
         ))
     }
 }
+/// A length the grid must hold at least two samples across: a tread or a pit one sample wide
+/// meets its neighbours with equal jumps either side, which is a bump, not walls (`cliff.rs`).
+fn cells2(field: &'static str, v: f64, cell: f64) -> Result<(), FieldError> {
+    positive(field, v)?;
+    if v >= 2.0 * cell {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!(
+                "expected at least two cells ({} m at `cell` = {cell} m) so the grid holds it between its walls, got {v}",
+                2.0 * cell
+            ),
+        ))
+    }
+}
+fn count(field: &'static str, n: usize, max: usize) -> Result<(), FieldError> {
+    if (1..=max).contains(&n) {
+        Ok(())
+    } else {
+        Err((field, format!("expected 1 to {max}, got {n}")))
+    }
+}
+/// [min, max] of finite numbers with min ≤ max.
+fn bounds(field: &'static str, r: [f64; 2]) -> Result<(), FieldError> {
+    if r.iter().all(|v| v.is_finite()) && r[0] <= r[1] {
+        Ok(())
+    } else {
+        Err((
+            field,
+            format!("expected [min, max] of finite numbers with min ≤ max, got {r:?}"),
+        ))
+    }
+}
+fn non_negative(field: &'static str, v: f64) -> Result<(), FieldError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err((field, format!("expected a finite number ≥ 0, got {v}")))
+    }
+}
+/// The terrain must hold a feature `extent` wide (named by `what`).
+fn holds(size: [f64; 2], extent: f64, what: &str) -> Result<(), FieldError> {
+    if size[0].min(size[1]) >= extent {
+        Ok(())
+    } else {
+        Err((
+            "size",
+            format!(
+                "expected at least {} m each way to hold {what}, got {size:?}",
+                (extent * 1e3).round() / 1e3
+            ),
+        ))
+    }
+}
+fn one_meter() -> f64 {
+    1.0
+}
+
 fn samples(field: &'static str, n: usize) -> Result<(), FieldError> {
     if (2..=8192).contains(&n) {
         Ok(())
@@ -362,6 +436,257 @@ impl HeightSource for Steps {
             self.first_step,
             self.step_length,
             self.step_height,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// Stairs along +x, up `count` steps, a landing, and down as many.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stairs {
+    pub step_height: f64,
+    pub step_length: f64,
+    pub count: usize,
+    #[serde(default = "one_meter")]
+    pub landing: f64,
+    #[serde(default)]
+    pub first_step: f64,
+    #[serde(default = "flat_size")]
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for Stairs {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("cell", self.cell)?;
+        finite("step_height", self.step_height)?;
+        cells2("step_length", self.step_length, self.cell)?;
+        count("count", self.count, 1000)?;
+        cells2("landing", self.landing, self.cell)?;
+        finite("first_step", self.first_step)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::stairs(
+            self.size,
+            self.center,
+            self.first_step,
+            self.count,
+            self.step_length,
+            self.step_height,
+            self.landing,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// Concentric square steps, `count` up to a top at the centre (down into a pit if
+/// `step_height` < 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PyramidStairs {
+    pub step_height: f64,
+    pub step_width: f64,
+    pub count: usize,
+    #[serde(default = "one_meter")]
+    pub top: f64,
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for PyramidStairs {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("cell", self.cell)?;
+        finite("step_height", self.step_height)?;
+        cells2("step_width", self.step_width, self.cell)?;
+        count("count", self.count, 1000)?;
+        cells2("top", self.top, self.cell)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        let width = self.top + 2.0 * (self.count - 1) as f64 * self.step_width;
+        holds(
+            self.size,
+            width,
+            "the pyramid (top + 2·(count − 1)·step_width)",
+        )
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::pyramid_stairs(
+            self.size,
+            self.center,
+            self.count,
+            self.step_width,
+            self.step_height,
+            self.top,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// legged_gym's discrete obstacles: seeded random boxes (or holes) on level ground.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiscreteObstacles {
+    pub count: usize,
+    /// Each box's sides, uniform in [min, max] (m).
+    pub side: [f64; 2],
+    /// Each box's height, uniform in [min, max] (m; negative: a hole).
+    pub height: [f64; 2],
+    /// The level square this wide at the centre, where a robot starts.
+    #[serde(default = "one_meter")]
+    pub platform: f64,
+    #[serde(default)]
+    pub seed: u32,
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for DiscreteObstacles {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("cell", self.cell)?;
+        count("count", self.count, 100_000)?;
+        bounds("side", self.side)?;
+        cells2("side", self.side[0], self.cell)?;
+        bounds("height", self.height)?;
+        non_negative("platform", self.platform)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        holds(self.size, self.platform, "the platform")
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::discrete_obstacles(
+            self.size,
+            self.center,
+            self.count,
+            self.side,
+            self.height,
+            self.platform,
+            self.seed,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+
+    fn seed(&self) -> Option<u32> {
+        Some(self.seed)
+    }
+
+    fn seed_mut(&mut self) -> Option<&mut u32> {
+        Some(&mut self.seed)
+    }
+}
+
+/// Square stones in a regular grid over pits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SteppingStones {
+    /// Each stone's side (m).
+    pub stone: f64,
+    /// The pit between neighbouring stones (m).
+    pub gap: f64,
+    /// The pits' depth below the stones' tops (m).
+    pub depth: f64,
+    /// The solid square this wide at the centre, where a robot starts.
+    #[serde(default = "one_meter")]
+    pub platform: f64,
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for SteppingStones {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("cell", self.cell)?;
+        cells2("stone", self.stone, self.cell)?;
+        cells2("gap", self.gap, self.cell)?;
+        positive("depth", self.depth)?;
+        non_negative("platform", self.platform)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)?;
+        holds(self.size, self.platform, "the platform")
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::stepping_stones(
+            self.size,
+            self.center,
+            self.stone,
+            self.gap,
+            self.depth,
+            self.platform,
+            self.cell,
+        )
+        .map_err(BuildError::Grid)
+    }
+}
+
+/// Trenches across the way along +x.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gaps {
+    /// Each trench's width along x (m).
+    pub width: f64,
+    /// From one trench's start to the next's (m).
+    pub spacing: f64,
+    pub depth: f64,
+    #[serde(default)]
+    pub first_gap: f64,
+    #[serde(default = "flat_size")]
+    pub size: [f64; 2],
+    #[serde(default = "zero2")]
+    pub center: [f64; 2],
+    #[serde(default = "cell_1cm")]
+    pub cell: f64,
+}
+
+impl HeightSource for Gaps {
+    fn validate(&self) -> Result<(), FieldError> {
+        positive("cell", self.cell)?;
+        cells2("width", self.width, self.cell)?;
+        positive("spacing", self.spacing)?;
+        cells2("spacing", self.spacing - self.width, self.cell).map_err(|_| {
+            (
+                "spacing",
+                format!(
+                    "expected at least `width` + two cells ({} m) so ground is left between the trenches, got {}",
+                    self.width + 2.0 * self.cell,
+                    self.spacing
+                ),
+            )
+        })?;
+        positive("depth", self.depth)?;
+        finite("first_gap", self.first_gap)?;
+        size2("size", self.size)?;
+        finite2("center", self.center)
+    }
+
+    fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
+        generate::gaps(
+            self.size,
+            self.center,
+            self.first_gap,
+            self.width,
+            self.spacing,
+            self.depth,
             self.cell,
         )
         .map_err(BuildError::Grid)

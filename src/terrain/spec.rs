@@ -4,7 +4,8 @@
 //! description = "the paper's natural ground"
 //! interpolation = "bicubic"      # or "bilinear"
 //! [source]
-//! kind = "natural"               # natural | bell | flat | slope | steps | rough | sine | csv | png | stl
+//! kind = "natural"               # natural | bell | flat | slope | steps | stairs | pyramid_stairs |
+//!                                # discrete_obstacles | stepping_stones | gaps | rough | sine | csv | png | stl
 //! seed = 5489
 //! size = [4.0, 4.0]
 //! peak_to_peak = 0.04
@@ -153,6 +154,35 @@ mod tests {
         let g = spec.build(Path::new("t.toml")).unwrap();
         assert_eq!((g.rows(), g.cols()), (100, 100));
         assert_eq!(g.x_range(), [-2.0, 2.0]);
+    }
+
+    /// Every terrain file builds; those meant to have walls have them, and no smooth one is read
+    /// with any (so its surface is the interpolation's, as before walls existed).
+    #[test]
+    fn the_terrain_files_have_walls_where_meant() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains");
+        let walled = [
+            "steps",
+            "steps_down",
+            "stairs",
+            "pyramid_stairs",
+            "discrete_obstacles",
+            "stepping_stones",
+            "gaps",
+        ];
+        let mut seen = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let grid = crate::terrain::load(&path).unwrap();
+            let name = path.file_stem().unwrap().to_string_lossy().to_string();
+            let meant = walled.contains(&name.as_str());
+            assert_eq!(grid.has_cliffs(), meant, "{name}");
+            seen += meant as usize;
+        }
+        assert_eq!(seen, walled.len());
     }
 
     #[test]
