@@ -6,6 +6,7 @@ pub mod bench;
 pub mod compare;
 pub mod contact;
 pub mod gait;
+pub mod ladder;
 pub mod metrics;
 pub mod optimize;
 pub mod record;

@@ -5,6 +5,7 @@ mod ball;
 mod batch;
 mod bench;
 mod compare;
+mod ladder;
 mod merge;
 mod optimize;
 mod robot;
@@ -47,6 +48,9 @@ pub enum Command {
     /// Run one scenario under several contact settings side by side: a table of their metrics
     /// and one recording with every setting superposed (exit 1: some diverged).
     Compare(compare::CompareArgs),
+    /// Walk a robot over each terrain family at rising difficulty (stairs, slopes, rough ground,
+    /// …), blind and perceptive, and report the highest level it crossed in each.
+    Ladder(ladder::LadderArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(merge::MergeArgs),
     /// Search gait and servo parameters for the best walk on a set of terrains and seeds
@@ -71,6 +75,7 @@ impl Cli {
             Some(Command::Batch(args)) => batch::batch(*args),
             Some(Command::Compare(args)) => compare::compare(args),
             Some(Command::Optimize(args)) => optimize::optimize(args),
+            Some(Command::Ladder(args)) => ladder::ladder(args),
             Some(Command::Merge(args)) => merge::merge(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Bench(args)) => bench::bench(args).map(|()| ExitCode::SUCCESS),
             Some(Command::Robot(args)) => robot::robot_command(args).map(|()| ExitCode::SUCCESS),

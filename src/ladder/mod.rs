@@ -1,0 +1,420 @@
+//! The terrain ladder: a robot walked over each terrain family at rising difficulty (riser
+//! height, slope angle, bump height, gap width, …), blind and perceptive, and for each family the
+//! highest level it crossed — the curriculum legged_gym trains on, as a measurement.
+//!
+//! A family is a sweep scenario file (`ladder/*.toml`, runnable as it is with `hexsim batch`): its
+//! `[sweep]` lists the difficulty parameter's levels (one dotted key) and `follow_terrain =
+//! [false, true]`; its `[expect]` says what crossing is — `forward_min`, the distance to get past
+//! the start, and `max_tilt_deg = 45`, not falling. The ladder is a client of the batch engine:
+//! it expands the families (for another robot, with that robot and a duration fitted to its
+//! speed), runs them as one batch and reads each run's record into an [`Outcome`]. A stall, a
+//! slide back, a fall or a divergence is a result, said as such.
+
+use crate::batch::results::{Record, Status};
+use crate::scenario::{self, Scenario, ScenarioError, sweep};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// The fraction of its nominal speed a robot must keep on average to cross in the time it is
+/// given: a ladder run for another robot lasts `forward_min / (SPEED_SHARE · v_nominal)`.
+pub const SPEED_SHARE: f64 = 0.5;
+
+/// Moving back more than this (m) against the command is sliding back, not a stall.
+const SLID_BACK: f64 = 0.05;
+
+/// A terrain family: its file, the difficulty parameter and its levels (easiest first).
+#[derive(Debug, Clone, Serialize)]
+pub struct Family {
+    pub name: String,
+    pub description: String,
+    pub file: PathBuf,
+    /// The dotted scenario key the levels set (e.g. `terrain.source.step_height`).
+    pub parameter: String,
+    pub levels: Vec<f64>,
+    /// The distance past the start that crosses a level (m).
+    pub distance: f64,
+}
+
+/// One run of the ladder: a family's level, blind or perceptive, and its scenario's name.
+pub struct Rung {
+    pub family: usize,
+    pub level: usize,
+    pub perceptive: bool,
+    pub name: String,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Got the distance past the start without falling.
+    Crossed,
+    /// Stopped short, neither falling nor sliding back.
+    Stalled,
+    /// Ended behind where it started.
+    SlidBack,
+    /// Tilted past 45° from upright.
+    Fell,
+    /// The simulation left physics (the message says why).
+    Diverged,
+    /// The scenario could not be run.
+    Error,
+}
+
+impl Outcome {
+    pub fn word(self) -> &'static str {
+        match self {
+            Outcome::Crossed => "crossed",
+            Outcome::Stalled => "stalled",
+            Outcome::SlidBack => "slid back",
+            Outcome::Fell => "fell",
+            Outcome::Diverged => "diverged",
+            Outcome::Error => "error",
+        }
+    }
+
+    /// What a run's record says happened: crossing needs every expectation met.
+    pub fn of(record: &Record) -> Outcome {
+        let metric = |name: &str| record.metrics.get(name).and_then(|v| v.as_f64());
+        match record.status {
+            Status::Error => return Outcome::Error,
+            Status::Diverged => return Outcome::Diverged,
+            Status::Passed => return Outcome::Crossed,
+            Status::Failed => {}
+        }
+        if metric("fell_at").is_some() {
+            Outcome::Fell
+        } else if metric("forward_distance").is_some_and(|d| d < -SLID_BACK) {
+            Outcome::SlidBack
+        } else {
+            Outcome::Stalled
+        }
+    }
+}
+
+/// A run's result as the ladder's JSON lists it.
+#[derive(Debug, Clone, Serialize)]
+pub struct RungResult {
+    pub family: String,
+    pub level: f64,
+    pub perceptive: bool,
+    pub outcome: Outcome,
+    /// Forward distance past the start (m), when the run produced one.
+    pub forward: Option<f64>,
+    pub max_tilt_deg: Option<f64>,
+    /// Deepest penetration of a foot and of any other link (m).
+    pub max_penetration: Option<f64>,
+    pub max_link_penetration: Option<f64>,
+    /// The divergence's or the error's message.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
+}
+
+/// A family's summary: the highest level crossed blind and perceptive, and what stopped it.
+#[derive(Debug, Clone, Serialize)]
+pub struct FamilySummary {
+    pub family: String,
+    pub parameter: String,
+    pub levels: Vec<f64>,
+    /// The highest level crossed with every level below it crossed too (None: not the first).
+    pub blind: Option<f64>,
+    pub perceptive: Option<f64>,
+    /// The first level not crossed, and how it ended.
+    pub blind_stopped_by: Option<(f64, Outcome)>,
+    pub perceptive_stopped_by: Option<(f64, Outcome)>,
+}
+
+/// The whole ladder's result (its JSON).
+#[derive(Debug, Clone, Serialize)]
+pub struct LadderResult {
+    pub robot: String,
+    pub families: Vec<FamilySummary>,
+    pub runs: Vec<RungResult>,
+}
+
+/// The ladder's families, its runs, and their scenarios (name-sorted, as a batch runs them).
+pub struct Ladder {
+    pub families: Vec<Family>,
+    pub rungs: Vec<Rung>,
+    pub scenarios: Vec<Scenario>,
+}
+
+/// Reads the ladder's families from `files` and expands them into runs, for `robot` if given
+/// (the files' own robot otherwise).
+pub fn load(files: &[PathBuf], robot: Option<&Path>) -> Result<Ladder, ScenarioError> {
+    let mut families = Vec::new();
+    let mut rungs = Vec::new();
+    let mut scenarios = Vec::new();
+    for file in files {
+        let fail = |message: String| ScenarioError {
+            file: file.clone(),
+            message,
+        };
+        let (path, mut table) =
+            scenario::read_table(file, Path::new(file.file_name().unwrap_or_default()))
+                .map_err(fail)?;
+        if let Some(robot) = robot {
+            let absolute = std::path::absolute(robot)
+                .map_err(|e| fail(format!("robot {}: {e}", robot.display())))?;
+            table.insert(
+                "robot".into(),
+                toml::Value::String(absolute.to_string_lossy().into_owned()),
+            );
+        }
+        let (parameter, levels) = difficulty(&table).map_err(fail)?;
+        let distance = table
+            .get("expect")
+            .and_then(|e| e.get("forward_min"))
+            .and_then(toml::Value::as_float)
+            .ok_or_else(|| {
+                fail("a ladder family's [expect] needs forward_min: the distance that crosses a level (m)".into())
+            })?;
+        let name = path
+            .file_stem()
+            .map_or("family".into(), |s| s.to_string_lossy().into_owned());
+        let description = table
+            .get("description")
+            .and_then(toml::Value::as_str)
+            .unwrap_or_default()
+            .to_string();
+        let family = families.len();
+        let variants = sweep::expand(table).map_err(fail)?;
+        for variant in variants {
+            let value = |key: &str| {
+                variant
+                    .assignments
+                    .iter()
+                    .find(|(k, _)| k == key)
+                    .map(|(_, v)| v.clone())
+            };
+            let level_value = value(&parameter).and_then(|v| as_number(&v)).unwrap_or(0.0);
+            let level = levels
+                .iter()
+                .position(|l| *l == level_value)
+                .unwrap_or_default();
+            let perceptive = value("follow_terrain").and_then(|v| v.as_bool()) == Some(true);
+            let run_name = variant.name(&name);
+            let mut table = variant.table;
+            let mut scenario = scenario::from_table(table.clone(), run_name.clone(), &path)?;
+            if robot.is_some() {
+                // the time a robot of this speed needs at SPEED_SHARE of it, and its settling
+                let speed = scenario.gait().map_or(0.0, |g| g.nominal_speed());
+                if speed > 0.0 {
+                    table.insert(
+                        "duration".into(),
+                        toml::Value::Float(distance / (SPEED_SHARE * speed)),
+                    );
+                    scenario = scenario::from_table(table, run_name, &path)?;
+                }
+            }
+            rungs.push(Rung {
+                family,
+                level,
+                perceptive,
+                name: scenario.name.clone(),
+            });
+            scenarios.push(scenario);
+        }
+        families.push(Family {
+            name,
+            description,
+            file: path,
+            parameter,
+            levels,
+            distance,
+        });
+    }
+    scenarios.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(Ladder {
+        families,
+        rungs,
+        scenarios,
+    })
+}
+
+/// The family's difficulty: the one `[sweep]` key other than `follow_terrain`, and its levels,
+/// which must be numbers rising.
+fn difficulty(table: &toml::Table) -> Result<(String, Vec<f64>), String> {
+    let sweep = table
+        .get("sweep")
+        .and_then(toml::Value::as_table)
+        .ok_or("a ladder family needs a [sweep] of its difficulty's levels")?;
+    let keys: Vec<&String> = sweep.keys().filter(|k| *k != "follow_terrain").collect();
+    let [key] = keys[..] else {
+        return Err(format!(
+            "a ladder family's [sweep] sweeps one difficulty (and follow_terrain), got {}",
+            if keys.is_empty() {
+                "none".to_string()
+            } else {
+                keys.iter()
+                    .map(|k| k.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        ));
+    };
+    let levels: Vec<f64> = sweep[key]
+        .as_array()
+        .ok_or(format!(
+            "sweep.{key}: a ladder's levels are a list of numbers"
+        ))?
+        .iter()
+        .map(|v| as_number(v).ok_or(format!("sweep.{key}: expected numbers, got {v}")))
+        .collect::<Result<_, _>>()?;
+    // easiest first: a riser's height rises, a drop's falls
+    let rising = levels.windows(2).all(|w| w[0] < w[1]);
+    let falling = levels.windows(2).all(|w| w[0] > w[1]);
+    if levels.is_empty() || !(rising || falling) {
+        return Err(format!(
+            "sweep.{key}: a ladder's levels must rise (or fall) steadily, easiest first, got {levels:?}"
+        ));
+    }
+    Ok((key.clone(), levels))
+}
+
+/// A level's number: the value, or a range's high end (`[low, high]`, as discrete obstacles'
+/// heights are drawn from).
+fn as_number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Array(range) => range.last().and_then(as_number),
+        _ => v.as_float().or_else(|| v.as_integer().map(|i| i as f64)),
+    }
+}
+
+/// Reads the batch's records (one per rung, by scenario name) into the ladder's result.
+pub fn summarise(
+    robot: &str,
+    families: &[Family],
+    rungs: &[Rung],
+    records: &[Record],
+) -> LadderResult {
+    let mut runs = Vec::new();
+    let mut outcomes = Vec::new();
+    for rung in rungs {
+        let family = &families[rung.family];
+        let record = records.iter().find(|r| r.name == rung.name);
+        let outcome = record.map_or(Outcome::Error, Outcome::of);
+        let metric = |name: &str| record.and_then(|r| r.metrics.get(name)?.as_f64());
+        outcomes.push((rung.family, rung.level, rung.perceptive, outcome));
+        runs.push(RungResult {
+            family: family.name.clone(),
+            level: family.levels[rung.level],
+            perceptive: rung.perceptive,
+            outcome,
+            forward: metric("forward_distance"),
+            max_tilt_deg: record.and_then(|r| {
+                let roll = r.metrics.get("max_roll_deg")?.as_f64()?;
+                let pitch = r.metrics.get("max_pitch_deg")?.as_f64()?;
+                Some(roll.max(pitch))
+            }),
+            max_penetration: metric("max_penetration"),
+            max_link_penetration: metric("max_link_penetration"),
+            message: record.and_then(|r| r.message.clone()),
+        });
+    }
+    let families = families
+        .iter()
+        .enumerate()
+        .map(|(f, family)| {
+            let climb = |perceptive: bool| {
+                let mut highest = None;
+                for (level, value) in family.levels.iter().enumerate() {
+                    let outcome = outcomes
+                        .iter()
+                        .find(|o| o.0 == f && o.1 == level && o.2 == perceptive)
+                        .map(|o| o.3);
+                    match outcome {
+                        Some(Outcome::Crossed) => highest = Some(*value),
+                        Some(other) => return (highest, Some((*value, other))),
+                        None => {}
+                    }
+                }
+                (highest, None)
+            };
+            let (blind, blind_stopped_by) = climb(false);
+            let (perceptive, perceptive_stopped_by) = climb(true);
+            FamilySummary {
+                family: family.name.clone(),
+                parameter: family.parameter.clone(),
+                levels: family.levels.clone(),
+                blind,
+                perceptive,
+                blind_stopped_by,
+                perceptive_stopped_by,
+            }
+        })
+        .collect();
+    LadderResult {
+        robot: robot.to_string(),
+        families,
+        runs,
+    }
+}
+
+impl LadderResult {
+    /// The table a person reads: per family, the highest level crossed blind and perceptive, and
+    /// what stopped the robot at the next (Markdown, as docs/ holds it).
+    pub fn table(&self, families: &[Family]) -> String {
+        let mut out = format!(
+            "| family ({}) | levels | blind | perceptive |\n|---|---|---|---|\n",
+            self.robot
+        );
+        for (summary, family) in self.families.iter().zip(families) {
+            let short = family
+                .parameter
+                .rsplit('.')
+                .next()
+                .unwrap_or(&family.parameter);
+            let cell = |highest: Option<f64>, stopped: Option<(f64, Outcome)>| {
+                let reached = highest.map_or("none".to_string(), |v| format!("{v}"));
+                match stopped {
+                    Some((level, outcome)) => format!("{reached} ({} at {level})", outcome.word()),
+                    None => format!("{reached} (all)"),
+                }
+            };
+            out.push_str(&format!(
+                "| {} | {short} {} | {} | {} |\n",
+                family.name,
+                summary
+                    .levels
+                    .iter()
+                    .map(|l| format!("{l}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                cell(summary.blind, summary.blind_stopped_by),
+                cell(summary.perceptive, summary.perceptive_stopped_by),
+            ));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_family_sweeps_one_rising_difficulty() {
+        let table: toml::Table = r#"
+            [sweep]
+            "terrain.source.step_height" = [0.02, 0.04]
+            follow_terrain = [false, true]
+        "#
+        .parse()
+        .unwrap();
+        let (key, levels) = difficulty(&table).unwrap();
+        assert_eq!(key, "terrain.source.step_height");
+        assert_eq!(levels, [0.02, 0.04]);
+        for (bad, expected) in [
+            ("[sweep]\nfollow_terrain = [false]\n", "got none"),
+            ("[sweep]\na = [1, 2]\nb = [1, 2]\n", "got a, b"),
+            ("[sweep]\na = [2, 1, 3]\n", "must rise"),
+            ("[sweep]\na = [\"x\"]\n", "expected numbers"),
+            ("[sweep]\na = [[0, 2], [0, 1], [0, 3]]\n", "must rise"),
+            ("duration = 1\n", "needs a [sweep]"),
+        ] {
+            let e = difficulty(&bad.parse().unwrap()).unwrap_err();
+            assert!(e.contains(expected), "{bad}: {e}");
+        }
+    }
+}

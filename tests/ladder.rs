@@ -1,0 +1,79 @@
+//! `hexsim ladder`: a family's levels run blind and perceptive, each run's outcome read from its
+//! record, the highest level crossed per family.
+
+mod common;
+use common::*;
+
+/// A short ladder on slopes: 5° is walked up, 38° (friction holds to 42°, the gait does not
+/// climb it) is not, and the table, the JSON and the batch's records say so.
+#[test]
+fn a_ladder_reports_the_highest_level_crossed_and_what_stopped_the_robot() {
+    let dir = scratch("ladder");
+    let family = dir.join("slope.toml");
+    std::fs::write(
+        &family,
+        format!(
+            "description = \"up a slope\"\ngait = {:?}\nduration = 6.0\n\
+             [terrain.source]\nkind = \"slope\"\nangle_deg = 5.0\nsize = [10.0, 10.0]\n\
+             [start]\nx = -1.0\ny = 0.0\n[expect]\nforward_min = 0.3\nmax_tilt_deg = 45\n\
+             [sweep]\n\"terrain.source.angle_deg\" = [5.0, 38.0]\nfollow_terrain = [false, true]\n",
+            project_file("gaits/tripod.toml")
+        ),
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let out = hexsim()
+        .arg("ladder")
+        .arg(&family)
+        .arg("-o")
+        .arg(&out_dir)
+        .arg("-q")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("ladder.json")).unwrap())
+            .unwrap();
+    let summary = &json["families"][0];
+    assert_eq!(summary["family"], "slope");
+    assert_eq!(summary["blind"], 5.0, "{summary}");
+    assert_eq!(summary["perceptive"], 5.0, "{summary}");
+    let stopped = summary["blind_stopped_by"].as_array().unwrap();
+    assert_eq!(stopped[0], 38.0);
+    assert_ne!(stopped[1], "crossed");
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 4);
+    for run in runs {
+        let crossed = run["outcome"] == "crossed";
+        assert_eq!(crossed, run["level"] == 5.0, "{run}");
+        assert_eq!(crossed, run["forward"].as_f64().unwrap() >= 0.3, "{run}");
+    }
+    assert!(stdout.contains("| slope |"), "{stdout}");
+    assert!(out_dir.join("ladder.md").is_file());
+    assert!(out_dir.join("results.jsonl").is_file());
+}
+
+/// A family that sweeps two difficulties at once is refused, naming the file.
+#[test]
+fn a_family_of_two_difficulties_is_refused() {
+    let dir = scratch("ladder-bad");
+    let family = dir.join("two.toml");
+    std::fs::write(
+        &family,
+        "[expect]\nforward_min = 1.0\n[sweep]\n\"terrain.source.angle_deg\" = [5.0, 10.0]\nseed = [1, 2]\n",
+    )
+    .unwrap();
+    let out = hexsim().arg("ladder").arg(&family).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("two.toml") && stderr.contains("one difficulty"),
+        "{stderr}"
+    );
+}
