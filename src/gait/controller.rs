@@ -76,7 +76,14 @@ pub struct GaitController {
     rolling: bool,
     /// The last answer on the ground per leg (a swinging foot's path without the lift).
     grounded: [[f64; 3]; 6],
+    /// How far each foot's standing target may be lowered and raised (m) and stay within the
+    /// leg's reach with room to spare and, raised, to lift a step (see [`Self::levelling`]).
+    vertical_room: [(f64, f64); 6],
 }
+
+/// The share of a leg's vertical reach from its standing target that levelling may use: the rest
+/// is left for the stride, the servos' sag and the reach's own curvature.
+const LEVELLING_SHARE: f64 = 0.7;
 
 /// Starting guesses for the standing pose's inverse kinematics, tried in turn: knee bent one way,
 /// the other way, straight, and the two with the femur down.
@@ -200,6 +207,26 @@ impl GaitController {
         }
         let radius = std::array::from_fn(|k| model.legs[k].foot.radius);
         let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]));
+        let vertical_room = std::array::from_fn(|k| {
+            let reach = |dz: f64| {
+                // the farthest a target moves along z from the standing one and is reached
+                let (mut lo, mut hi, mut guess) = (0.0, dz, last[k]);
+                for _ in 0..30 {
+                    let mid = 0.5 * (lo + hi);
+                    let answer = chains[k].solve(neutral[k] + DVec3::Z * mid, guess);
+                    if answer.error <= REACH_TOLERANCE {
+                        (lo, guess) = (mid, answer.angles);
+                    } else {
+                        hi = mid;
+                    }
+                }
+                lo.abs()
+            };
+            let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
+            let down = LEVELLING_SHARE * reach(-span);
+            let up = (LEVELLING_SHARE * reach(span) - spec.step_height).max(0.0);
+            (down, up)
+        });
         Ok(GaitController {
             offsets: spec.offsets,
             spec,
@@ -210,6 +237,7 @@ impl GaitController {
             rest,
             rolling: true,
             grounded: last,
+            vertical_room,
         })
     }
 
@@ -231,6 +259,25 @@ impl GaitController {
     /// Joint angles of the standing pose, per leg.
     pub fn standing_angles(&self) -> [[f64; 3]; 6] {
         std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
+    }
+
+    /// The share λ ∈ [0, 1] of the ground's rise under each foot that the legs can follow: the
+    /// largest for which every standing target moved by λ·`ground` (see [`Self::targets`]) stays
+    /// within its leg's vertical room. Levelled on a slope the downhill feet reach down and the
+    /// uphill ones up; on hex18 past about 15° they cannot both, and a target out of reach is
+    /// clamped — the IK answers with the stretched leg, the body tips onto it, and on 30° it slid
+    /// 0.95 m in 10 s. Levelled by λ instead, the body keeps the rest of the slope's tilt.
+    pub fn levelling(&self, ground: impl Fn(DVec3) -> f64) -> f64 {
+        (0..6).fold(1.0f64, |share, k| {
+            let rise = ground(self.neutral[k]);
+            let (down, up) = self.vertical_room[k];
+            let room = if rise < 0.0 { down } else { up };
+            if rise.abs() * share > room {
+                room / rise.abs()
+            } else {
+                share
+            }
+        })
     }
 
     /// Joint angles of the standing pose with each foot lowered or raised to the ground under it
