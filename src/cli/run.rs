@@ -225,6 +225,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             m.time_off_terrain
         );
     }
+    if m.command_progress < 0.0 {
+        println!(
+            "  warning: the body went {:.3} m backwards against the command (slid?)",
+            -m.command_progress
+        );
+    }
     if m.clamped_ik_steps > 0 {
         println!(
             "  warning: {} steps had foot targets out of reach (IK clamped)",

@@ -69,6 +69,11 @@ impl Walker {
         &self.hexapod
     }
 
+    /// The velocity command the gait follows.
+    pub fn command(&self) -> VelocityCommand {
+        self.command
+    }
+
     pub fn set_command(&mut self, command: VelocityCommand) {
         self.command = command;
     }
