@@ -19,6 +19,7 @@
 //! own turn of the tibia does not swing the foot sideways. The fit plans the stance without it:
 //! the offset is millimetres, an execution detail like the servos' load feed-forward.
 
+use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
@@ -45,6 +46,9 @@ pub struct GaitTargets {
     pub phases: [LegPhase; 6],
     /// Legs whose target was out of reach this instant (IK answered with the closest pose).
     pub clamped: [bool; 6],
+    /// Legs whose foot is on the ground by the gait's reckoning: in stance, or (reactive gait)
+    /// its swing ended early on the ground.
+    pub grounded: [bool; 6],
 }
 
 /// A leg that cannot take a gait's stance: the standing foot position or the swing apex above it
@@ -79,6 +83,8 @@ pub struct GaitController {
     /// How far each foot's standing target may be lowered and raised (m) and stay within the
     /// leg's reach with room to spare and, raised, to lift a step (see [`Self::levelling`]).
     vertical_room: [(f64, f64); 6],
+    /// The reactive gait's state, when on (see [`super::reactive`]).
+    reactive: Option<Reactive>,
 }
 
 /// The share of a leg's vertical reach from its standing target that levelling may use: the rest
@@ -238,6 +244,7 @@ impl GaitController {
             rolling: true,
             grounded: last,
             vertical_room,
+            reactive: None,
         })
     }
 
@@ -246,6 +253,22 @@ impl GaitController {
     pub fn with_rolling_feet(mut self, on: bool) -> Self {
         self.rolling = on;
         self
+    }
+
+    /// Turns the reactive gait on (`Some`: its state from the start) or off.
+    pub fn set_reactive(&mut self, reactive: Option<Reactive>) {
+        self.reactive = reactive;
+    }
+
+    pub fn is_reactive(&self) -> bool {
+        self.reactive.is_some()
+    }
+
+    /// What the feet felt in the last step, for the reactive gait (ignored when it is off).
+    pub fn feel(&mut self, feel: [FootFeel; 6]) {
+        if let Some(reactive) = &mut self.reactive {
+            reactive.feel(feel);
+        }
     }
 
     pub fn gait(&self) -> &Gait {
@@ -312,13 +335,19 @@ impl GaitController {
             feet: [DVec3::ZERO; 6],
             phases: [LegPhase::Stance(0.0); 6],
             clamped: [false; 6],
+            grounded: [true; 6],
         };
-        for k in 0..6 {
+        let phases: [LegPhase; 6] = std::array::from_fn(|k| {
+            leg_phase(t, self.spec.period, self.spec.duty_factor, self.offsets[k])
+        });
+        if let Some(reactive) = &mut self.reactive {
+            reactive.follow_feet(&self.neutral, &phases);
+        }
+        for (k, &phase) in phases.iter().enumerate() {
             let n = self.neutral[k];
             // ground displacement under the foot over one stance, seen from the body
             let d = -(v + omega.cross(n)) * stance_time * blend;
-            let phase = leg_phase(t, self.spec.period, self.spec.duty_factor, self.offsets[k]);
-            let (mut foot, lift) = match phase {
+            let (mut foot, mut lift) = match phase {
                 LegPhase::Stance(s) => (n + d * (s - 0.5), 0.0),
                 LegPhase::Swing(s) => {
                     let duty = self.spec.duty_factor;
@@ -327,6 +356,26 @@ impl GaitController {
                     (n + d * (0.5 - progress) + DVec3::Z * lift, lift)
                 }
             };
+            out.grounded[k] = phase.is_stance();
+            if let Some(reactive) = &mut self.reactive {
+                let base = foot - DVec3::Z * lift;
+                let height = reactive.offset(
+                    k,
+                    base,
+                    phase,
+                    lift,
+                    self.spec.step_height,
+                    -d.normalize_or_zero(),
+                    self.vertical_room[k],
+                );
+                foot = base + DVec3::Z * height + d.normalize_or_zero() * reactive.back_off(k);
+                out.grounded[k] = reactive.grounded(k, phase);
+                lift = if out.grounded[k] {
+                    0.0
+                } else {
+                    height.max(0.0)
+                };
+            }
             foot.z += ground(foot);
             let (foot, solution) = self.place(k, foot, lift);
             self.last[k] = solution.angles;

@@ -2,7 +2,7 @@
 
 use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
-use crate::gait::{GaitController, GaitTargets, VelocityCommand};
+use crate::gait::{FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand};
 use crate::robot::RobotModel;
 use glam::{DAffine3, DVec3};
 
@@ -24,6 +24,11 @@ pub struct Walker {
     /// [`Walker::hold_load`]; on by default); off: the targets are the gait's angles and the legs
     /// sag under load.
     pub load_feedforward: bool,
+    /// The reactive gait (`gait::reactive`): feet find the ground by touch; off: the
+    /// schedule's heights.
+    pub reactive: bool,
+    /// What each foot felt in the last step (normal force, ground force in the body frame).
+    feel: [FootFeel; 6],
     /// Joint targets given from outside (rad, by model joint), in place of the gait's.
     given_targets: Option<Vec<f64>>,
     /// The feed-forward's link poses and holding torques, kept between steps (no allocation).
@@ -59,6 +64,8 @@ impl Walker {
             clamped_steps: 0,
             terrain_following: false,
             load_feedforward: true,
+            reactive: false,
+            feel: [FootFeel::default(); 6],
             given_targets: None,
             poses: Vec::new(),
             torques: vec![0.0; n],
@@ -196,13 +203,21 @@ impl Walker {
             let period = self.controller.gait().period;
             // ramp the stride up over the first cycle so the feet leave the standing pose smoothly
             let blend = (t / period).min(1.0);
+            if self.reactive != self.controller.is_reactive() {
+                let model = self.hexapod.model();
+                let share = model.total_mass() * STANDARD_GRAVITY / 6.0;
+                let reactive = Reactive::new(share, self.hexapod.dt());
+                self.controller
+                    .set_reactive(self.reactive.then_some(reactive));
+            }
+            self.controller.feel(self.feel);
             let targets = if self.terrain_following {
                 let ground = Self::ground_within_reach(&self.hexapod, &self.controller);
                 self.controller.targets(t, self.command, blend, ground)
             } else {
                 self.controller.targets(t, self.command, blend, |_| 0.0)
             };
-            self.set_leg_targets(targets.joint_angles, targets.phases.map(|p| p.is_stance()));
+            self.set_leg_targets(targets.joint_angles, targets.grounded);
             if targets.clamped.iter().any(|&c| c) {
                 self.clamped_steps += 1;
             }
@@ -217,6 +232,13 @@ impl Walker {
             self.set_leg_targets(angles, [true; 6]);
         }
         let robot = self.hexapod.step();
+        let to_body = robot.body.matrix3.transpose();
+        self.feel = robot.foot_contacts.map(|c| {
+            c.map_or(FootFeel::default(), |c| FootFeel {
+                normal_force: c.normal_force,
+                force: to_body * c.force,
+            })
+        });
         WalkSample {
             robot,
             gait: self.last_targets,
