@@ -526,6 +526,47 @@ fn walks_up_and_down_a_25_degree_slope() {
     }
 }
 
+/// hex18 on stairs of 6 cm risers and 30 cm treads (the first 0.8 m ahead), 20 s, blind: the
+/// reactive gait (`gait::reactive`) finds each step by touch. Measured, up: the body rises
+/// 0.204 m (3 risers; x 0.94 m), where the rigid gait stalls at the first riser (0.031 m, its
+/// feet sliding 0.80 m against it); down (risers of −6 cm): 0.303 m (5 risers) against 0.155 m.
+#[test]
+fn the_reactive_gait_climbs_and_descends_stairs() {
+    let climb = |rise: f64, reactive: bool| {
+        let ground = terrain::steps([8.0, 2.0], [1.5, 0.0], 0.3, 0.3, rise, 0.01).unwrap();
+        let place = Placement {
+            x: -0.5,
+            y: 0.0,
+            yaw: 0.0,
+        };
+        let mut walker = walker(
+            hex18(),
+            ground,
+            place,
+            tripod(),
+            1.0,
+            Articulation::Multibody,
+        );
+        walker.reactive = reactive;
+        let samples: Vec<HexapodSample> = (0..21_000).map(|_| walker.step().robot).collect();
+        let end = samples.last().unwrap().body.translation;
+        let climbed = end.z - samples[999].body.translation.z;
+        println!(
+            "risers {:+.0} cm, reactive {reactive}: body {:+.3} m in height, at x {:.3} m",
+            rise * 100.0,
+            climbed,
+            end.x
+        );
+        climbed
+    };
+    let (up, up_rigid) = (climb(0.06, true), climb(0.06, false));
+    assert!(up > 0.12, "climbed {up:.3} m: fewer than two risers");
+    assert!(up_rigid < 0.06, "the rigid gait climbed {up_rigid:.3} m");
+    let (down, down_rigid) = (-climb(-0.06, true), -climb(-0.06, false));
+    assert!(down > 0.24, "descended {down:.3} m: fewer than four risers");
+    assert!(down > down_rigid, "{down:.3} m, rigid {down_rigid:.3} m");
+}
+
 /// On a 35° slope the robot, placed with its feet 1 mm above the ground below them, touches along
 /// the slope's normal in its very first step: the contact forces then must already be finite and
 /// bounded (the multibody's contact mobility needs the mass matrix before rapier's first step).
