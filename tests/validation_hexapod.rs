@@ -528,8 +528,8 @@ fn walks_up_and_down_a_25_degree_slope() {
 
 /// hex18 on stairs of 6 cm risers and 30 cm treads (the first 0.8 m ahead), 20 s, blind: the
 /// reactive gait (`gait::reactive`) finds each step by touch. Measured, up: the body rises
-/// 0.204 m (3 risers; x 0.94 m), where the rigid gait stalls at the first riser (0.031 m, its
-/// feet sliding 0.80 m against it); down (risers of −6 cm): 0.303 m (5 risers) against 0.155 m.
+/// 0.130 m (x 0.77 m), where the rigid gait stalls at the first riser (0.031 m, its feet sliding
+/// 0.80 m against it); down (risers of −6 cm): 0.282 m against 0.155 m.
 #[test]
 fn the_reactive_gait_climbs_and_descends_stairs() {
     let climb = |rise: f64, reactive: bool| {

@@ -230,7 +230,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             m.time_off_terrain
         );
     }
-    if m.command_progress < 0.0 {
+    if m.command_progress < -hexsim::metrics::walk::BACKWARDS_NOISE {
         println!(
             "  warning: the body went {:.3} m backwards against the command (slid?)",
             -m.command_progress

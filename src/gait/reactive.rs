@@ -166,6 +166,9 @@ impl Reactive {
                     // touch-down: the foot stays where it met the ground
                     self.touched[k] = true;
                     self.offset[k] = here + plane;
+                } else {
+                    // the ground the swing aims at, where a stance that finds none starts to search
+                    self.offset[k] = self.lift_off[k] * towards_plane + plane;
                 }
                 here
             }
@@ -195,5 +198,79 @@ impl Reactive {
     /// ended by a touch-down.
     pub fn grounded(&self, k: usize, phase: LegPhase) -> bool {
         phase.is_stance() || self.touched[k]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DT: f64 = 1e-3;
+    const STEP: f64 = 0.03;
+    const ROOM: (f64, f64) = (0.05, 0.04);
+
+    fn pressed(normal: f64, force: DVec3) -> [FootFeel; 6] {
+        let mut feel = [FootFeel::default(); 6];
+        feel[0] = FootFeel {
+            normal_force: normal,
+            force,
+        };
+        feel
+    }
+
+    /// A foot that meets the ground late in its swing stays where it met it, through the rest of
+    /// the swing and its stance; one that meets nothing reaches down for the ground at the
+    /// search speed, no farther than its room.
+    #[test]
+    fn a_foot_lands_where_it_touches_and_searches_where_it_does_not() {
+        let mut r = Reactive::new(4.0, DT);
+        let foot = DVec3::new(0.1, 0.1, -0.1);
+        let forward = DVec3::X;
+        // standing on the ground before the swing
+        r.feel(pressed(4.0, DVec3::new(0.0, 0.0, 4.0)));
+        r.offset(0, foot, LegPhase::Stance(0.9), 0.0, STEP, forward, ROOM);
+        // in the air until 70 % of the swing, then on a 1 cm step
+        r.feel(pressed(0.0, DVec3::ZERO));
+        let before = r.offset(0, foot, LegPhase::Swing(0.7), 0.012, STEP, forward, ROOM);
+        r.feel(pressed(3.0, DVec3::new(0.0, 0.0, 3.0)));
+        let touched = r.offset(0, foot, LegPhase::Swing(0.71), 0.011, STEP, forward, ROOM);
+        assert_eq!(touched, 0.011);
+        assert!(before > touched);
+        assert!(r.grounded(0, LegPhase::Swing(0.8)));
+        let later = r.offset(0, foot, LegPhase::Swing(0.9), 0.003, STEP, forward, ROOM);
+        let stance = r.offset(0, foot, LegPhase::Stance(0.2), 0.0, STEP, forward, ROOM);
+        assert_eq!((later, stance), (touched, touched));
+        // the next swing finds nothing: its stance reaches down at the search speed
+        r.feel(pressed(0.0, DVec3::ZERO));
+        r.offset(0, foot, LegPhase::Swing(0.0), 0.0, STEP, forward, ROOM);
+        let landed = r.offset(0, foot, LegPhase::Swing(0.999), 0.0, STEP, forward, ROOM);
+        let mut heights = vec![];
+        for _ in 0..1000 {
+            heights.push(r.offset(0, foot, LegPhase::Stance(0.0), 0.0, STEP, forward, ROOM));
+        }
+        assert!((landed - heights[0] - SEARCH_SPEED * DT).abs() < 1e-12);
+        assert!((heights[99] - (landed - 100.0 * SEARCH_SPEED * DT)).abs() < 1e-9);
+        assert_eq!(*heights.last().unwrap(), -ROOM.0);
+    }
+
+    /// A swing pushed back against its direction lifts higher and draws back; one that touches
+    /// nothing keeps the schedule's lift.
+    #[test]
+    fn a_blocked_swing_lifts_higher() {
+        let mut r = Reactive::new(4.0, DT);
+        let foot = DVec3::new(0.1, 0.1, -0.1);
+        r.feel(pressed(4.0, DVec3::new(0.0, 0.0, 4.0)));
+        r.offset(0, foot, LegPhase::Stance(0.9), 0.0, STEP, DVec3::X, ROOM);
+        r.feel(pressed(0.0, DVec3::ZERO));
+        let free = r.offset(0, foot, LegPhase::Swing(0.4), 0.02, STEP, DVec3::X, ROOM);
+        assert!((free - 0.02).abs() < 1e-12);
+        r.feel(pressed(3.0, DVec3::new(-3.0, 0.0, 0.5)));
+        let mut lifted = free;
+        for _ in 0..50 {
+            lifted = r.offset(0, foot, LegPhase::Swing(0.4), 0.02, STEP, DVec3::X, ROOM);
+        }
+        assert!(lifted > free + 0.01, "{lifted} against {free}");
+        assert!(r.back_off(0) > 0.0);
+        assert!(!r.grounded(0, LegPhase::Swing(0.4)));
     }
 }

@@ -9,6 +9,10 @@ use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
+/// Going backwards against the command by less than this (m) is noise, not a slide: a robot
+/// stepping off from standing sways back and forth by a millimetre or so.
+pub const BACKWARDS_NOISE: f64 = 0.01;
+
 /// A hexapod run's summary, written as JSON.
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default)]
@@ -406,7 +410,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         name: "command_progress",
         unit: "m",
         what: "body travel along the commanded direction, step by step (negative: went backwards)",
-        noise: Some(0.01),
+        noise: Some(BACKWARDS_NOISE),
         better: Better::Higher,
         bounds: &[],
         value: |m| Value::One(m.command_progress),
