@@ -287,9 +287,9 @@ impl GaitController {
     /// The share λ ∈ [0, 1] of the ground's rise under each foot that the legs can follow: the
     /// largest for which every standing target moved by λ·`ground` (see [`Self::targets`]) stays
     /// within its leg's vertical room. Levelled on a slope the downhill feet reach down and the
-    /// uphill ones up; on hex18 past about 15° they cannot both, and a target out of reach is
-    /// clamped — the IK answers with the stretched leg, the body tips onto it, and on 30° it slid
-    /// 0.95 m in 10 s. Levelled by λ instead, the body keeps the rest of the slope's tilt.
+    /// uphill ones up; hex18's legs level at most 10.7° (λ < 1 from 11° on), and a target out of
+    /// reach is clamped — the IK answers with the stretched leg, the body tips onto it, and on
+    /// 30° it slid 0.95 m in 10 s. Levelled by λ instead, the body keeps the rest of the tilt.
     pub fn levelling(&self, ground: impl Fn(DVec3) -> f64) -> f64 {
         (0..6).fold(1.0f64, |share, k| {
             let rise = ground(self.neutral[k]);
