@@ -146,6 +146,8 @@ fn run_walks_and_writes_recording_trajectory_and_metrics() {
         stdout.contains("wave") && stdout.contains("distance"),
         "{stdout}"
     );
+    // walking forward as told: no warning of going backwards
+    assert!(!stdout.contains("backwards"), "{stdout}");
     assert!(std::fs::read(&rrd).unwrap().starts_with(b"RRF"));
     let trajectory = std::fs::read_to_string(&csv).unwrap();
     let header = trajectory.lines().next().unwrap();
@@ -545,4 +547,45 @@ fn a_walk_off_the_terrain_grid_is_flagged() {
     let (on, stdout) = walk("-1.0", "inside");
     assert_eq!(on, 0.0);
     assert!(!stdout.contains("beyond the terrain's grid"), "{stdout}");
+}
+
+/// A walk that goes backwards against its command says so: uphill on 20° with μs = μk = 0.3,
+/// past the feet's friction angle (tan 20° = 0.36), no stance holds and the robot slides down
+/// while told to climb; the summary warns and the metrics carry the negative progress.
+#[test]
+fn a_walk_sliding_back_against_its_command_says_so() {
+    let dir = scratch("slide_back");
+    let terrain = dir.join("slope45.toml");
+    std::fs::write(
+        &terrain,
+        "[source]\nkind = \"slope\"\nangle_deg = 20.0\nsize = [20.0, 4.0]\n",
+    )
+    .unwrap();
+    let json = dir.join("m.json");
+    let out = hexsim()
+        .args(["run", "--no-record", "--duration", "2", "--start", "0", "0"])
+        .args(["--mu-static", "0.3", "--mu-kinetic", "0.3", "--terrain"])
+        .arg(&terrain)
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let progress = metrics["command_progress"].as_f64().unwrap();
+    println!("{stdout}");
+    assert!(progress < -0.1, "progress {progress} m");
+    assert!(
+        stdout.contains(&format!(
+            "warning: the body went {:.3} m backwards against the command",
+            -progress
+        )),
+        "{stdout}"
+    );
 }

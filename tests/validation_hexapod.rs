@@ -412,6 +412,161 @@ fn v14_holds_without_drift_recovery() {
     }
 }
 
+/// V21: how far hex18's body moves in 10 s standing on a 30° slope (μs = 0.9) after 1 s to land,
+/// m: the walker standing (its settle) with the load feed-forward, the body parallel to the
+/// slope or, `levelled`, following the terrain as far as the legs reach (`GaitController::
+/// levelling`: on 30° it levels 11° of the slope's 30°).
+fn creep_on_a_30_degree_slope(articulation: Articulation, levelled: bool) -> f64 {
+    let ground = terrain::slope([4.0, 4.0], [0.0, 0.0], 30f64.to_radians(), 0.0).unwrap();
+    let place = Placement {
+        x: 0.0,
+        y: 0.0,
+        yaw: 0.0,
+    };
+    // standing all the while: the gait would start after 60 s
+    let mut walker = walker(hex18(), ground, place, tripod(), 60.0, articulation);
+    walker.terrain_following = levelled;
+    let landing: Vec<HexapodSample> = (0..1000).map(|_| walker.step().robot).collect();
+    let start = landing.last().unwrap().body.translation;
+    (0..10_000)
+        .map(|_| (walker.step().robot.body.translation - start).length())
+        .fold(0.0, f64::max)
+}
+
+fn v21_stands_on_a_30_degree_slope(articulation: Articulation, levelled: bool) {
+    let moved = creep_on_a_30_degree_slope(articulation, levelled);
+    println!(
+        "V21 ({articulation:?}, {}): body moved {:.4} mm in 10 s on 30°",
+        if levelled { "levelled" } else { "parallel" },
+        moved * 1e3
+    );
+    assert!(moved < 0.005, "V21: the body moved {:.3} mm", moved * 1e3);
+}
+
+#[test]
+fn v21_multibody_parallel_to_a_30_degree_slope() {
+    v21_stands_on_a_30_degree_slope(Articulation::Multibody, false);
+}
+
+#[test]
+fn v21_multibody_levelled_on_a_30_degree_slope() {
+    v21_stands_on_a_30_degree_slope(Articulation::Multibody, true);
+}
+
+/// Placed level (a `Placement` has no pitch), the robot first falls 0.26 m onto its rear feet
+/// and lands sliding at 0.8 m/s; the multibody's feet, which share their stopping forces, stop
+/// it, the impulse joints' do not until 3 s later. Landed, it stands: 0.001 mm from 6 s to 16 s.
+#[test]
+#[ignore = "measured: slides 589 mm after its level start's fall; needs a pitched Placement"]
+fn v21_impulse_parallel_to_a_30_degree_slope() {
+    v21_stands_on_a_30_degree_slope(Articulation::Impulse, false);
+}
+
+/// As the parallel case: its level start drops the rear feet 0.17 m (the levelling covers 11°).
+#[test]
+#[ignore = "measured: slides 1500 mm after its level start's fall; needs a pitched Placement"]
+fn v21_impulse_levelled_on_a_30_degree_slope() {
+    v21_stands_on_a_30_degree_slope(Articulation::Impulse, true);
+}
+
+/// Up and down a 25° slope (μs = 0.9), blind and following the terrain, 20 s: the stance holds
+/// its ground — forward at least V13's 70 % of nominal and no more than nominal (sliding down
+/// would add to it), no foot sliding 0.1 m (the third-party robots' bar). Measured: up 2.092 m
+/// blind, 2.108 m following (0.085 / 0.091 m worst slip); down 2.136 / 2.155 m (0.029 /
+/// 0.019 m). Before the feed-forward took gravity's direction and the levelling its reach, up
+/// 1.767 m blind (0.271 m slip) and −1.019 m following — it slid back — and down 3.058 m
+/// following (1.546 m slip). Multibody: on impulse joints the level start's fall onto the slope
+/// lands sliding (see V21).
+#[test]
+fn walks_up_and_down_a_25_degree_slope() {
+    let gait = tripod();
+    let nominal = gait.nominal_speed() * 20.0;
+    for (ascent, way) in [(0.0, "up"), (std::f64::consts::PI, "down")] {
+        for following in [false, true] {
+            let ground =
+                terrain::slope([14.0, 4.0], [0.0, 0.0], 25f64.to_radians(), ascent).unwrap();
+            let place = Placement {
+                x: -4.0,
+                y: 0.0,
+                yaw: 0.0,
+            };
+            let mut walker = walker(
+                hex18(),
+                ground,
+                place,
+                gait.clone(),
+                1.0,
+                Articulation::Multibody,
+            );
+            walker.terrain_following = following;
+            let samples: Vec<HexapodSample> = (0..21_000).map(|_| walker.step().robot).collect();
+            let forward =
+                samples.last().unwrap().body.translation.x - samples[999].body.translation.x;
+            let mut slid = [0.0f64; 6];
+            for s in &samples[1000..] {
+                for (k, c) in s.foot_contacts.iter().enumerate() {
+                    if let Some(c) = c.filter(|c| c.normal_force > 0.0) {
+                        slid[k] += c.slip.length() * DT;
+                    }
+                }
+            }
+            let worst = slid.iter().copied().fold(0.0, f64::max);
+            println!(
+                "25° {way}, following {following}: forward {forward:.3} m of {nominal:.2}, worst slip {worst:.3} m"
+            );
+            assert!(
+                (0.7 * nominal..=nominal).contains(&forward),
+                "25° {way}, following {following}: forward {forward:.3} m"
+            );
+            assert!(
+                worst < 0.1,
+                "25° {way}, following {following}: slid {worst:.3} m"
+            );
+        }
+    }
+}
+
+/// hex18 on stairs of 6 cm risers and 30 cm treads (the first 0.8 m ahead), 20 s, blind: the
+/// reactive gait (`gait::reactive`) finds each step by touch. Measured, up: the body rises
+/// 0.130 m (x 0.77 m), where the rigid gait stalls at the first riser (0.031 m, its feet sliding
+/// 0.80 m against it); down (risers of −6 cm): 0.282 m against 0.155 m.
+#[test]
+fn the_reactive_gait_climbs_and_descends_stairs() {
+    let climb = |rise: f64, reactive: bool| {
+        let ground = terrain::steps([8.0, 2.0], [1.5, 0.0], 0.3, 0.3, rise, 0.01).unwrap();
+        let place = Placement {
+            x: -0.5,
+            y: 0.0,
+            yaw: 0.0,
+        };
+        let mut walker = walker(
+            hex18(),
+            ground,
+            place,
+            tripod(),
+            1.0,
+            Articulation::Multibody,
+        );
+        walker.reactive = reactive;
+        let samples: Vec<HexapodSample> = (0..21_000).map(|_| walker.step().robot).collect();
+        let end = samples.last().unwrap().body.translation;
+        let climbed = end.z - samples[999].body.translation.z;
+        println!(
+            "risers {:+.0} cm, reactive {reactive}: body {:+.3} m in height, at x {:.3} m",
+            rise * 100.0,
+            climbed,
+            end.x
+        );
+        climbed
+    };
+    let (up, up_rigid) = (climb(0.06, true), climb(0.06, false));
+    assert!(up > 0.12, "climbed {up:.3} m: fewer than two risers");
+    assert!(up_rigid < 0.06, "the rigid gait climbed {up_rigid:.3} m");
+    let (down, down_rigid) = (-climb(-0.06, true), -climb(-0.06, false));
+    assert!(down > 0.24, "descended {down:.3} m: fewer than four risers");
+    assert!(down > down_rigid, "{down:.3} m, rigid {down_rigid:.3} m");
+}
+
 /// On a 35° slope the robot, placed with its feet 1 mm above the ground below them, touches along
 /// the slope's normal in its very first step: the contact forces then must already be finite and
 /// bounded (the multibody's contact mobility needs the mass matrix before rapier's first step).

@@ -93,6 +93,7 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
         settle: None,
         follow_terrain: None,
         rolling_feet: None,
+        reactive_gait: None,
         articulation: None,
         solver_iterations: None,
         pgs_iterations: None,

@@ -34,6 +34,10 @@ pub struct RunArgs {
     /// Keep the body level on slopes: raise or lower each foot's path by the terrain under it.
     #[arg(long)]
     follow_terrain: bool,
+    /// Reactive gait (blind): each foot lands where it touches the ground, reaches down for
+    /// ground it does not find, lifts higher when a swing is blocked; the body follows the feet.
+    #[arg(long)]
+    reactive: bool,
     /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo needs a
     /// smaller step to be stable (a warning says so).
     #[arg(long)]
@@ -138,6 +142,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         settle: Some(args.settle),
         follow_terrain: Some(args.follow_terrain),
         rolling_feet: args.no_rolling.then_some(false),
+        reactive_gait: Some(args.reactive),
         articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),
         pgs_iterations: args.pgs_iterations,
@@ -252,6 +257,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             },
             links.join(", "),
             m.max_link_penetration * 1e3
+        );
+    }
+    if m.command_progress < -hexsim::metrics::walk::BACKWARDS_NOISE {
+        println!(
+            "  warning: the body went {:.3} m backwards against the command (slid?)",
+            -m.command_progress
         );
     }
     if m.clamped_ik_steps > 0 {

@@ -19,6 +19,7 @@
 //! own turn of the tibia does not swing the foot sideways. The fit plans the stance without it:
 //! the offset is millimetres, an execution detail like the servos' load feed-forward.
 
+use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
@@ -45,6 +46,9 @@ pub struct GaitTargets {
     pub phases: [LegPhase; 6],
     /// Legs whose target was out of reach this instant (IK answered with the closest pose).
     pub clamped: [bool; 6],
+    /// Legs whose foot is on the ground by the gait's reckoning: in stance, or (reactive gait)
+    /// its swing ended early on the ground.
+    pub grounded: [bool; 6],
 }
 
 /// A leg that cannot take a gait's stance: the standing foot position or the swing apex above it
@@ -76,7 +80,16 @@ pub struct GaitController {
     rolling: bool,
     /// The last answer on the ground per leg (a swinging foot's path without the lift).
     grounded: [[f64; 3]; 6],
+    /// How far each foot's standing target may be lowered and raised (m) and stay within the
+    /// leg's reach with room to spare and, raised, to lift a step (see [`Self::levelling`]).
+    vertical_room: [(f64, f64); 6],
+    /// The reactive gait's state, when on (see [`super::reactive`]).
+    reactive: Option<Reactive>,
 }
+
+/// The share of a leg's vertical reach from its standing target that levelling may use: the rest
+/// is left for the stride, the servos' sag and the reach's own curvature.
+const LEVELLING_SHARE: f64 = 0.7;
 
 /// Starting guesses for the standing pose's inverse kinematics, tried in turn: knee bent one way,
 /// the other way, straight, and the two with the femur down.
@@ -200,6 +213,26 @@ impl GaitController {
         }
         let radius = std::array::from_fn(|k| model.legs[k].foot.radius);
         let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]));
+        let vertical_room = std::array::from_fn(|k| {
+            let reach = |dz: f64| {
+                // the farthest a target moves along z from the standing one and is reached
+                let (mut lo, mut hi, mut guess) = (0.0, dz, last[k]);
+                for _ in 0..30 {
+                    let mid = 0.5 * (lo + hi);
+                    let answer = chains[k].solve(neutral[k] + DVec3::Z * mid, guess);
+                    if answer.error <= REACH_TOLERANCE {
+                        (lo, guess) = (mid, answer.angles);
+                    } else {
+                        hi = mid;
+                    }
+                }
+                lo.abs()
+            };
+            let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
+            let down = LEVELLING_SHARE * reach(-span);
+            let up = (LEVELLING_SHARE * reach(span) - spec.step_height).max(0.0);
+            (down, up)
+        });
         Ok(GaitController {
             offsets: spec.offsets,
             spec,
@@ -210,6 +243,8 @@ impl GaitController {
             rest,
             rolling: true,
             grounded: last,
+            vertical_room,
+            reactive: None,
         })
     }
 
@@ -218,6 +253,22 @@ impl GaitController {
     pub fn with_rolling_feet(mut self, on: bool) -> Self {
         self.rolling = on;
         self
+    }
+
+    /// Turns the reactive gait on (`Some`: its state from the start) or off.
+    pub fn set_reactive(&mut self, reactive: Option<Reactive>) {
+        self.reactive = reactive;
+    }
+
+    pub fn is_reactive(&self) -> bool {
+        self.reactive.is_some()
+    }
+
+    /// What the feet felt in the last step, for the reactive gait (ignored when it is off).
+    pub fn feel(&mut self, feel: [FootFeel; 6]) {
+        if let Some(reactive) = &mut self.reactive {
+            reactive.feel(feel);
+        }
     }
 
     pub fn gait(&self) -> &Gait {
@@ -231,6 +282,25 @@ impl GaitController {
     /// Joint angles of the standing pose, per leg.
     pub fn standing_angles(&self) -> [[f64; 3]; 6] {
         std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
+    }
+
+    /// The share λ ∈ [0, 1] of the ground's rise under each foot that the legs can follow: the
+    /// largest for which every standing target moved by λ·`ground` (see [`Self::targets`]) stays
+    /// within its leg's vertical room. Levelled on a slope the downhill feet reach down and the
+    /// uphill ones up; hex18's legs level at most 10.7° (λ < 1 from 11° on), and a target out of
+    /// reach is clamped — the IK answers with the stretched leg, the body tips onto it, and on
+    /// 30° it slid 0.95 m in 10 s. Levelled by λ instead, the body keeps the rest of the tilt.
+    pub fn levelling(&self, ground: impl Fn(DVec3) -> f64) -> f64 {
+        (0..6).fold(1.0f64, |share, k| {
+            let rise = ground(self.neutral[k]);
+            let (down, up) = self.vertical_room[k];
+            let room = if rise < 0.0 { down } else { up };
+            if rise.abs() * share > room {
+                room / rise.abs()
+            } else {
+                share
+            }
+        })
     }
 
     /// Joint angles of the standing pose with each foot lowered or raised to the ground under it
@@ -265,13 +335,19 @@ impl GaitController {
             feet: [DVec3::ZERO; 6],
             phases: [LegPhase::Stance(0.0); 6],
             clamped: [false; 6],
+            grounded: [true; 6],
         };
-        for k in 0..6 {
+        let phases: [LegPhase; 6] = std::array::from_fn(|k| {
+            leg_phase(t, self.spec.period, self.spec.duty_factor, self.offsets[k])
+        });
+        if let Some(reactive) = &mut self.reactive {
+            reactive.follow_feet(&self.neutral, &phases);
+        }
+        for (k, &phase) in phases.iter().enumerate() {
             let n = self.neutral[k];
             // ground displacement under the foot over one stance, seen from the body
             let d = -(v + omega.cross(n)) * stance_time * blend;
-            let phase = leg_phase(t, self.spec.period, self.spec.duty_factor, self.offsets[k]);
-            let (mut foot, lift) = match phase {
+            let (mut foot, mut lift) = match phase {
                 LegPhase::Stance(s) => (n + d * (s - 0.5), 0.0),
                 LegPhase::Swing(s) => {
                     let duty = self.spec.duty_factor;
@@ -280,6 +356,26 @@ impl GaitController {
                     (n + d * (0.5 - progress) + DVec3::Z * lift, lift)
                 }
             };
+            out.grounded[k] = phase.is_stance();
+            if let Some(reactive) = &mut self.reactive {
+                let base = foot - DVec3::Z * lift;
+                let height = reactive.offset(
+                    k,
+                    base,
+                    phase,
+                    lift,
+                    self.spec.step_height,
+                    -d.normalize_or_zero(),
+                    self.vertical_room[k],
+                );
+                foot = base + DVec3::Z * height + d.normalize_or_zero() * reactive.back_off(k);
+                out.grounded[k] = reactive.grounded(k, phase);
+                lift = if out.grounded[k] {
+                    0.0
+                } else {
+                    height.max(0.0)
+                };
+            }
             foot.z += ground(foot);
             let (foot, solution) = self.place(k, foot, lift);
             self.last[k] = solution.angles;

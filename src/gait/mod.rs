@@ -5,6 +5,7 @@ mod command;
 mod controller;
 mod fit;
 mod margins;
+mod reactive;
 mod schedule;
 mod spec;
 
@@ -12,6 +13,7 @@ pub use command::{CommandChange, CommandSchedule};
 pub use controller::{GaitController, GaitTargets, REACH_TOLERANCE, StanceError, VelocityCommand};
 pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
 pub use margins::{CycleMargins, Unreached, cycle_margins};
+pub use reactive::{FootFeel, Reactive};
 pub use schedule::{LegPhase, leg_phase, minimum_support};
 pub use spec::{Gait, GaitError, GaitSpec, SwingShape};
 

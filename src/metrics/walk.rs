@@ -9,6 +9,10 @@ use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
+/// Going backwards against the command by less than this (m) is noise, not a slide: a robot
+/// stepping off from standing sways back and forth by a millimetre or so.
+pub const BACKWARDS_NOISE: f64 = 0.01;
+
 /// A hexapod run's summary, written as JSON.
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default)]
@@ -25,6 +29,11 @@ pub struct HexapodMetrics {
     pub distance: f64,
     pub mean_speed: f64,
     pub heading_change_deg: f64,
+    /// The body's travel along the commanded direction (m): each step's displacement on the
+    /// command's unit vector (turned by the body's heading), summed; steps without a linear
+    /// command count nothing. Negative: the robot went backwards against its command (slid
+    /// down a slope it was told to climb), which a distance alone does not say.
+    pub command_progress: f64,
     pub max_roll_deg: f64,
     pub max_pitch_deg: f64,
     pub rms_roll_deg: f64,
@@ -205,6 +214,8 @@ struct Accumulators {
     terrain: Option<([f64; 2], [f64; 2])>,
     /// Steps each model link touched the ground with a sphere other than its foot.
     link_steps: Vec<u64>,
+    /// The body's position at the last step (for [`HexapodMetrics::command_progress`]).
+    last_position: Option<glam::DVec3>,
 }
 
 /// How far a contact slid over a step of `dt`: its in-plane speed times `dt`, while it bears load.
@@ -293,6 +304,13 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         {
             self.time_off_terrain += dt;
         }
+        let command = walker.command();
+        let along = glam::DVec2::new(command.forward, command.sideways).normalize_or_zero();
+        if let Some(last) = a.last_position {
+            let step = glam::DMat2::from_angle(yaw) * along;
+            self.command_progress += (position - last).truncate().dot(step);
+        }
+        a.last_position = Some(position);
         let moved = position - start;
         let (s_h, c_h) = heading.sin_cos();
         self.forward_distance = moved.x * c_h + moved.y * s_h;
@@ -454,6 +472,15 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         better: Better::Higher,
         bounds: &[Bound::min("forward_min")],
         value: |m| Value::One(m.forward_distance),
+    },
+    Metric {
+        name: "command_progress",
+        unit: "m",
+        what: "body travel along the commanded direction, step by step (negative: went backwards)",
+        noise: Some(BACKWARDS_NOISE),
+        better: Better::Higher,
+        bounds: &[],
+        value: |m| Value::One(m.command_progress),
     },
     Metric {
         name: "sideways_distance",

@@ -36,6 +36,8 @@ pub struct WalkRun {
     pub terrain_following: bool,
     /// Move the feet's targets with their spheres' rolling (see [`crate::gait::controller`]).
     pub rolling_feet: bool,
+    /// The reactive gait (see [`crate::gait`]'s `reactive`).
+    pub reactive_gait: bool,
     /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
     pub load_feedforward: bool,
     /// Seconds walked.
@@ -113,6 +115,7 @@ impl WalkRun {
         let mut walker = Walker::new(hexapod, controller, self.commands.at(0.0), self.settle_time);
         walker.terrain_following = self.terrain_following;
         walker.load_feedforward = self.load_feedforward;
+        walker.reactive = self.reactive_gait;
         let every = decimation(self.log_rate, dt);
 
         let name = match self.settings.articulation {

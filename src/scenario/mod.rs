@@ -85,6 +85,8 @@ struct WalkSetup {
     follow_terrain: bool,
     /// Feet targets moved with their spheres' rolling (see `gait::controller`).
     rolling_feet: bool,
+    /// The reactive gait (see `gait::reactive`).
+    reactive_gait: bool,
     /// Servo targets held against the load (see `sim::Walker::load_feedforward`).
     feedforward: bool,
     start: spec::StartSpec,
@@ -297,6 +299,7 @@ impl Scenario {
             settle_time: w.settle,
             terrain_following: w.follow_terrain,
             rolling_feet: w.rolling_feet,
+            reactive_gait: w.reactive_gait,
             load_feedforward: w.feedforward,
             duration: self.spec.duration,
             log_rate: self.log_rate,

@@ -179,13 +179,14 @@ fn resolve_terrain(
 }
 
 /// A walk's fields that a ball scenario must not set.
-fn walk_fields(spec: &ScenarioSpec) -> [(&'static str, bool); 11] {
+fn walk_fields(spec: &ScenarioSpec) -> [(&'static str, bool); 12] {
     [
         ("robot", spec.robot.is_some()),
         ("gait", spec.gait.is_some()),
         ("settle", spec.settle.is_some()),
         ("follow_terrain", spec.follow_terrain.is_some()),
         ("rolling_feet", spec.rolling_feet.is_some()),
+        ("reactive_gait", spec.reactive_gait.is_some()),
         ("articulation", spec.articulation.is_some()),
         ("solver_iterations", spec.solver_iterations.is_some()),
         ("pgs_iterations", spec.pgs_iterations.is_some()),
@@ -399,6 +400,7 @@ fn resolve_walk(
         settle,
         follow_terrain: spec.follow_terrain.unwrap_or(false),
         rolling_feet: spec.rolling_feet.unwrap_or(true),
+        reactive_gait: spec.reactive_gait.unwrap_or(false),
         feedforward: spec.servo.and_then(|s| s.feedforward).unwrap_or(true),
         start: spec.start.unwrap_or_default(),
         ground,

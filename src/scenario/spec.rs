@@ -117,6 +117,10 @@ pub struct ScenarioSpec {
     /// foot instead of scrubbing it (default true; see `gait::controller`).
     #[serde(default)]
     pub rolling_feet: Option<bool>,
+    /// The reactive gait: feet find the ground by touch, a blocked swing lifts higher, the body
+    /// follows the feet that are down (default false; see `gait::reactive`).
+    #[serde(default)]
+    pub reactive_gait: Option<bool>,
     /// How the links are joined: `multibody` (default) or `impulse` (faster; joints drift a little).
     #[serde(default)]
     pub articulation: Option<crate::sim::Articulation>,

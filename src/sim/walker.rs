@@ -2,8 +2,9 @@
 
 use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
-use crate::gait::{GaitController, GaitTargets, VelocityCommand};
-use crate::robot::statics;
+use crate::gait::{FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand};
+use crate::robot::RobotModel;
+use glam::{DAffine3, DVec3};
 
 /// The walking robot: a [`Hexapod`] and the [`GaitController`] that sets its servo targets.
 pub struct Walker {
@@ -23,11 +24,19 @@ pub struct Walker {
     /// [`Walker::hold_load`]; on by default); off: the targets are the gait's angles and the legs
     /// sag under load.
     pub load_feedforward: bool,
+    /// The reactive gait (`gait::reactive`): feet find the ground by touch; off: the
+    /// schedule's heights.
+    pub reactive: bool,
+    /// What each foot felt in the last step (normal force, ground force in the body frame).
+    feel: [FootFeel; 6],
     /// Joint targets given from outside (rad, by model joint), in place of the gait's.
     given_targets: Option<Vec<f64>>,
     /// The feed-forward's link poses and holding torques, kept between steps (no allocation).
     poses: Vec<glam::DAffine3>,
     torques: Vec<f64>,
+    /// The terrain height the body rides above when following the terrain, smoothed (see
+    /// [`Walker::ground_reference`]); None until the first step that follows it.
+    ground_reference: Option<f64>,
 }
 
 /// A step of the walker: the robot's state and the gait's targets for it.
@@ -58,14 +67,22 @@ impl Walker {
             clamped_steps: 0,
             terrain_following: false,
             load_feedforward: true,
+            reactive: false,
+            feel: [FootFeel::default(); 6],
             given_targets: None,
             poses: Vec::new(),
             torques: vec![0.0; n],
+            ground_reference: None,
         }
     }
 
     pub fn hexapod(&self) -> &Hexapod {
         &self.hexapod
+    }
+
+    /// The velocity command the gait follows.
+    pub fn command(&self) -> VelocityCommand {
+        self.command
     }
 
     pub fn set_command(&mut self, command: VelocityCommand) {
@@ -82,19 +99,61 @@ impl Walker {
         self.hexapod.time() - self.settle_time
     }
 
-    /// How far the terrain under a body-frame point lies above the terrain under the body, seen
-    /// with the body's heading only (its tilt is what following the terrain avoids).
-    fn ground_relative(hexapod: &Hexapod) -> impl Fn(glam::DVec3) -> f64 + '_ {
+    /// How far the terrain under a body-frame point lies above `under_body`, the height the body
+    /// rides above, seen with the body's heading only (its tilt is what following the terrain
+    /// avoids).
+    fn ground_relative(hexapod: &Hexapod, under_body: f64) -> impl Fn(glam::DVec3) -> f64 + '_ {
         let body = hexapod.body_frame();
         let terrain = hexapod.terrain();
         let heading =
             glam::DMat3::from_rotation_z(body.matrix3.x_axis.y.atan2(body.matrix3.x_axis.x));
         let center = body.translation;
-        let under_body = terrain.height(center.x, center.y);
         move |p: glam::DVec3| {
             let w = center + heading * p;
             terrain.height(w.x, w.y) - under_body
         }
+    }
+
+    /// The height the body rides above when following the terrain: the terrain's mean height
+    /// under the hips, low-passed with a time constant of a quarter gait period. The height
+    /// under the body's centre alone steps by a whole riser as the centre crosses it, and every
+    /// foot's target stepped with it in one step (hex18 on 2 cm stairs: 0.25 rad at every swing
+    /// femur, all six feet thrown off the ground); under six hips it steps by a sixth, and the
+    /// filter spreads that over the next steps.
+    fn ground_reference(&mut self) -> f64 {
+        let model = self.hexapod.model();
+        let body = self.hexapod.body_frame();
+        let terrain = self.hexapod.terrain();
+        let heading =
+            glam::DMat3::from_rotation_z(body.matrix3.x_axis.y.atan2(body.matrix3.x_axis.x));
+        let hips = model.legs.iter().map(|leg| {
+            let hip = model.joints[leg.joints[0]].origin.translation;
+            let w = body.translation + heading * hip;
+            terrain.height(w.x, w.y)
+        });
+        let mean = hips.sum::<f64>() / model.legs.len() as f64;
+        let reference = match self.ground_reference {
+            None => mean,
+            Some(last) => {
+                let tau = 0.25 * self.controller.gait().period;
+                let rate = (self.hexapod.dt() / tau).min(1.0);
+                last + (mean - last) * rate
+            }
+        };
+        self.ground_reference = Some(reference);
+        reference
+    }
+
+    /// [`Self::ground_relative`] scaled to what the legs can follow
+    /// ([`GaitController::levelling`]).
+    fn ground_within_reach<'a>(
+        hexapod: &'a Hexapod,
+        controller: &GaitController,
+        under_body: f64,
+    ) -> impl Fn(glam::DVec3) -> f64 + 'a {
+        let ground = Self::ground_relative(hexapod, under_body);
+        let share = controller.levelling(&ground);
+        move |p| share * ground(p)
     }
 
     /// Sets the servos' targets to the legs' `angles`, held against the load of the feet in
@@ -115,22 +174,24 @@ impl Walker {
 
     /// A position servo under load stands τ/k short of its target (τ = k·(q* − q) at rest), so
     /// a stance leg sags and, with three legs pushing against each other, splays and slides.
-    /// Feed-forward: with the robot standing level in the target pose, each joint's target is
-    /// moved on by τ/k, τ the torque it holds (`statics::holding_torques`) — its outboard links'
-    /// weight and its foot's share of the body's weight (`statics::stance_loads`: force and
-    /// moment balance on the feet the gait has down, none on a foot in swing). The servo then
-    /// comes to rest on the gait's angle under the planned load.
+    /// Feed-forward: with the robot standing in the target pose, each joint's target is moved on
+    /// by τ/k, τ the torque it holds ([`holding_torques`]) — its outboard links' weight and its
+    /// foot's share of the body's weight ([`stance_loads`]: force and moment balance on the feet
+    /// the gait has down, none on a foot in swing). The servo then comes to rest on the gait's
+    /// angle under the planned load.
+    ///
+    /// The weight acts along gravity as the body's attitude shows it (an IMU's reading), not
+    /// along the body's −z: walking parallel to a 25° slope, part of the weight pulls along the
+    /// body, and planned as vertical loads the stance legs took it up through their compliance
+    /// each step and the feet slid (uphill, blind: 1.77 m in 20 s, the worst foot sliding
+    /// 0.27 m; planned along gravity: 2.09 m, 0.085 m).
     fn hold_load(&mut self, stance: [bool; 6]) {
         let model = self.hexapod.model();
         model.link_poses_into(&self.targets_by_joint, &mut self.poses);
-        let loads = statics::stance_loads(model, &self.poses, STANDARD_GRAVITY, stance);
-        statics::holding_torques(
-            model,
-            &self.poses,
-            STANDARD_GRAVITY,
-            &loads,
-            &mut self.torques,
-        );
+        let body = self.hexapod.body_frame().matrix3;
+        let gravity = body.transpose() * DVec3::new(0.0, 0.0, -STANDARD_GRAVITY);
+        let loads = stance_loads(model, &self.poses, gravity, stance);
+        holding_torques(model, &self.poses, gravity, &loads, &mut self.torques);
         let stiffness = self.hexapod.gains().stiffness;
         for (target, torque) in self.targets_by_joint.iter_mut().zip(&self.torques) {
             *target += torque / stiffness;
@@ -176,20 +237,30 @@ impl Walker {
             let period = self.controller.gait().period;
             // ramp the stride up over the first cycle so the feet leave the standing pose smoothly
             let blend = (t / period).min(1.0);
+            if self.reactive != self.controller.is_reactive() {
+                let model = self.hexapod.model();
+                let share = model.total_mass() * STANDARD_GRAVITY / 6.0;
+                let reactive = Reactive::new(share, self.hexapod.dt());
+                self.controller
+                    .set_reactive(self.reactive.then_some(reactive));
+            }
+            self.controller.feel(self.feel);
             let targets = if self.terrain_following {
-                let ground = Self::ground_relative(&self.hexapod);
+                let under_body = self.ground_reference();
+                let ground = Self::ground_within_reach(&self.hexapod, &self.controller, under_body);
                 self.controller.targets(t, self.command, blend, ground)
             } else {
                 self.controller.targets(t, self.command, blend, |_| 0.0)
             };
-            self.set_leg_targets(targets.joint_angles, targets.phases.map(|p| p.is_stance()));
+            self.set_leg_targets(targets.joint_angles, targets.grounded);
             if targets.clamped.iter().any(|&c| c) {
                 self.clamped_steps += 1;
             }
             self.last_targets = Some(targets);
         } else if self.terrain_following {
             // stand level from the start, so the walk does not begin tilted with the ground
-            let ground = Self::ground_relative(&self.hexapod);
+            let under_body = self.ground_reference();
+            let ground = Self::ground_within_reach(&self.hexapod, &self.controller, under_body);
             let angles = self.controller.standing_on(ground);
             self.set_leg_targets(angles, [true; 6]);
         } else if self.load_feedforward {
@@ -197,10 +268,103 @@ impl Walker {
             self.set_leg_targets(angles, [true; 6]);
         }
         let robot = self.hexapod.step();
+        let to_body = robot.body.matrix3.transpose();
+        self.feel = robot.foot_contacts.map(|c| {
+            c.map_or(FootFeel::default(), |c| FootFeel {
+                normal_force: c.normal_force,
+                force: to_body * c.force,
+            })
+        });
         WalkSample {
             robot,
             gait: self.last_targets,
             settling: t < 0.0,
+        }
+    }
+}
+
+/// Each foot's force (N, along −`gravity`, in `legs` order) holding the robot still on the feet in
+/// `stance`, its links at `poses` (body frame) and `gravity` (m/s², body frame): ΣF_i = m·|g| and
+/// no moment about the centre of mass, Σ F_i·(p_i − c) ∥ g — exact on three feet, least squares
+/// (minimum ΣF_i²) on more. With gravity along −z, `robot::statics::stance_loads`; a foot the
+/// balance would pull on gets none, the rest scaled to the weight; feet in a line share it.
+fn stance_loads(
+    model: &RobotModel,
+    poses: &[DAffine3],
+    gravity: DVec3,
+    stance: [bool; 6],
+) -> [f64; 6] {
+    let weight = model.total_mass() * gravity.length();
+    let down = gravity.normalize_or(DVec3::NEG_Z);
+    // two axes across gravity: the body's x and y when it stands level
+    let across_y = down.cross(DVec3::X).normalize_or(DVec3::Y) * -1.0;
+    let across_x = across_y.cross(-down);
+    let com = model.centre_of_mass(poses);
+    let feet: [glam::DVec2; 6] = std::array::from_fn(|k| {
+        let leg = &model.legs[k];
+        let p = poses[leg.foot_link].transform_point3(leg.foot.center) - com;
+        glam::DVec2::new(p.dot(across_x), p.dot(across_y))
+    });
+    let count = stance.iter().filter(|&&s| s).count();
+    if count == 0 {
+        return [0.0; 6];
+    }
+    let equal = weight / count as f64;
+    // F = Aᵀ(AAᵀ)⁻¹b with A's columns (1, u_i, v_i) and b = (m·g, 0, 0)
+    let row = |k: usize| DVec3::new(1.0, feet[k].x, feet[k].y);
+    let normal = (0..6)
+        .filter(|&k| stance[k])
+        .map(|k| {
+            let a = row(k);
+            glam::DMat3::from_cols(a * a.x, a * a.y, a * a.z)
+        })
+        .fold(glam::DMat3::ZERO, |sum, m| sum + m);
+    let scale = feet.iter().map(|f| f.length_squared()).sum::<f64>() + 1e-12;
+    if normal.determinant().abs() <= 1e-9 * scale * scale {
+        return std::array::from_fn(|k| if stance[k] { equal } else { 0.0 });
+    }
+    let lambda = normal.inverse() * DVec3::new(weight, 0.0, 0.0);
+    let mut loads: [f64; 6] = std::array::from_fn(|k| {
+        if stance[k] {
+            row(k).dot(lambda).max(0.0)
+        } else {
+            0.0
+        }
+    });
+    let total: f64 = loads.iter().sum();
+    if total > 0.0 {
+        loads.iter_mut().for_each(|f| *f *= weight / total);
+        loads
+    } else {
+        std::array::from_fn(|k| if stance[k] { equal } else { 0.0 })
+    }
+}
+
+/// Into `torques`, per model joint, the servo torque (N·m about the joint's axis, on the child)
+/// holding the links at `poses` (body frame) under `gravity` (m/s², body frame), each foot pushed
+/// against gravity by `loads` (N): τ_j = −a_j·[Σ_k (c_k − o_j) × m_k·g + (f − o_j) × F], over the
+/// leg's links outboard of joint j (`robot::statics::holding_torques` with gravity along −z).
+fn holding_torques(
+    model: &RobotModel,
+    poses: &[DAffine3],
+    gravity: DVec3,
+    loads: &[f64; 6],
+    torques: &mut [f64],
+) {
+    let up = -gravity.normalize_or(DVec3::NEG_Z);
+    torques.fill(0.0);
+    for (leg, &load) in model.legs.iter().zip(loads) {
+        let ground_force = up * load;
+        let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
+        for (i, &j) in leg.joints.iter().enumerate() {
+            let (origin, axis) = model.joint_axis(poses, j);
+            let mut moment = (foot - origin).cross(ground_force);
+            for &outboard in &leg.joints[i..] {
+                let link = model.joints[outboard].child;
+                let com = poses[link].transform_point3(model.links[link].com);
+                moment += (com - origin).cross(gravity * model.links[link].mass);
+            }
+            torques[j] = -axis.dot(moment);
         }
     }
 }
