@@ -84,22 +84,26 @@ fn among_walls(
     }
     let buried = center.z < terrain.height(center.x, center.y);
     let depth = |distance: f64| radius + if buried { distance } else { -distance };
+    let mut touching = Touching::default();
     let mut nearest = center.distance(below.point);
     let mut best = SphereGeometry {
         penetration: depth(nearest),
         ..below
     };
+    touching.add(best);
     if best.penetration <= 0.0 {
         for (u, v) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)] {
             let start = (center.x + u * radius, center.y + v * radius);
             let g = closest_from(terrain, center, radius, orientation, start);
             let distance = center.distance(g.point);
+            let g = SphereGeometry {
+                penetration: depth(distance),
+                ..g
+            };
+            touching.add(g);
             if distance < nearest {
                 nearest = distance;
-                best = SphereGeometry {
-                    penetration: depth(distance),
-                    ..g
-                };
+                best = g;
             }
         }
     }
@@ -107,23 +111,112 @@ fn among_walls(
         let (point, face) = wall.closest(center);
         let offset = center - point;
         let distance = offset.length();
+        let normal = if distance < 1e-12 {
+            face
+        } else if buried {
+            -offset / distance
+        } else {
+            offset / distance
+        };
+        let g = SphereGeometry {
+            penetration: depth(distance),
+            point,
+            frame: GroundFrame::from_normal(normal),
+        };
+        touching.add(g);
         if distance < nearest {
             nearest = distance;
-            let normal = if distance < 1e-12 {
-                face
-            } else if buried {
-                -offset / distance
-            } else {
-                offset / distance
-            };
-            best = SphereGeometry {
-                penetration: depth(distance),
-                point,
-                frame: GroundFrame::from_normal(normal),
-            };
+            best = g;
         }
     });
-    best
+    if buried {
+        best
+    } else {
+        touching.in_corner(best, center, radius)
+    }
+}
+
+/// The most surfaces a sphere is taken to touch at once in a concave corner (a pit's floor and
+/// two walls, a box's side and the ground: three at most on a grid's walls and treads; one spare).
+const MAX_TOUCHING: usize = 4;
+
+/// The surfaces (treads, wall faces, edges) a sphere clear of the ground with its centre
+/// reaches into, each with its depth and normal, for [`Touching::in_corner`].
+#[derive(Default)]
+struct Touching {
+    found: [Option<SphereGeometry>; 8],
+    count: usize,
+}
+
+impl Touching {
+    fn add(&mut self, g: SphereGeometry) {
+        if g.penetration > 0.0 && self.count < self.found.len() {
+            self.found[self.count] = Some(g);
+            self.count += 1;
+        }
+    }
+
+    /// In a concave corner — a foot on a pit's floor against its wall, a sphere between a
+    /// box's side and the ground — the sphere presses into each surface at once; the nearest
+    /// alone (the closest point) flips between them as the sphere moves, the force turning
+    /// 90° with the depth unchanged from one step to the next, and the two springs, each
+    /// missing every other step, let the foot chatter into the wall and the floor (measured on
+    /// `ladder/stones.toml` at gap 0.06, perceptive: a foot in a pit's corner swinging 4, 6,
+    /// 11, 21, 27 mm step to step until its centre was 5.6 mm inside the stone, a divergence;
+    /// on `ladder/obstacles.toml` at height 0.04, blind: a foot at a box's foot 9.5 mm into its
+    /// side, 70–110 N alternating between −y and +z each step). So the surfaces that face each
+    /// other — each one's contact point on the outer side of the other's tangent plane — are
+    /// summed as springs: depth vector Σ xᵢ·nᵢ, its length the depth and its direction the
+    /// normal, which is exactly the two springs' force (k·Σ xᵢ·nᵢ) for the linear law, and which
+    /// changes continuously as a surface starts or stops touching. A convex edge and the tread
+    /// beside it do not face each other (the edge lies in the tread's plane), nor do the pieces
+    /// of one face: those keep the nearest alone, so a sphere touching one surface gets what it
+    /// got before, bit for bit. A centre inside the ground keeps its nearest way out.
+    fn in_corner(&self, best: SphereGeometry, center: DVec3, radius: f64) -> SphereGeometry {
+        if self.count < 2 {
+            return best;
+        }
+        // faces another surface: its point beyond the other's tangent plane, and the other's
+        // beyond its own (1 µm: a contact point on a face's plane, as an edge on its tread's,
+        // does not face it)
+        let facing = |a: &SphereGeometry, b: &SphereGeometry| {
+            (b.point - a.point).dot(a.frame.normal) > 1e-6
+                && (a.point - b.point).dot(b.frame.normal) > 1e-6
+        };
+        let mut chosen = [best; MAX_TOUCHING];
+        let mut n = 1;
+        let mut sum = best.penetration * best.frame.normal;
+        // deepest first, so that of two pieces of one face the deeper is kept
+        let mut order: [usize; 8] = std::array::from_fn(|k| k);
+        let found = &self.found[..self.count];
+        let depth_of = |k: usize| found[k].map_or(f64::NEG_INFINITY, |g| g.penetration);
+        order[..self.count].sort_by(|&a, &b| depth_of(b).total_cmp(&depth_of(a)));
+        for &k in &order[..self.count] {
+            let Some(g) = found[k] else { continue };
+            if n < MAX_TOUCHING && chosen[..n].iter().all(|c| facing(c, &g)) {
+                chosen[n] = g;
+                n += 1;
+                sum += g.penetration * g.frame.normal;
+            }
+        }
+        if n == 1 {
+            return best;
+        }
+        let penetration = sum.length();
+        if penetration < 1e-12 {
+            // squeezed evenly between two faces: the springs cancel
+            return SphereGeometry {
+                penetration: 0.0,
+                ..best
+            };
+        }
+        let normal = sum / penetration;
+        SphereGeometry {
+            penetration,
+            point: center - (radius - penetration) * normal,
+            frame: GroundFrame::from_normal(normal),
+        }
+    }
 }
 
 /// The fixed-point search for the closest surface point, from the ground at `start`. The gap is
@@ -298,15 +391,15 @@ mod tests {
 
     #[test]
     fn a_sphere_pushed_into_a_riser_touches_its_face_horizontally() {
-        // 3 mm into the face, level with nothing below (the lower tread just touched)
-        let g = against_brute_force(DVec3::new(WALL - 0.047, 0.1, 0.0499));
+        // 3 mm into the face, the lower tread 0.1 mm clear
+        let g = against_brute_force(DVec3::new(WALL - 0.047, 0.1, 0.0501));
         assert!((g.penetration - 0.003).abs() < 1e-9, "{}", g.penetration);
         assert!(
             g.frame.normal.abs_diff_eq(-DVec3::X, 1e-12),
             "{}",
             g.frame.normal
         );
-        assert!((g.point.x - WALL).abs() < 1e-12 && (g.point.z - 0.0499).abs() < 1e-12);
+        assert!((g.point.x - WALL).abs() < 1e-12 && (g.point.z - 0.0501).abs() < 1e-12);
         // the frame is a frame
         let f = g.frame;
         assert!((f.tangent_x.cross(f.tangent_y) - f.normal).length() < 1e-12);
@@ -340,9 +433,172 @@ mod tests {
         // clear of both, 2 mm from each: a gap of 2 mm, not a depth
         let g = against_brute_force(DVec3::new(WALL - 0.052, 0.0, 0.052));
         assert!((g.penetration + 0.002).abs() < 1e-9, "{}", g.penetration);
-        // in the corner, 1 mm into the tread and 2 mm into the face: the face is nearer
-        let g = against_brute_force(DVec3::new(WALL - 0.048, 0.0, 0.049));
+    }
+
+    /// The least translation that takes a sphere (r = 0.05) at `center` out of the riser's ground,
+    /// by brute force: the ground's profile sampled every 1 µm (it is uniform along y), and in
+    /// each direction of the x–z plane the shortest move, by bisection, after which the sphere
+    /// is clear of every sample's column; directions 1° apart, then 0.002° apart within 1° of the
+    /// best (the shortest move has a kink at the way out of a corner). For a sphere against faces
+    /// at right angles this is the depth vector's length √(Σ xᵢ²), what the summed springs report.
+    fn brute_force_way_out(center: DVec3) -> (f64, DVec3) {
+        let (terrain, r) = (riser(), 0.05);
+        let profile: Vec<(f64, f64)> = (0..=140_000)
+            .map(|k| center.x - 0.07 + k as f64 * 1e-6)
+            .map(|x| (x, terrain.height(x, center.y)))
+            .collect();
+        let clear = |p: DVec3| {
+            profile
+                .iter()
+                .filter(|(x, _)| (x - p.x).abs() < r)
+                .all(|&(x, h)| (x - p.x).hypot((p.z - h).max(0.0)) >= r)
+        };
+        let shortest = |degrees: f64| {
+            let angle = degrees.to_radians();
+            let direction = DVec3::new(angle.cos(), 0.0, angle.sin());
+            let (mut lo, mut hi) = (0.0, 0.02);
+            for _ in 0..30 {
+                let mid = 0.5 * (lo + hi);
+                if clear(center + mid * direction) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            (hi, direction, degrees)
+        };
+        let least = |a: (f64, DVec3, f64), b: (f64, DVec3, f64)| if b.0 < a.0 { b } else { a };
+        let start = (f64::INFINITY, DVec3::ZERO, 0.0);
+        let coarse = (0..360).map(|k| shortest(k as f64)).fold(start, least);
+        let fine = (0..=1000)
+            .map(|k| shortest(coarse.2 - 1.0 + k as f64 * 0.002))
+            .fold(coarse, least);
+        (fine.0, fine.1)
+    }
+
+    #[test]
+    fn a_sphere_in_the_corner_of_a_tread_and_a_riser_presses_into_both() {
+        // 1 mm into the tread and 2 mm into the face: both springs, along (−2, 0, 1)/√5; the
+        // nearest alone said 2 mm along −x
+        let center = DVec3::new(WALL - 0.048, 0.0, 0.049);
+        let g = sphere_geometry(&riser(), center, 0.05, Orientation::Exact);
+        let expected = DVec3::new(-0.002, 0.0, 0.001);
+        assert!(
+            (g.penetration - expected.length()).abs() < 1e-12,
+            "{}",
+            g.penetration
+        );
+        assert!(g.frame.normal.abs_diff_eq(expected.normalize(), 1e-12));
+        // the centre on the normal through the point, the gap along it
+        assert!(((center - g.point).dot(g.frame.normal) - (0.05 - g.penetration)).abs() < 1e-12);
+        assert!((center - g.point).cross(g.frame.normal).length() < 1e-12);
+        // against the brute force's way out, here and where the two are equally deep (where the
+        // nearest alone turned the force by 90°)
+        for center in [center, DVec3::new(WALL - 0.047, 0.3, 0.047)] {
+            let g = sphere_geometry(&riser(), center, 0.05, Orientation::Exact);
+            let (depth, direction) = brute_force_way_out(center);
+            assert!(
+                (g.penetration - depth).abs() < 2e-6,
+                "{} mm against {} mm",
+                g.penetration * 1e3,
+                depth * 1e3
+            );
+            assert!(
+                g.frame.normal.angle_between(direction) < 0.25f64.to_radians(),
+                "{} against {direction}",
+                g.frame.normal
+            );
+        }
+    }
+
+    /// Sliding into the corner, the force turns continuously from the tread's normal to the
+    /// face's and its size never jumps: 10 µm steps change the normal by at most 0.3° (10 µm of
+    /// the face's depth against 2 mm of the tread's; the nearest alone turned it 90°) and the
+    /// depth by at most the step.
+    #[test]
+    fn the_force_turns_continuously_into_a_corner() {
+        let terrain = riser();
+        let at = |x: f64| {
+            sphere_geometry(
+                &terrain,
+                DVec3::new(x, 0.0, 0.048),
+                0.05,
+                Orientation::Exact,
+            )
+        };
+        let mut last = at(WALL - 0.055);
+        assert!(last.frame.normal.abs_diff_eq(DVec3::Z, 1e-12));
+        for k in 1..=1000 {
+            let g = at(WALL - 0.055 + k as f64 * 1e-5);
+            let turn = g.frame.normal.angle_between(last.frame.normal);
+            assert!(turn < 0.3f64.to_radians(), "at step {k}: {turn} rad");
+            assert!(
+                (g.penetration - last.penetration).abs() <= 1.0001e-5,
+                "at step {k}"
+            );
+            last = g;
+        }
+        // 5 mm into the face and 2 mm into the tread at the end
+        assert!((last.penetration - 0.029e-3f64.sqrt()).abs() < 1e-12);
+    }
+
+    /// In a stepped pit's bottom corner a sphere presses into the floor and two walls at right
+    /// angles: three springs.
+    #[test]
+    fn a_sphere_in_a_pits_corner_presses_into_the_floor_and_both_walls() {
+        // the bottom, 0.2 m down, within 0.205 m of the centre (walls midway between samples)
+        let pit = crate::terrain::pyramid_stairs([2.0, 2.0], [0.0, 0.0], 2, 0.2, -0.1, 0.41, 0.01)
+            .unwrap();
+        assert!((pit.height(0.1, 0.1) + 0.2).abs() < 1e-12);
+        let center = DVec3::new(0.205 - 0.048, 0.205 - 0.047, -0.2 + 0.049);
+        let g = sphere_geometry(&pit, center, 0.05, Orientation::Exact);
+        let expected = DVec3::new(-0.002, -0.003, 0.001);
+        assert!(
+            (g.penetration - expected.length()).abs() < 1e-12,
+            "{}",
+            g.penetration
+        );
+        assert!(
+            g.frame.normal.abs_diff_eq(expected.normalize(), 1e-12),
+            "{}",
+            g.frame.normal
+        );
+    }
+
+    /// A foot in a trench as wide as itself touches both walls: the springs push it to the middle,
+    /// and where they balance they cancel instead of the nearer wall pushing alone.
+    #[test]
+    fn a_foot_in_a_trench_its_own_width_is_pushed_to_the_middle() {
+        // walls at x = 0.505 and 0.525, 0.1 m deep
+        let trench =
+            crate::terrain::gaps([1.0, 0.5], [0.5, 0.0], 0.505, 0.02, 0.4, 0.1, 0.01).unwrap();
+        assert!((trench.height(0.515, 0.0) + 0.1).abs() < 1e-12);
+        // 1 mm off the middle, 5 cm above the floor: 1 mm into one wall, 1 mm clear of the other
+        let g = sphere_geometry(
+            &trench,
+            DVec3::new(0.514, 0.0, -0.05),
+            0.01,
+            Orientation::Exact,
+        );
+        assert!((g.penetration - 0.001).abs() < 1e-12, "{}", g.penetration);
+        assert!(g.frame.normal.abs_diff_eq(DVec3::X, 1e-12));
+        // an 11.5 mm sphere 1 mm off the middle: 2.5 and 0.5 mm into the walls, net 2 mm
+        let g = sphere_geometry(
+            &trench,
+            DVec3::new(0.514, 0.0, -0.05),
+            0.0115,
+            Orientation::Exact,
+        );
         assert!((g.penetration - 0.002).abs() < 1e-12, "{}", g.penetration);
+        assert!(g.frame.normal.abs_diff_eq(DVec3::X, 1e-12));
+        // in the middle the springs cancel
+        let g = sphere_geometry(
+            &trench,
+            DVec3::new(0.515, 0.0, -0.05),
+            0.0115,
+            Orientation::Exact,
+        );
+        assert!(g.penetration.abs() < 1e-12, "{}", g.penetration);
     }
 
     #[test]
