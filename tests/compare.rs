@@ -147,9 +147,10 @@ fn a_broken_comparison_says_where() {
     }
 }
 
-/// A setting that diverges (hex18 on a contact spring too stiff for the 1 ms step, √(k/m)·h = 4.0
-/// on a foot link, run though the set-up refuses it: `allow_unstable_dt`; it diverges at 2.55 s) is reported with why, exit 1, and the others are still
-/// recorded, the diverged one up to where it stopped.
+/// A setting that diverges (hex18 on a contact spring far too stiff for the 1 ms step, √(k/m)·h ≈
+/// 9 on a foot link, run though the set-up refuses it: `allow_unstable_dt`; it diverges within
+/// the first steps, whatever the gait does) is reported with why, exit 1, and the others are
+/// still recorded, the diverged one up to where it stopped.
 #[test]
 fn a_diverging_setting_is_reported_and_the_rest_recorded() {
     let dir = scratch("compare-diverge");
@@ -168,7 +169,7 @@ fn a_diverging_setting_is_reported_and_the_rest_recorded() {
     std::fs::write(
         &file,
         format!(
-            "scenario = {:?}\nduration = 6.0\n[[setting]]\nname = \"hexsim\"\n[[setting]]\nname = \"stiff\"\ncontact = {{ stiffness = 8e5 }}\n",
+            "scenario = {:?}\nduration = 6.0\n[[setting]]\nname = \"hexsim\"\n[[setting]]\nname = \"stiff\"\ncontact = {{ stiffness = 4e6 }}\n",
             scenario.to_string_lossy()
         ),
     )
@@ -188,10 +189,10 @@ fn a_diverging_setting_is_reported_and_the_rest_recorded() {
         "{stdout}"
     );
     let contents = read_back(&rrd).unwrap();
-    for name in ["hexsim", "stiff"] {
+    for (name, least) in [("hexsim", 100), ("stiff", 1)] {
         let rows = contents
             .at(false, &format!("plots/forward_x/{name}"))
             .map_or(0, |s| s.rows);
-        assert!(rows > 100, "{name}: {rows} samples");
+        assert!(rows >= least, "{name}: {rows} samples");
     }
 }

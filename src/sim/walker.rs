@@ -37,6 +37,8 @@ pub struct Walker {
     /// The terrain height the body rides above when following the terrain, smoothed (see
     /// [`Walker::ground_reference`]); None until the first step that follows it.
     ground_reference: Option<f64>,
+    /// Its rate of change (m/s), for the tracker.
+    ground_rate: f64,
 }
 
 /// A step of the walker: the robot's state and the gait's targets for it.
@@ -73,6 +75,7 @@ impl Walker {
             poses: Vec::new(),
             torques: vec![0.0; n],
             ground_reference: None,
+            ground_rate: 0.0,
         }
     }
 
@@ -115,7 +118,7 @@ impl Walker {
     }
 
     /// The height the body rides above when following the terrain: the terrain's mean height
-    /// under the hips, low-passed with a time constant of a quarter gait period. The height
+    /// under the hips, tracked over about a quarter gait period. The height
     /// under the body's centre alone steps by a whole riser as the centre crosses it, and every
     /// foot's target stepped with it in one step (hex18 on 2 cm stairs: 0.25 rad at every swing
     /// femur, all six feet thrown off the ground); under six hips it steps by a sixth, and the
@@ -132,12 +135,22 @@ impl Walker {
             terrain.height(w.x, w.y)
         });
         let mean = hips.sum::<f64>() / model.legs.len() as f64;
+        // a first-order lag would trail a slope by v·τ; this one follows a ramp exactly and
+        // spreads a step over a quarter period (an α-β tracker: level and rate)
         let reference = match self.ground_reference {
-            None => mean,
+            None => {
+                self.ground_rate = 0.0;
+                mean
+            }
             Some(last) => {
+                let dt = self.hexapod.dt();
                 let tau = 0.25 * self.controller.gait().period;
-                let rate = (self.hexapod.dt() / tau).min(1.0);
-                last + (mean - last) * rate
+                let predicted = last + self.ground_rate * dt;
+                let residual = mean - predicted;
+                let alpha = (2.0 * dt / tau).min(1.0);
+                let beta = alpha * alpha / (2.0 - alpha);
+                self.ground_rate += beta * residual / dt;
+                predicted + alpha * residual
             }
         };
         self.ground_reference = Some(reference);
