@@ -3,7 +3,7 @@
 //! of the leg's outboard weights and of its foot's ground force), and each leg's segment lengths.
 
 use super::model::{Leg, RobotModel};
-use glam::{DAffine3, DVec3};
+use glam::{DAffine3, DMat3, DVec2, DVec3};
 
 /// Per model joint, the servo torque (N·m, about the joint axis, on the child) that holds `pose`
 /// (joint angles per model joint) standing level under `gravity` (m/s²), the weight shared
@@ -39,22 +39,7 @@ pub fn holding_torques(
     loads: &[f64; 6],
     torques: &mut [f64],
 ) {
-    let g = DVec3::new(0.0, 0.0, -gravity);
-    torques.fill(0.0);
-    for (leg, &load) in model.legs.iter().zip(loads) {
-        let ground_force = DVec3::new(0.0, 0.0, load);
-        let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
-        for (i, &j) in leg.joints.iter().enumerate() {
-            let (origin, axis) = model.joint_axis(poses, j);
-            let mut moment = (foot - origin).cross(ground_force);
-            for &outboard in &leg.joints[i..] {
-                let link = model.joints[outboard].child;
-                let com = poses[link].transform_point3(model.links[link].com);
-                moment += (com - origin).cross(g * model.links[link].mass);
-            }
-            torques[j] = -axis.dot(moment);
-        }
-    }
+    holding_torques_under(model, poses, DVec3::new(0.0, 0.0, -gravity), loads, torques);
 }
 
 /// Each foot's vertical force (N, in `legs` order) holding the robot still and level on the
@@ -70,31 +55,65 @@ pub fn stance_loads(
     gravity: f64,
     stance: [bool; 6],
 ) -> [f64; 6] {
-    let weight = model.total_mass() * gravity;
+    stance_loads_under(model, poses, DVec3::new(0.0, 0.0, -gravity), stance)
+}
+
+/// Each foot's share (N) of the robot's weight under `gravity` (m/s²), standing on `feet_down`
+/// feet (at least one).
+pub fn foot_load(model: &RobotModel, gravity: f64, feet_down: usize) -> f64 {
+    model.total_mass() * gravity / feet_down.max(1) as f64
+}
+
+/// A leg's segments with its joints at zero: hip to second joint, second to third, third to the
+/// foot's centre (m).
+pub fn segment_lengths(model: &RobotModel, leg: &Leg) -> [f64; 3] {
+    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
+    let at = |j: usize| {
+        let joint = &model.joints[j];
+        (poses[joint.parent] * joint.origin).translation
+    };
+    let [a, b, c] = leg.joints.map(at);
+    let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
+    [a.distance(b), b.distance(c), c.distance(foot)]
+}
+
+/// Each foot's force (N, along −`gravity`, in `legs` order) holding the robot still on the feet in
+/// `stance`, its links at `poses` (body frame) and `gravity` (m/s², body frame): ΣF_i = m·|g| and
+/// no moment about the centre of mass, Σ F_i·(p_i − c) ∥ g — exact on three feet, least squares
+/// (minimum ΣF_i²) on more. With gravity along −z it is [`stance_loads`]; a foot the
+/// balance would pull on gets none, the rest scaled to the weight; feet in a line share it.
+pub fn stance_loads_under(
+    model: &RobotModel,
+    poses: &[DAffine3],
+    gravity: DVec3,
+    stance: [bool; 6],
+) -> [f64; 6] {
+    let weight = model.total_mass() * gravity.length();
+    let down = gravity.normalize_or(DVec3::NEG_Z);
+    // two axes across gravity: the body's x and y when it stands level
+    let across_y = down.cross(DVec3::X).normalize_or(DVec3::Y) * -1.0;
+    let across_x = across_y.cross(-down);
     let com = model.centre_of_mass(poses);
-    let feet: [DVec3; 6] = std::array::from_fn(|k| {
+    let feet: [DVec2; 6] = std::array::from_fn(|k| {
         let leg = &model.legs[k];
-        poses[leg.foot_link].transform_point3(leg.foot.center) - com
+        let p = poses[leg.foot_link].transform_point3(leg.foot.center) - com;
+        DVec2::new(p.dot(across_x), p.dot(across_y))
     });
-    let down = stance.iter().filter(|&&s| s).count();
-    if down == 0 {
+    let count = stance.iter().filter(|&&s| s).count();
+    if count == 0 {
         return [0.0; 6];
     }
-    let equal = weight / down as f64;
-    // F = Aᵀ(AAᵀ)⁻¹b with A's columns (1, x_i, y_i) and b = (m·g, 0, 0)
+    let equal = weight / count as f64;
+    // F = Aᵀ(AAᵀ)⁻¹b with A's columns (1, u_i, v_i) and b = (m·g, 0, 0)
     let row = |k: usize| DVec3::new(1.0, feet[k].x, feet[k].y);
     let normal = (0..6)
         .filter(|&k| stance[k])
         .map(|k| {
             let a = row(k);
-            glam::DMat3::from_cols(a * a.x, a * a.y, a * a.z)
+            DMat3::from_cols(a * a.x, a * a.y, a * a.z)
         })
-        .fold(glam::DMat3::ZERO, |sum, m| sum + m);
-    let scale = feet
-        .iter()
-        .map(|f| f.truncate().length_squared())
-        .sum::<f64>()
-        + 1e-12;
+        .fold(DMat3::ZERO, |sum, m| sum + m);
+    let scale = feet.iter().map(|f| f.length_squared()).sum::<f64>() + 1e-12;
     if normal.determinant().abs() <= 1e-9 * scale * scale {
         return std::array::from_fn(|k| if stance[k] { equal } else { 0.0 });
     }
@@ -115,23 +134,34 @@ pub fn stance_loads(
     }
 }
 
-/// Each foot's share (N) of the robot's weight under `gravity` (m/s²), standing on `feet_down`
-/// feet (at least one).
-pub fn foot_load(model: &RobotModel, gravity: f64, feet_down: usize) -> f64 {
-    model.total_mass() * gravity / feet_down.max(1) as f64
-}
-
-/// A leg's segments with its joints at zero: hip to second joint, second to third, third to the
-/// foot's centre (m).
-pub fn segment_lengths(model: &RobotModel, leg: &Leg) -> [f64; 3] {
-    let poses = model.link_poses(&vec![0.0; model.joints.len()]);
-    let at = |j: usize| {
-        let joint = &model.joints[j];
-        (poses[joint.parent] * joint.origin).translation
-    };
-    let [a, b, c] = leg.joints.map(at);
-    let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
-    [a.distance(b), b.distance(c), c.distance(foot)]
+/// Into `torques`, per model joint, the servo torque (N·m about the joint's axis, on the child)
+/// holding the links at `poses` (body frame) under `gravity` (m/s², body frame), each foot pushed
+/// against gravity by `loads` (N): τ_j = −a_j·[Σ_k (c_k − o_j) × m_k·g + (f − o_j) × F], over the
+/// leg's links outboard of joint j ([`holding_torques`] with gravity along −z). For a body standing
+/// tilted (on a slope), where part of the weight pulls along its plane.
+pub fn holding_torques_under(
+    model: &RobotModel,
+    poses: &[DAffine3],
+    gravity: DVec3,
+    loads: &[f64; 6],
+    torques: &mut [f64],
+) {
+    let up = -gravity.normalize_or(DVec3::NEG_Z);
+    torques.fill(0.0);
+    for (leg, &load) in model.legs.iter().zip(loads) {
+        let ground_force = up * load;
+        let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
+        for (i, &j) in leg.joints.iter().enumerate() {
+            let (origin, axis) = model.joint_axis(poses, j);
+            let mut moment = (foot - origin).cross(ground_force);
+            for &outboard in &leg.joints[i..] {
+                let link = model.joints[outboard].child;
+                let com = poses[link].transform_point3(model.links[link].com);
+                moment += (com - origin).cross(gravity * model.links[link].mass);
+            }
+            torques[j] = -axis.dot(moment);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -3,8 +3,8 @@
 use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
 use crate::gait::{FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand};
-use crate::robot::RobotModel;
-use glam::{DAffine3, DVec3};
+use crate::robot::statics;
+use glam::DVec3;
 
 /// The walking robot: a [`Hexapod`] and the [`GaitController`] that sets its servo targets.
 pub struct Walker {
@@ -188,8 +188,8 @@ impl Walker {
     /// A position servo under load stands τ/k short of its target (τ = k·(q* − q) at rest), so
     /// a stance leg sags and, with three legs pushing against each other, splays and slides.
     /// Feed-forward: with the robot standing in the target pose, each joint's target is moved on
-    /// by τ/k, τ the torque it holds ([`holding_torques`]) — its outboard links' weight and its
-    /// foot's share of the body's weight ([`stance_loads`]: force and moment balance on the feet
+    /// by τ/k, τ the torque it holds ([`statics::holding_torques_under`]) — its outboard links' weight and its
+    /// foot's share of the body's weight ([`statics::stance_loads_under`]: force and moment balance on the feet
     /// the gait has down, none on a foot in swing). The servo then comes to rest on the gait's
     /// angle under the planned load.
     ///
@@ -203,8 +203,8 @@ impl Walker {
         model.link_poses_into(&self.targets_by_joint, &mut self.poses);
         let body = self.hexapod.body_frame().matrix3;
         let gravity = body.transpose() * DVec3::new(0.0, 0.0, -STANDARD_GRAVITY);
-        let loads = stance_loads(model, &self.poses, gravity, stance);
-        holding_torques(model, &self.poses, gravity, &loads, &mut self.torques);
+        let loads = statics::stance_loads_under(model, &self.poses, gravity, stance);
+        statics::holding_torques_under(model, &self.poses, gravity, &loads, &mut self.torques);
         let stiffness = self.hexapod.gains().stiffness;
         for (target, torque) in self.targets_by_joint.iter_mut().zip(&self.torques) {
             *target += torque / stiffness;
@@ -292,92 +292,6 @@ impl Walker {
             robot,
             gait: self.last_targets,
             settling: t < 0.0,
-        }
-    }
-}
-
-/// Each foot's force (N, along −`gravity`, in `legs` order) holding the robot still on the feet in
-/// `stance`, its links at `poses` (body frame) and `gravity` (m/s², body frame): ΣF_i = m·|g| and
-/// no moment about the centre of mass, Σ F_i·(p_i − c) ∥ g — exact on three feet, least squares
-/// (minimum ΣF_i²) on more. With gravity along −z, `robot::statics::stance_loads`; a foot the
-/// balance would pull on gets none, the rest scaled to the weight; feet in a line share it.
-fn stance_loads(
-    model: &RobotModel,
-    poses: &[DAffine3],
-    gravity: DVec3,
-    stance: [bool; 6],
-) -> [f64; 6] {
-    let weight = model.total_mass() * gravity.length();
-    let down = gravity.normalize_or(DVec3::NEG_Z);
-    // two axes across gravity: the body's x and y when it stands level
-    let across_y = down.cross(DVec3::X).normalize_or(DVec3::Y) * -1.0;
-    let across_x = across_y.cross(-down);
-    let com = model.centre_of_mass(poses);
-    let feet: [glam::DVec2; 6] = std::array::from_fn(|k| {
-        let leg = &model.legs[k];
-        let p = poses[leg.foot_link].transform_point3(leg.foot.center) - com;
-        glam::DVec2::new(p.dot(across_x), p.dot(across_y))
-    });
-    let count = stance.iter().filter(|&&s| s).count();
-    if count == 0 {
-        return [0.0; 6];
-    }
-    let equal = weight / count as f64;
-    // F = Aᵀ(AAᵀ)⁻¹b with A's columns (1, u_i, v_i) and b = (m·g, 0, 0)
-    let row = |k: usize| DVec3::new(1.0, feet[k].x, feet[k].y);
-    let normal = (0..6)
-        .filter(|&k| stance[k])
-        .map(|k| {
-            let a = row(k);
-            glam::DMat3::from_cols(a * a.x, a * a.y, a * a.z)
-        })
-        .fold(glam::DMat3::ZERO, |sum, m| sum + m);
-    let scale = feet.iter().map(|f| f.length_squared()).sum::<f64>() + 1e-12;
-    if normal.determinant().abs() <= 1e-9 * scale * scale {
-        return std::array::from_fn(|k| if stance[k] { equal } else { 0.0 });
-    }
-    let lambda = normal.inverse() * DVec3::new(weight, 0.0, 0.0);
-    let mut loads: [f64; 6] = std::array::from_fn(|k| {
-        if stance[k] {
-            row(k).dot(lambda).max(0.0)
-        } else {
-            0.0
-        }
-    });
-    let total: f64 = loads.iter().sum();
-    if total > 0.0 {
-        loads.iter_mut().for_each(|f| *f *= weight / total);
-        loads
-    } else {
-        std::array::from_fn(|k| if stance[k] { equal } else { 0.0 })
-    }
-}
-
-/// Into `torques`, per model joint, the servo torque (N·m about the joint's axis, on the child)
-/// holding the links at `poses` (body frame) under `gravity` (m/s², body frame), each foot pushed
-/// against gravity by `loads` (N): τ_j = −a_j·[Σ_k (c_k − o_j) × m_k·g + (f − o_j) × F], over the
-/// leg's links outboard of joint j (`robot::statics::holding_torques` with gravity along −z).
-fn holding_torques(
-    model: &RobotModel,
-    poses: &[DAffine3],
-    gravity: DVec3,
-    loads: &[f64; 6],
-    torques: &mut [f64],
-) {
-    let up = -gravity.normalize_or(DVec3::NEG_Z);
-    torques.fill(0.0);
-    for (leg, &load) in model.legs.iter().zip(loads) {
-        let ground_force = up * load;
-        let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
-        for (i, &j) in leg.joints.iter().enumerate() {
-            let (origin, axis) = model.joint_axis(poses, j);
-            let mut moment = (foot - origin).cross(ground_force);
-            for &outboard in &leg.joints[i..] {
-                let link = model.joints[outboard].child;
-                let com = poses[link].transform_point3(model.links[link].com);
-                moment += (com - origin).cross(gravity * model.links[link].mass);
-            }
-            torques[j] = -axis.dot(moment);
         }
     }
 }
