@@ -83,69 +83,57 @@ where
         })
 }
 
-/// T_SS·x = rhs for `m` sticking contacts, from their 2×2 blocks: in fixed-size storage up to
-/// [`MAX_JOINT_CONTACTS`], else in storage of their size.
+/// T_SS·x = rhs for `m` sticking contacts, from their 2×2 blocks, into `out` (one 2-vector per
+/// contact): in fixed-size storage up to [`MAX_JOINT_CONTACTS`], else in storage of their size.
+/// False if there is no trustworthy solution (see [`solve_sticking`]).
 fn solve_blocks(
     m: usize,
     block: impl Fn(usize, usize) -> na::Matrix2<f64>,
     rhs: impl Fn(usize) -> na::Vector2<f64>,
-) -> Option<Vec2s> {
-    let symmetric = |a: usize, b: usize| (block(a, b) + block(b, a).transpose()) * 0.5;
-    if m <= MAX_JOINT_CONTACTS {
-        let mut t_ss = Block::identity();
-        let mut column = Column::zeros();
-        for a in 0..m {
-            for b in 0..m {
-                t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
-                    .copy_from(&symmetric(a, b));
-            }
-            column.fixed_rows_mut::<2>(2 * a).copy_from(&rhs(a));
-        }
-        let x = solve_sticking(t_ss, &column, 2 * m)?;
-        Some(Vec2s::from_fn(m, |a| DVec2::new(x[2 * a], x[2 * a + 1])))
+    out: &mut Vec<DVec2>,
+) -> bool {
+    let solution = if m <= MAX_JOINT_CONTACTS {
+        let (mut t_ss, mut column) = (Block::identity(), Column::zeros());
+        fill_blocks(&mut t_ss, &mut column, m, &block, &rhs);
+        solve_sticking(t_ss, &column, 2 * m).map(|x| store(x.as_slice(), m, out))
     } else {
         let mut t_ss = na::DMatrix::zeros(2 * m, 2 * m);
         let mut column = na::DVector::zeros(2 * m);
-        for a in 0..m {
-            for b in 0..m {
-                t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
-                    .copy_from(&symmetric(a, b));
-            }
-            column.fixed_rows_mut::<2>(2 * a).copy_from(&rhs(a));
+        fill_blocks(&mut t_ss, &mut column, m, &block, &rhs);
+        solve_sticking(t_ss, &column, 2 * m).map(|x| store(x.as_slice(), m, out))
+    };
+    solution.is_some()
+}
+
+/// T_SS's first 2m rows and columns, symmetrised (W is symmetric, its numerical copy only
+/// nearly), and the right-hand side.
+fn fill_blocks<R, C, S, R2, S2>(
+    t_ss: &mut na::Matrix<f64, R, C, S>,
+    column: &mut na::Matrix<f64, R2, na::U1, S2>,
+    m: usize,
+    block: &impl Fn(usize, usize) -> na::Matrix2<f64>,
+    rhs: &impl Fn(usize) -> na::Vector2<f64>,
+) where
+    R: na::Dim,
+    C: na::Dim,
+    R2: na::Dim,
+    S: na::StorageMut<f64, R, C>,
+    S2: na::StorageMut<f64, R2, na::U1>,
+{
+    for a in 0..m {
+        for b in 0..m {
+            let symmetric = (block(a, b) + block(b, a).transpose()) * 0.5;
+            t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
+                .copy_from(&symmetric);
         }
-        let x = solve_sticking(t_ss, &column, 2 * m)?;
-        Some(Vec2s::from_fn(m, |a| DVec2::new(x[2 * a], x[2 * a + 1])))
+        column.fixed_rows_mut::<2>(2 * a).copy_from(&rhs(a));
     }
 }
 
-/// A solution per sticking contact: inline for a hexapod's feet, on the heap beyond.
-struct Vec2s {
-    inline: [DVec2; MAX_JOINT_CONTACTS],
-    heap: Vec<DVec2>,
-}
-
-impl Vec2s {
-    fn from_fn(m: usize, f: impl Fn(usize) -> DVec2) -> Self {
-        if m <= MAX_JOINT_CONTACTS {
-            Vec2s {
-                inline: std::array::from_fn(|a| if a < m { f(a) } else { DVec2::ZERO }),
-                heap: Vec::new(),
-            }
-        } else {
-            Vec2s {
-                inline: [DVec2::ZERO; MAX_JOINT_CONTACTS],
-                heap: (0..m).map(f).collect(),
-            }
-        }
-    }
-
-    fn get(&self, a: usize) -> DVec2 {
-        if self.heap.is_empty() {
-            self.inline[a]
-        } else {
-            self.heap[a]
-        }
-    }
+/// A solution's pairs as one 2-vector per contact.
+fn store(x: &[f64], m: usize, out: &mut Vec<DVec2>) {
+    out.clear();
+    out.extend((0..m).map(|a| DVec2::new(x[2 * a], x[2 * a + 1])));
 }
 
 /// Scratch for [`JointSolver::respond`], kept between steps so that a step allocates nothing
@@ -159,6 +147,8 @@ pub struct JointSolver {
     fixed: Vec<Option<DVec2>>,
     stops: Vec<DVec2>,
     sticking: Vec<usize>,
+    /// The joint solve's answer per sticking contact.
+    solution: Vec<DVec2>,
 }
 
 /// The forces on `contacts` over a step, solved together (see the module docs), with scratch
@@ -194,6 +184,7 @@ impl JointSolver {
             fixed,
             stops,
             sticking,
+            solution,
         } = self;
         pending.clear();
         for (i, (c, state)) in contacts.iter().zip(states.iter_mut()).enumerate() {
@@ -238,13 +229,12 @@ impl JointSolver {
                 }
                 r
             };
-            // symmetrised: W is symmetric, its numerical copy only nearly. T_SS is singular when
-            // contacts coincide (two spheres on one point): any split of their force stops them,
+            // T_SS is singular when contacts coincide (two spheres on one point): any split of their force stops them,
             // and the least-squares solution of least norm shares it equally
             let block = |a: usize, b: usize| {
                 in_plane(mobility(touching[sticking[a]], touching[sticking[b]]))
             };
-            let Some(x) = solve_blocks(m, block, rhs) else {
+            if !solve_blocks(m, block, rhs, solution) {
                 // not even that (a mobility with NaN): each contact's force as if alone
                 for &s in sticking.iter() {
                     let pc = p(touching[s]);
@@ -258,11 +248,11 @@ impl JointSolver {
                     };
                 }
                 break;
-            };
+            }
             let mut changed = false;
             for (a, &s) in sticking.iter().enumerate() {
                 let pc = p(touching[s]);
-                let stop = pc.previous_friction - x.get(a);
+                let stop = pc.previous_friction - solution[a];
                 stops[s] = stop;
                 let outcome = pc.friction(&model.friction, stop);
                 if !outcome.sticking {
