@@ -150,3 +150,65 @@ fn a_robot_too_weak_to_stand_rests_on_its_body_and_the_run_says_so() {
         "{stdout}"
     );
 }
+
+/// A foot in a crack its own width: hex18 walking blind over 2 cm trenches and between stones
+/// 2 cm apart (its feet are 2 cm across) drops feet in and gets them wedged. Where each face of
+/// the crack was summed into one contact, and kinetic friction acted against the slip a step
+/// began with, a wedged foot swung from wall to wall, growing each step, and the runs ended
+/// "diverged" at 12.76 s and 11.16 s with a foot 11.7 and 10.2 mm deep. Each face is its own
+/// contact now, and friction acts against the velocity a step ends with, never jamming the foot
+/// in: the runs finish, no foot or link deeper than 5 mm.
+#[test]
+fn a_foot_wedged_in_a_crack_its_own_width_stays_in_the_physics() {
+    let dir = scratch("crack");
+    for (name, source, start) in [
+        (
+            "gaps",
+            "kind = \"gaps\"\nwidth = 0.02\nspacing = 0.4\ndepth = 0.1\nfirst_gap = 0.5\n\
+             size = [6.0, 4.0]\ncell = 0.01\n",
+            ["-0.5", "0"],
+        ),
+        (
+            "stones",
+            "kind = \"stepping_stones\"\nstone = 0.15\ngap = 0.02\ndepth = 0.1\n\
+             platform = 1.0\nsize = [6.0, 6.0]\ncell = 0.01\n",
+            ["0", "0"],
+        ),
+    ] {
+        let terrain = dir.join(format!("{name}.toml"));
+        std::fs::write(&terrain, format!("[source]\n{source}")).unwrap();
+        let metrics = dir.join(format!("{name}.json"));
+        let out = hexsim()
+            .arg("run")
+            .arg("--terrain")
+            .arg(&terrain)
+            .args([
+                "--start",
+                start[0],
+                start[1],
+                "--duration",
+                "14",
+                "--no-record",
+            ])
+            .arg("--metrics")
+            .arg(&metrics)
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(out.status.code(), Some(0), "{name}: {text}");
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        let foot = m["max_penetration"].as_f64().unwrap();
+        let link = m["max_link_penetration"].as_f64().unwrap();
+        println!(
+            "{name}: deepest foot {:.2} mm, link {:.2} mm",
+            foot * 1e3,
+            link * 1e3
+        );
+        assert!(foot < 5e-3 && link < 5e-3, "{name}: {foot} {link}");
+    }
+}

@@ -13,8 +13,16 @@
 //!
 //! Karnopp (1985): inside the stick band |v| < Δv friction *cancels the tangential load* — it is
 //! F_stop, as long as |F_stop| ≤ μs·Fn, and μs·Fn along it otherwise (the contact breaks away).
-//! Outside the band it is the kinetic force −μk·Fn·v/|v|, unless the kinetic friction can stop the
+//! Outside the band it is the kinetic force μk·Fn, unless the kinetic friction can stop the
 //! contact within the step (|F_stop| ≤ μk·Fn), in which case it stops there instead of overshooting.
+//! In both, friction at its limit acts along F_stop — the stopping force projected onto the
+//! friction disc, as a projected Gauss–Seidel solver projects its impulse — that is, against the
+//! velocity the contact would have at the end of the step, not the one it had at its start. For a
+//! contact sliding steadily the two agree (F_stop ≈ −M·v/h when the load is small beside M·v/h);
+//! where the step reverses the slip they do not: a light foot bouncing between the walls of a pit
+//! its own width is pushed sideways 3 m/s a step by each wall (its leg turns a push across into a
+//! slide along), and friction against the old slip pushed it the same way again — its slip
+//! growing ×1.2–3.7 a step to a divergence (`ladder/stones.toml` at 2 cm).
 //! Because the stick force holds the velocity at zero rather than letting a residual velocity
 //! inside the band persist, a foot on a slope below its friction angle does not creep — the failure
 //! of regularised models (MuJoCo's, Drake's) that need a velocity to make a force.
@@ -231,7 +239,7 @@ fn karnopp(
         }
     } else {
         FrictionOutcome {
-            force: -mu_kinetic * normal_force * slip / speed,
+            force: stop * (mu_kinetic * normal_force / stop_needed),
             sticking: false,
         }
     }
@@ -324,6 +332,30 @@ mod tests {
         let out = law.force(slip, FN, stop);
         assert!(!out.sticking);
         assert!((out.force + 8.0 * slip / 0.5).length() < 1e-12);
+    }
+
+    /// Sliding at 1 m/s along +x while the load (a wall's push through the leg) would carry the
+    /// contact to −2 m/s by the end of the step: kinetic friction, too weak to stop it, acts
+    /// against that end velocity (+x), not against the start's (−x, which would add to the load).
+    #[test]
+    fn karnopp_slides_against_the_velocity_the_step_ends_with() {
+        let law = FrictionLaw::default();
+        let mass = DMat2::from_diagonal(DVec2::splat(0.05));
+        let (slip, h) = (DVec2::new(1.0, 0.0), 1e-3);
+        let load = DVec2::new(-150.0, 0.0);
+        // F_stop = −L − M·v/h
+        let stop = -load - mass * slip / h;
+        assert!(stop.x > 0.0 && stop.length() > 8.0);
+        let out = law.force(slip, FN, stop);
+        assert!(!out.sticking);
+        assert!(
+            (out.force - DVec2::new(8.0, 0.0)).length() < 1e-12,
+            "{}",
+            out.force
+        );
+        // the end velocity is smaller than without friction: friction took energy out
+        let end = |f: DVec2| slip + mass.inverse() * (load + f) * h;
+        assert!(end(out.force).length() < end(DVec2::ZERO).length());
     }
 
     #[test]

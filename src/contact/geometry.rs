@@ -35,12 +35,29 @@ const CLOSEST_POINT_TOLERANCE: f64 = 1e-10;
 /// terrain within the sphere's footprint rises above its lowest point
 /// ([`HeightGrid::ceiling_near`]), it is repeated from the footprint's four edges and the
 /// deepest answer kept.
+///
+/// In a concave corner the sphere presses into several faces at once: this is their springs
+/// summed into one contact ([`Faces::summed`]), which is what one body with one contact state —
+/// the ball — needs; [`sphere_faces`] gives the faces one by one.
 pub fn sphere_geometry(
     terrain: &HeightGrid,
     center: DVec3,
     radius: f64,
     orientation: Orientation,
 ) -> SphereGeometry {
+    sphere_faces(terrain, center, radius, orientation).summed(center, radius)
+}
+
+/// The surfaces a sphere presses into: one (or, clear of the ground, the nearest with its gap as
+/// a negative depth) except in a concave corner of a grid with cliffs — a foot on a pit's floor
+/// against its wall, a foot in a trench its own width — where each face it presses into is its
+/// own contact (see [`Touching::faces`]).
+pub fn sphere_faces(
+    terrain: &HeightGrid,
+    center: DVec3,
+    radius: f64,
+    orientation: Orientation,
+) -> Faces {
     let below = closest_from(terrain, center, radius, orientation, (center.x, center.y));
     if terrain.has_cliffs() {
         return among_walls(terrain, center, radius, orientation, below);
@@ -48,19 +65,81 @@ pub fn sphere_geometry(
     if below.penetration > 0.0
         || terrain.ceiling_near(center.x, center.y, radius) <= center.z - radius
     {
-        return below;
+        return Faces::single(below);
     }
-    [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
-        .map(|(u, v)| (center.x + u * radius, center.y + v * radius))
-        .into_iter()
-        .map(|start| closest_from(terrain, center, radius, orientation, start))
-        .fold(below, |deepest, g| {
-            if g.penetration > deepest.penetration {
-                g
-            } else {
-                deepest
-            }
-        })
+    Faces::single(
+        [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
+            .map(|(u, v)| (center.x + u * radius, center.y + v * radius))
+            .into_iter()
+            .map(|start| closest_from(terrain, center, radius, orientation, start))
+            .fold(below, |deepest, g| {
+                if g.penetration > deepest.penetration {
+                    g
+                } else {
+                    deepest
+                }
+            }),
+    )
+}
+
+/// The most faces a sphere is taken to press into at once in a concave corner (a pit's floor and
+/// two walls, a box's side and the ground: three at most on a grid's walls and treads; one spare).
+pub const MAX_FACES: usize = 4;
+
+/// The faces a sphere presses into ([`sphere_faces`]): at least one, the nearest first.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Faces {
+    faces: [SphereGeometry; MAX_FACES],
+    len: usize,
+}
+
+impl Faces {
+    /// One surface (or the gap to the nearest).
+    pub fn single(g: SphereGeometry) -> Self {
+        Faces {
+            faces: [g; MAX_FACES],
+            len: 1,
+        }
+    }
+
+    /// The faces, the nearest first (clear of the ground: that one alone, with a depth ≤ 0).
+    pub fn as_slice(&self) -> &[SphereGeometry] {
+        &self.faces[..self.len]
+    }
+
+    /// The nearest face.
+    pub fn nearest(&self) -> &SphereGeometry {
+        &self.faces[0]
+    }
+
+    /// The faces' springs summed as one contact: depth vector Σ xᵢ·nᵢ, its length the depth and
+    /// its direction the normal — exactly the springs' force (k·Σ xᵢ·nᵢ) for the linear law, and
+    /// continuous as a face starts or stops touching. A sphere squeezed evenly between two faces
+    /// gets no depth: the springs cancel.
+    pub fn summed(&self, center: DVec3, radius: f64) -> SphereGeometry {
+        let best = self.faces[0];
+        if self.len == 1 {
+            return best;
+        }
+        let sum: DVec3 = self
+            .as_slice()
+            .iter()
+            .map(|g| g.penetration * g.frame.normal)
+            .sum();
+        let penetration = sum.length();
+        if penetration < 1e-12 {
+            return SphereGeometry {
+                penetration: 0.0,
+                ..best
+            };
+        }
+        let normal = sum / penetration;
+        SphereGeometry {
+            penetration,
+            point: center - (radius - penetration) * normal,
+            frame: GroundFrame::from_normal(normal),
+        }
+    }
 }
 
 /// [`sphere_geometry`] on a grid with cliffs (`terrain/cliff.rs`): the surface is the treads and
@@ -78,9 +157,9 @@ fn among_walls(
     radius: f64,
     orientation: Orientation,
     below: SphereGeometry,
-) -> SphereGeometry {
+) -> Faces {
     if terrain.ceiling_near(center.x, center.y, radius) <= center.z - radius {
-        return below;
+        return Faces::single(below);
     }
     let buried = center.z < terrain.height(center.x, center.y);
     let depth = |distance: f64| radius + if buried { distance } else { -distance };
@@ -130,18 +209,14 @@ fn among_walls(
         }
     });
     if buried {
-        best
+        Faces::single(best)
     } else {
-        touching.in_corner(best, center, radius)
+        touching.faces(best)
     }
 }
 
-/// The most surfaces a sphere is taken to touch at once in a concave corner (a pit's floor and
-/// two walls, a box's side and the ground: three at most on a grid's walls and treads; one spare).
-const MAX_TOUCHING: usize = 4;
-
 /// The surfaces (treads, wall faces, edges) a sphere clear of the ground with its centre
-/// reaches into, each with its depth and normal, for [`Touching::in_corner`].
+/// reaches into, each with its depth and normal, for [`Touching::faces`].
 #[derive(Default)]
 struct Touching {
     found: [Option<SphereGeometry>; 8],
@@ -157,24 +232,21 @@ impl Touching {
     }
 
     /// In a concave corner — a foot on a pit's floor against its wall, a sphere between a
-    /// box's side and the ground — the sphere presses into each surface at once; the nearest
-    /// alone (the closest point) flips between them as the sphere moves, the force turning
-    /// 90° with the depth unchanged from one step to the next, and the two springs, each
-    /// missing every other step, let the foot chatter into the wall and the floor (measured on
-    /// `ladder/stones.toml` at gap 0.06, perceptive: a foot in a pit's corner swinging 4, 6,
-    /// 11, 21, 27 mm step to step until its centre was 5.6 mm inside the stone, a divergence;
-    /// on `ladder/obstacles.toml` at height 0.04, blind: a foot at a box's foot 9.5 mm into its
-    /// side, 70–110 N alternating between −y and +z each step). So the surfaces that face each
-    /// other — each one's contact point on the outer side of the other's tangent plane — are
-    /// summed as springs: depth vector Σ xᵢ·nᵢ, its length the depth and its direction the
-    /// normal, which is exactly the two springs' force (k·Σ xᵢ·nᵢ) for the linear law, and which
-    /// changes continuously as a surface starts or stops touching. A convex edge and the tread
-    /// beside it do not face each other (the edge lies in the tread's plane), nor do the pieces
-    /// of one face: those keep the nearest alone, so a sphere touching one surface gets what it
-    /// got before, bit for bit. A centre inside the ground keeps its nearest way out.
-    fn in_corner(&self, best: SphereGeometry, center: DVec3, radius: f64) -> SphereGeometry {
+    /// box's side and the ground, a foot in a trench its own width — the sphere presses into
+    /// each surface at once; the nearest alone (the closest point) flips between them as the
+    /// sphere moves, the force turning 90° with the depth unchanged from one step to the next,
+    /// and the two springs, each missing every other step, let the foot chatter into the wall
+    /// and the floor (measured on `ladder/stones.toml` at gap 0.06, perceptive: a foot in a
+    /// pit's corner swinging 4, 6, 11, 21, 27 mm step to step until its centre was 5.6 mm inside
+    /// the stone, a divergence). So every surface that faces the others — each one's contact
+    /// point on the outer side of the other's tangent plane — is a face the sphere presses
+    /// into. A convex edge and the tread beside it do not face each other (the edge lies in the
+    /// tread's plane), nor do the pieces of one face: those keep the nearest alone, so a sphere
+    /// touching one surface gets what it got before, bit for bit.
+    fn faces(&self, best: SphereGeometry) -> Faces {
+        let mut faces = Faces::single(best);
         if self.count < 2 {
-            return best;
+            return faces;
         }
         // faces another surface: its point beyond the other's tangent plane, and the other's
         // beyond its own (1 µm: a contact point on a face's plane, as an edge on its tread's,
@@ -183,9 +255,6 @@ impl Touching {
             (b.point - a.point).dot(a.frame.normal) > 1e-6
                 && (a.point - b.point).dot(b.frame.normal) > 1e-6
         };
-        let mut chosen = [best; MAX_TOUCHING];
-        let mut n = 1;
-        let mut sum = best.penetration * best.frame.normal;
         // deepest first, so that of two pieces of one face the deeper is kept
         let mut order: [usize; 8] = std::array::from_fn(|k| k);
         let found = &self.found[..self.count];
@@ -193,29 +262,12 @@ impl Touching {
         order[..self.count].sort_by(|&a, &b| depth_of(b).total_cmp(&depth_of(a)));
         for &k in &order[..self.count] {
             let Some(g) = found[k] else { continue };
-            if n < MAX_TOUCHING && chosen[..n].iter().all(|c| facing(c, &g)) {
-                chosen[n] = g;
-                n += 1;
-                sum += g.penetration * g.frame.normal;
+            if faces.len < MAX_FACES && faces.as_slice().iter().all(|c| facing(c, &g)) {
+                faces.faces[faces.len] = g;
+                faces.len += 1;
             }
         }
-        if n == 1 {
-            return best;
-        }
-        let penetration = sum.length();
-        if penetration < 1e-12 {
-            // squeezed evenly between two faces: the springs cancel
-            return SphereGeometry {
-                penetration: 0.0,
-                ..best
-            };
-        }
-        let normal = sum / penetration;
-        SphereGeometry {
-            penetration,
-            point: center - (radius - penetration) * normal,
-            frame: GroundFrame::from_normal(normal),
-        }
+        faces
     }
 }
 
@@ -599,6 +651,45 @@ mod tests {
             Orientation::Exact,
         );
         assert!(g.penetration.abs() < 1e-12, "{}", g.penetration);
+    }
+
+    /// The same trench face by face: each wall the foot presses into is a face of its own with
+    /// its own depth and horizontal normal, and in the middle both push (the sum cancels).
+    #[test]
+    fn a_foot_in_a_trench_its_own_width_presses_into_each_wall() {
+        let trench =
+            crate::terrain::gaps([1.0, 0.5], [0.5, 0.0], 0.505, 0.02, 0.4, 0.1, 0.01).unwrap();
+        let center = DVec3::new(0.514, 0.0, -0.05);
+        let faces = sphere_faces(&trench, center, 0.0115, Orientation::Exact);
+        let mut faces: Vec<_> = faces
+            .as_slice()
+            .iter()
+            .map(|g| (g.penetration, g.frame.normal))
+            .collect();
+        faces.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(faces.len(), 2, "{faces:?}");
+        assert!((faces[0].0 - 0.0005).abs() < 1e-12 && faces[0].1.abs_diff_eq(-DVec3::X, 1e-12));
+        assert!((faces[1].0 - 0.0025).abs() < 1e-12 && faces[1].1.abs_diff_eq(DVec3::X, 1e-12));
+        // on the floor too: three faces, the floor's normal up
+        let center = DVec3::new(0.515, 0.0, -0.1 + 0.011);
+        let faces = sphere_faces(&trench, center, 0.0115, Orientation::Exact);
+        assert_eq!(faces.as_slice().len(), 3);
+        assert!(
+            faces
+                .as_slice()
+                .iter()
+                .any(|g| g.frame.normal.abs_diff_eq(DVec3::Z, 1e-12)
+                    && (g.penetration - 0.0005).abs() < 1e-12)
+        );
+        // a sphere on open ground has one face, the one `sphere_geometry` gives
+        let flat = crate::terrain::flat([1.0, 1.0], [0.0, 0.0], 0.0).unwrap();
+        let center = DVec3::new(0.1, 0.1, 0.009);
+        let faces = sphere_faces(&flat, center, 0.01, Orientation::Exact);
+        assert_eq!(faces.as_slice().len(), 1);
+        assert_eq!(
+            *faces.nearest(),
+            sphere_geometry(&flat, center, 0.01, Orientation::Exact)
+        );
     }
 
     #[test]

@@ -266,7 +266,9 @@ impl JointSolver {
         }
         out[..n].fill(None);
         for (s, &i) in touching.iter().enumerate() {
-            out[i] = Some(model.finish(p(i), stops[s], dt, &mut states[i]));
+            let outcome = p(i).friction(&model.friction, stops[s]);
+            let outcome = p(i).unjammed(outcome, mobility(i, i));
+            out[i] = Some(ContactModel::conclude(p(i), outcome, dt, &mut states[i]));
         }
     }
 }

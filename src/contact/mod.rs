@@ -20,7 +20,7 @@ mod paper;
 mod rolling;
 
 pub use friction::{FrictionLaw, FrictionOutcome};
-pub use geometry::{SphereGeometry, sphere_geometry};
+pub use geometry::{Faces, MAX_FACES, SphereGeometry, sphere_faces, sphere_geometry};
 pub use joint::respond_jointly;
 pub use normal::{NormalLaw, REFERENCE_DAMPING, REFERENCE_STIFFNESS, exact_decay_factor};
 pub use paper::paper_geometry;
@@ -136,6 +136,31 @@ pub struct PendingContact {
 }
 
 impl PendingContact {
+    /// Friction that would push the contact into the ground harder than its normal force pushes
+    /// it out, scaled down until the two balance. `w` is the contact's own mobility in its
+    /// ground-frame axes (t₁, t₂, n). Where a point is far more mobile along the ground than
+    /// across it and the two are coupled — a foot at the end of a leg dragged forward, whose
+    /// tibia levers it down (hex18 in a trench: W_nn = 7.6 /kg, W_nt = (11.4, 10.5) /kg, so
+    /// μ·|W_nt| = 12.4 > W_nn) — friction at μ·Fn drives the foot in faster than the spring
+    /// drives it out: Painlevé's jam. Rigid contact resolves it with a normal impulse that stops
+    /// the slip; an explicit spring answers a step late, friction grows with it, and the foot
+    /// swings through the ground ×1.5–2 a step (`ladder/gaps.toml` at 2 cm: 10.5 mm deep, a
+    /// divergence). Limiting friction to W_nn·Fn + W_nt·F_t ≥ 0 — the contact's forces together
+    /// never accelerate it into the ground — only takes friction away, never adds it, and is
+    /// inactive wherever the coupling is weaker than 1/μ of the normal mobility (a stance foot
+    /// under its hip).
+    pub fn unjammed(&self, outcome: FrictionOutcome, w: DMat3) -> FrictionOutcome {
+        let push = w.x_axis.z * outcome.force.x + w.y_axis.z * outcome.force.y;
+        let out = w.z_axis.z * self.normal_force;
+        if push >= -out || push >= 0.0 {
+            return outcome;
+        }
+        FrictionOutcome {
+            force: outcome.force * (out / -push),
+            sticking: false,
+        }
+    }
+
     /// F_stop for a contact alone, whose in-plane effective mass is `mass`.
     pub fn stopping_force(&self, mass: DMat2) -> DVec2 {
         self.previous_friction - mass * self.demand
@@ -192,6 +217,27 @@ pub struct ContactForce {
     pub sticking: bool,
     /// The ground frame at the contact.
     pub frame: GroundFrame,
+}
+
+impl ContactForce {
+    /// One body's contact from several faces it presses into at once (a foot in a pit's
+    /// corner): the forces and normal forces summed, the deepest face's point, frame, depth and
+    /// slip, sticking only if every face sticks.
+    pub fn merge(&mut self, other: &ContactForce) {
+        let sticking = self.sticking && other.sticking;
+        let (force, normal_force, friction) = (
+            self.force + other.force,
+            self.normal_force + other.normal_force,
+            self.friction + other.friction,
+        );
+        if other.penetration > self.penetration {
+            *self = *other;
+        }
+        self.force = force;
+        self.normal_force = normal_force;
+        self.friction = friction;
+        self.sticking = sticking;
+    }
 }
 
 impl ContactModel {
@@ -266,6 +312,16 @@ impl ContactModel {
         state: &mut ContactState,
     ) -> ContactForce {
         let outcome = pending.friction(&self.friction, stop);
+        Self::conclude(pending, outcome, dt, state)
+    }
+
+    /// [`Self::finish`] with the friction already chosen.
+    pub fn conclude(
+        pending: &PendingContact,
+        outcome: FrictionOutcome,
+        dt: f64,
+        state: &mut ContactState,
+    ) -> ContactForce {
         let frame = &pending.frame;
         let friction = frame.to_world(outcome.force.extend(0.0));
         let slip_world = frame.to_world(pending.slip.extend(0.0));
@@ -302,6 +358,22 @@ impl ContactModel {
                 paper_geometry(terrain, center, radius, xe, ye)
             }
             _ => sphere_geometry(terrain, center, radius, self.orientation),
+        }
+    }
+
+    /// The faces the sphere presses into as this contact sees them ([`sphere_faces`]): one,
+    /// except in a concave corner of a grid with walls. The paper's vertical reading knows one.
+    pub fn sphere_faces(
+        &self,
+        terrain: &crate::terrain::HeightGrid,
+        center: DVec3,
+        radius: f64,
+    ) -> Faces {
+        match (self.variant, self.orientation) {
+            (Variant::Paper, Orientation::Paper { .. }) => {
+                Faces::single(self.sphere_geometry(terrain, center, radius))
+            }
+            _ => sphere_faces(terrain, center, radius, self.orientation),
         }
     }
 
@@ -383,6 +455,53 @@ impl ContactModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A pending contact with normal force `normal_force`, for [`PendingContact::unjammed`].
+    fn pending(normal_force: f64) -> PendingContact {
+        PendingContact {
+            point: DVec3::ZERO,
+            frame: GroundFrame::from_normal(DVec3::Z),
+            penetration: 1e-3,
+            normal_velocity: 0.0,
+            slip: DVec2::new(1.0, 0.0),
+            normal_force,
+            previous_friction: DVec2::ZERO,
+            demand: DVec2::ZERO,
+            normal_change: 0.0,
+        }
+    }
+
+    /// hex18's foot in a trench (measured): W_nn = 7.6 /kg and W_nt = (11.4, 10.5) /kg. Friction
+    /// of 0.8·100 N along −(1, 1)/√2 would push it in at (11.4 + 10.5)·80/√2 = 1239 N/kg against
+    /// the normal force's 760 out: it is scaled to balance; friction that pushes it out, or in
+    /// less than the normal force pushes out, is left alone.
+    #[test]
+    fn friction_never_jams_a_contact_into_the_ground() {
+        let w = DMat3::from_cols(
+            DVec3::new(32.4, 13.5, 11.4),
+            DVec3::new(13.5, 32.1, 10.5),
+            DVec3::new(11.4, 10.5, 7.6),
+        );
+        let p = pending(100.0);
+        let along = |f: DVec2| FrictionOutcome {
+            force: f,
+            sticking: true,
+        };
+        let jam = DVec2::new(-1.0, -1.0).normalize() * 80.0;
+        let out = p.unjammed(along(jam), w);
+        assert!(!out.sticking);
+        let push = |f: DVec2| w.x_axis.z * f.x + w.y_axis.z * f.y;
+        assert!(
+            (push(out.force) + 7.6 * 100.0).abs() < 1e-9,
+            "{}",
+            out.force
+        );
+        assert!(out.force.normalize().abs_diff_eq(jam.normalize(), 1e-12));
+        for kept in [-jam, DVec2::new(-30.0, 0.0), DVec2::new(60.0, -65.0)] {
+            assert!(push(kept) >= -760.0);
+            assert_eq!(p.unjammed(along(kept), w), along(kept));
+        }
+    }
 
     #[test]
     fn rigid_sphere_presents_two_sevenths_of_its_mass_in_the_plane() {
@@ -483,7 +602,10 @@ mod tests {
                                     * (-(s / stribeck_velocity).powi(2)).exp();
                             -level * slip / s.max(width) - viscous * slip
                         }
-                        FrictionLaw::Karnopp { mu_kinetic, .. } => -mu_kinetic * fn_ * slip / s,
+                        // the stopping force projected onto the kinetic disc
+                        FrictionLaw::Karnopp { mu_kinetic, .. } => {
+                            mu_kinetic * fn_ * stop / stop.length()
+                        }
                         FrictionLaw::None => DVec2::ZERO,
                     }
                 };

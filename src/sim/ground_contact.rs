@@ -9,11 +9,22 @@
 //! above the ground most of the time, so a broad phase goes first: a link whose bounding sphere
 //! is above the highest the terrain reaches is passed over whole, and a sphere above the
 //! terrain's bound around it ([`HeightGrid::ceiling_near`]) needs no closest-point search.
+//!
+//! A sphere in a concave corner — a foot on a pit's floor against its wall, a foot in a trench
+//! its own width — presses into each face at once, and each face is a contact of its own, with
+//! its own damper along its own normal and its own friction ([`crate::contact::sphere_faces`]).
+//! Their springs summed into one contact would couple them: the summed normal tilts from one
+//! wall to the other within a fraction of a millimetre, and a foot far more mobile sideways than
+//! up (hex18's: 0.026 kg along x, 0.095 kg along z in a trench) is damped along one step's tilt
+//! and moves along the next step's mirror image, swinging from wall to wall ×1.35 a step
+//! (`ladder/gaps.toml` at 2 cm: a divergence).
 
 use super::articulation::{ContactPoint, Joints};
 use super::engine::Engine;
 use crate::contact::joint::{JointContact, JointSolver};
-use crate::contact::{ContactForce, ContactModel, ContactState, Variant};
+use crate::contact::{
+    ContactForce, ContactModel, ContactState, MAX_FACES, SphereGeometry, Variant,
+};
 use crate::robot::{ContactSphere, RobotModel, contact_set};
 use crate::terrain::HeightGrid;
 use glam::{DAffine3, DMat3, DVec3};
@@ -40,15 +51,28 @@ struct LinkSpheres {
     touched: bool,
 }
 
-/// Every contact's state between steps (stick anchors, Karnopp's sticking flag), and scratch.
+/// A face a sphere pressed into last step: its contact's state between steps (stick anchor,
+/// Karnopp's sticking flag) and its normal, by which this step's faces are matched to it.
+#[derive(Clone, Copy, Default)]
+struct Slot {
+    state: ContactState,
+    /// None: free.
+    normal: Option<DVec3>,
+}
+
+/// Faces whose normals differ by less than this (cos 45°) from one step to the next are taken to
+/// be the same face, its contact state carried on.
+const SAME_FACE: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// Every contact's state between steps, and scratch.
 pub(super) struct GroundContacts {
-    /// The feet's, then every link sphere's.
-    states: Vec<ContactState>,
+    /// [`MAX_FACES`] per sphere: the feet's, then every link sphere's.
+    slots: Vec<Slot>,
     links: Vec<LinkSpheres>,
     spheres: Vec<ContactSphere>,
     /// The highest the terrain's surface reaches anywhere.
     ceiling: f64,
-    /// This step's touching contacts: their index in `states`, rapier point, solver input.
+    /// This step's touching contacts: their index in `slots`, rapier point, solver input.
     ids: Vec<usize>,
     points: Vec<ContactPoint>,
     inputs: Vec<JointContact>,
@@ -80,7 +104,7 @@ impl GroundContacts {
         let ceiling =
             terrain.ceiling_near(0.5 * (x0 + x1), 0.5 * (y0 + y1), (x1 - x0).max(y1 - y0));
         GroundContacts {
-            states: vec![ContactState::default(); 6 + spheres.len()],
+            slots: vec![Slot::default(); (6 + spheres.len()) * MAX_FACES],
             links,
             spheres,
             ceiling,
@@ -121,7 +145,7 @@ impl GroundContacts {
                 center: leg.foot.center,
                 radius: leg.foot.radius,
             };
-            if !self.find(
+            self.find(
                 k,
                 leg.foot_link,
                 &sphere,
@@ -130,9 +154,7 @@ impl GroundContacts {
                 contact,
                 bodies,
                 model,
-            ) {
-                self.states[k] = ContactState::default();
-            }
+            );
         }
         // the links' spheres, those near the ground
         for l in 0..self.links.len() {
@@ -146,7 +168,8 @@ impl GroundContacts {
             let frame = &frames[link];
             if frame.transform_point3(bound.center).z - bound.radius > self.ceiling {
                 if touched {
-                    self.states[6 + first..6 + end].fill(ContactState::default());
+                    self.slots[(6 + first) * MAX_FACES..(6 + end) * MAX_FACES]
+                        .fill(Slot::default());
                     self.links[l].touched = false;
                 }
                 continue;
@@ -154,11 +177,7 @@ impl GroundContacts {
             let mut any = false;
             for s in first..end {
                 let sphere = self.spheres[s];
-                if self.find(6 + s, link, &sphere, frame, terrain, contact, bodies, model) {
-                    any = true;
-                } else {
-                    self.states[6 + s] = ContactState::default();
-                }
+                any |= self.find(6 + s, link, &sphere, frame, terrain, contact, bodies, model);
             }
             self.links[l].touched = any;
         }
@@ -183,7 +202,7 @@ impl GroundContacts {
         }
         self.scratch_states.clear();
         self.scratch_states
-            .extend(self.ids.iter().map(|&id| self.states[id]));
+            .extend(self.ids.iter().map(|&id| self.slots[id].state));
         self.forces.clear();
         self.forces.resize(n, None);
         if contact.variant == Variant::Paper {
@@ -210,22 +229,27 @@ impl GroundContacts {
                 &mut self.forces,
             );
         }
-        let mut feet = [None; 6];
+        let mut feet: [Option<ContactForce>; 6] = [None; 6];
         link_contacts.clear();
         for i in 0..n {
             let id = self.ids[i];
-            self.states[id] = self.scratch_states[i];
+            self.slots[id].state = self.scratch_states[i];
             let Some(c) = self.forces[i] else { continue };
             let point = &self.points[i];
             let body = &mut engine.bodies[point.body];
             body.add_force(c.force.as_vec3(), true);
             body.add_torque((c.point - point.com).cross(c.force).as_vec3(), true);
-            if id < 6 {
-                feet[id] = Some(c);
+            let sphere = id / MAX_FACES;
+            if sphere < 6 {
+                // a foot pressing into several faces reports them as one contact
+                match &mut feet[sphere] {
+                    Some(foot) => foot.merge(&c),
+                    none => *none = Some(c),
+                }
             } else {
                 link_contacts.push(LinkContact {
                     link: point.link,
-                    radius: self.spheres[id - 6].radius,
+                    radius: self.spheres[sphere - 6].radius,
                     force: c,
                 });
             }
@@ -233,8 +257,9 @@ impl GroundContacts {
         feet
     }
 
-    /// Adds sphere `sphere` of link `link` (posed by `frame`) to this step's contacts if it
-    /// touches the terrain, as contact `id`; false if it is clear.
+    /// Adds sphere `sphere` of link `link` (posed by `frame`) to this step's contacts, one per
+    /// face it presses into, if it touches the terrain, as sphere `id`; false (its faces' states
+    /// reset) if it is clear.
     #[allow(clippy::too_many_arguments)]
     fn find(
         &mut self,
@@ -247,30 +272,118 @@ impl GroundContacts {
         bodies: &[RigidBodyHandle],
         model: &RobotModel,
     ) -> bool {
+        let slots = id * MAX_FACES..(id + 1) * MAX_FACES;
         let center = frame.transform_point3(sphere.center);
         let r = sphere.radius;
         // a sphere well clear of the ground needs no closest-point search
         if center.z - r > self.ceiling || center.z - r > terrain.ceiling_near(center.x, center.y, r)
         {
+            self.slots[slots].fill(Slot::default());
             return false;
         }
-        let geometry = contact.sphere_geometry(terrain, center, r);
-        if geometry.penetration <= 0.0 {
+        let faces = contact.sphere_faces(terrain, center, r);
+        let faces = faces.as_slice();
+        if faces[0].penetration <= 0.0 {
+            self.slots[slots].fill(Slot::default());
             return false;
         }
-        self.ids.push(id);
-        self.points.push(ContactPoint {
-            link,
-            body: bodies[link],
-            point: geometry.point,
-            com: frame.transform_point3(model.links[link].com),
-            frame: geometry.frame,
-        });
-        self.inputs.push(JointContact {
-            geometry,
-            velocity: DVec3::ZERO,
-            sharing: 1,
-        });
+        let taken = match_faces(&mut self.slots[slots.clone()], faces);
+        let com = frame.transform_point3(model.links[link].com);
+        for (geometry, slot) in faces.iter().zip(taken) {
+            self.ids.push(slots.start + slot);
+            self.points.push(ContactPoint {
+                link,
+                body: bodies[link],
+                point: geometry.point,
+                com,
+                frame: geometry.frame,
+            });
+            self.inputs.push(JointContact {
+                geometry: *geometry,
+                velocity: DVec3::ZERO,
+                sharing: 1,
+            });
+        }
         true
+    }
+}
+
+/// Gives each of this step's `faces` (all touching) one of a sphere's `slots`: the slot of last
+/// step's face with the nearest normal, within [`SAME_FACE`] — so a contact keeps its stick
+/// anchor while it stays on its face — or a free one, its state fresh. A sphere on one face
+/// before and after keeps its slot whatever its normal did (a foot rolling over an edge is on
+/// one surface throughout). Slots left over are freed. Returns the slot of each face.
+fn match_faces(slots: &mut [Slot], faces: &[SphereGeometry]) -> [usize; MAX_FACES] {
+    let mut taken = [usize::MAX; MAX_FACES];
+    let before = slots.iter().filter(|s| s.normal.is_some()).count();
+    if faces.len() == 1 && before <= 1 {
+        taken[0] = slots.iter().position(|s| s.normal.is_some()).unwrap_or(0);
+    } else {
+        let mut claimed = [false; MAX_FACES];
+        for (f, face) in faces.iter().enumerate() {
+            let n = face.frame.normal;
+            let same = (0..slots.len())
+                .filter(|&k| !claimed[k])
+                .filter_map(|k| Some((k, slots[k].normal?.dot(n))))
+                .filter(|&(_, cos)| cos > SAME_FACE)
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(k, _)| k);
+            let slot = same.unwrap_or_else(|| {
+                (0..slots.len())
+                    .find(|&k| !claimed[k] && slots[k].normal.is_none())
+                    .or_else(|| (0..slots.len()).find(|&k| !claimed[k]))
+                    .expect("as many slots as faces")
+            });
+            if same.is_none() {
+                slots[slot].state = ContactState::default();
+            }
+            claimed[slot] = true;
+            taken[f] = slot;
+        }
+    }
+    let used = &taken[..faces.len()];
+    for (k, slot) in slots.iter_mut().enumerate() {
+        match used.iter().position(|&t| t == k) {
+            Some(f) => slot.normal = Some(faces[f].frame.normal),
+            None => *slot = Slot::default(),
+        }
+    }
+    taken
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terrain::GroundFrame;
+
+    fn face(normal: DVec3) -> SphereGeometry {
+        SphereGeometry {
+            penetration: 1e-3,
+            point: DVec3::ZERO,
+            frame: GroundFrame::from_normal(normal),
+        }
+    }
+
+    /// A face keeps its slot — its stick anchor — while it stays the same face, whatever order
+    /// the faces come in; a new face gets a fresh state; a face gone frees its slot.
+    #[test]
+    fn faces_keep_their_contact_state_from_step_to_step() {
+        let mut slots = [Slot::default(); MAX_FACES];
+        let (floor, wall) = (DVec3::Z, DVec3::X);
+        let taken = match_faces(&mut slots, &[face(floor), face(wall)]);
+        assert_ne!(taken[0], taken[1]);
+        // the faces the other way round
+        let again = match_faces(&mut slots, &[face(wall), face(floor)]);
+        assert_eq!((again[0], again[1]), (taken[1], taken[0]));
+        // the wall gone, the floor tilted 30°: still the floor's slot; the wall's is free
+        let tilted = DVec3::new(0.5, 0.0, 0.75f64.sqrt());
+        let last = match_faces(&mut slots, &[face(tilted), face(-wall)]);
+        assert_eq!(last[0], taken[0]);
+        assert_ne!(last[1], taken[0]);
+        assert_eq!(slots.iter().filter(|s| s.normal.is_some()).count(), 2);
+        // one face before and one after keeps its slot even past 45° (an edge rolled over)
+        let mut slots = [Slot::default(); MAX_FACES];
+        let first = match_faces(&mut slots, &[face(floor)])[0];
+        assert_eq!(match_faces(&mut slots, &[face(wall)])[0], first);
     }
 }
