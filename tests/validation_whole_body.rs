@@ -52,6 +52,7 @@ fn v19_resting_on_the_belly(articulation: Articulation) {
             x: 0.0,
             y: 0.0,
             yaw: 0.0,
+            ..Default::default()
         },
         &pose,
         0.05,

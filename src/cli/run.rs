@@ -7,7 +7,7 @@ use hexsim::scenario::spec::{
     WALK_LOG_RATE,
 };
 use hexsim::scenario::{FileOr, Kind, Metrics, Output, Outputs, Scenario, ScenarioSpec};
-use hexsim::sim::Articulation;
+use hexsim::sim::{Articulation, Attitude};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -57,6 +57,10 @@ pub struct RunArgs {
     /// Start heading (deg).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     heading: f64,
+    /// Set the body down parallel to the ground under it (the plane through the terrain under
+    /// its feet), as a robot put down on a slope stands; default: level.
+    #[arg(long)]
+    on_ground: bool,
     /// Seed for generated terrains (natural, rough); replaces the terrain file's.
     #[arg(long)]
     seed: Option<u32>,
@@ -155,6 +159,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             x: args.start.as_ref().map(|v| v[0]),
             y: args.start.as_ref().map(|v| v[1]),
             heading_deg: args.heading,
+            attitude: if args.on_ground {
+                Attitude::Ground
+            } else {
+                Attitude::Level
+            },
         }),
         command: Some(vec![CommandSpec {
             at: 0.0,

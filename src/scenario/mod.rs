@@ -104,6 +104,7 @@ impl WalkSetup {
             x: self.start.x.unwrap_or(x_min + START_INSET),
             y: self.start.y.unwrap_or(0.5 * (y_min + y_max)),
             yaw: self.start.heading_deg.to_radians(),
+            attitude: self.start.attitude,
         }
     }
 }

@@ -399,6 +399,8 @@ pub struct StartSpec {
     pub x: Option<f64>,
     pub y: Option<f64>,
     pub heading_deg: f64,
+    /// `level` (default) or `ground`: the body set down parallel to the ground under it.
+    pub attitude: crate::sim::Attitude,
 }
 
 /// From `at` seconds into the walk, ramp to this command over `ramp` seconds.

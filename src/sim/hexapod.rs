@@ -18,7 +18,7 @@ use super::ground_contact::GroundContacts;
 pub use super::ground_contact::LinkContact;
 use crate::contact::{ContactForce, ContactModel};
 use crate::robot::RobotModel;
-use crate::terrain::{GroundFrame, HeightGrid};
+use crate::terrain::{GroundFrame, HeightGrid, Orientation};
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
 use std::sync::Arc;
@@ -56,12 +56,26 @@ impl Default for HexapodSettings {
 }
 
 /// Where and how the robot starts.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Placement {
     /// Body x, y (m) and heading (rad).
     pub x: f64,
     pub y: f64,
     pub yaw: f64,
+    pub attitude: Attitude,
+}
+
+/// How the body is set down.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Attitude {
+    /// Level, whatever the ground: on a slope the uphill feet touch first and the body falls
+    /// onto the others (0.26 m on 30° for hex18).
+    #[default]
+    Level,
+    /// Parallel to the ground under it — the plane through the terrain under the feet, fitted by
+    /// least squares — as a robot put down on a slope stands: every foot touches at once.
+    Ground,
 }
 
 /// The robot's state after a step.
@@ -166,22 +180,47 @@ impl Hexapod {
             settings.articulation.stabilization_iterations(),
         );
         // body height: each foot and every link's contact sphere above the ground under it
-        let heading = DQuat::from_rotation_z(placement.yaw);
         let link_poses = model.link_poses(pose);
-        let mut body_z = f64::NEG_INFINITY;
-        let mut clear = |link: usize, center: DVec3, radius: f64| {
-            let p = heading * link_poses[link].transform_point3(center);
-            let ground = terrain.height(placement.x + p.x, placement.y + p.y);
-            body_z = body_z.max(ground + radius - p.z);
-        };
-        for leg in &model.legs {
-            clear(leg.foot_link, leg.foot.center, leg.foot.radius);
-        }
-        for (k, link) in model.links.iter().enumerate() {
-            for sphere in &link.contacts {
-                clear(k, sphere.center, sphere.radius);
+        let heading = match placement.attitude {
+            Attitude::Level => DQuat::from_rotation_z(placement.yaw),
+            Attitude::Ground => {
+                let level = DQuat::from_rotation_z(placement.yaw);
+                let feet: Vec<DVec3> = model
+                    .legs
+                    .iter()
+                    .map(|leg| level * link_poses[leg.foot_link].transform_point3(leg.foot.center))
+                    .collect();
+                ground_tilt(&terrain, placement.x, placement.y, &feet) * level
             }
-        }
+        };
+        let spheres: Vec<(DVec3, f64)> =
+            model
+                .legs
+                .iter()
+                .map(|leg| (leg.foot_link, leg.foot.center, leg.foot.radius))
+                .chain(model.links.iter().enumerate().flat_map(|(k, link)| {
+                    link.contacts.iter().map(move |c| (k, c.center, c.radius))
+                }))
+                .map(|(link, center, radius)| {
+                    (heading * link_poses[link].transform_point3(center), radius)
+                })
+                .collect();
+        // each sphere its radius above the ground under its centre, then lifted out of the ground
+        // along the normal where that leaves it in (on a slope a sphere its radius above the
+        // ground vertically sinks r·(1 − cos θ) into it: 1.3 mm on 30°)
+        let mut body_z = spheres
+            .iter()
+            .map(|(p, r)| terrain.height(placement.x + p.x, placement.y + p.y) + r - p.z)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let lift = spheres
+            .iter()
+            .map(|(p, r)| {
+                let center = DVec3::new(placement.x + p.x, placement.y + p.y, body_z + p.z);
+                let g = crate::contact::sphere_geometry(&terrain, center, *r, Orientation::Exact);
+                g.penetration.max(0.0) / g.frame.normal.z.max(0.1)
+            })
+            .fold(0.0, f64::max);
+        body_z += lift;
         let body = DAffine3::from_rotation_translation(
             heading,
             DVec3::new(placement.x, placement.y, body_z + 1e-3 + height),
@@ -434,6 +473,35 @@ impl Hexapod {
     }
 }
 
+/// The rotation that turns the vertical into the normal of the plane fitted by least squares to
+/// the terrain under `feet` (offsets from the body at `x`, `y`): the shortest arc, so the heading
+/// is kept. Level for fewer than three feet or feet in a line.
+fn ground_tilt(terrain: &HeightGrid, x: f64, y: f64, feet: &[DVec3]) -> DQuat {
+    // z = a·u + b·v + c over the feet's (u, v): the normal equations of the fit, centred
+    let n = feet.len() as f64;
+    let (mu, mv) = feet
+        .iter()
+        .fold((0.0, 0.0), |(u, v), p| (u + p.x / n, v + p.y / n));
+    let heights: Vec<f64> = feet
+        .iter()
+        .map(|p| terrain.height(x + p.x, y + p.y))
+        .collect();
+    let mz = heights.iter().sum::<f64>() / n;
+    let (mut suu, mut suv, mut svv, mut suz, mut svz) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (p, z) in feet.iter().zip(&heights) {
+        let (u, v, z) = (p.x - mu, p.y - mv, z - mz);
+        (suu, suv, svv) = (suu + u * u, suv + u * v, svv + v * v);
+        (suz, svz) = (suz + u * z, svz + v * z);
+    }
+    let det = suu * svv - suv * suv;
+    if feet.len() < 3 || det.abs() < 1e-12 * (suu * svv).max(1e-300) {
+        return DQuat::IDENTITY;
+    }
+    let a = (suz * svv - svz * suv) / det;
+    let b = (svz * suu - suz * suv) / det;
+    DQuat::from_rotation_arc(DVec3::Z, DVec3::new(-a, -b, 1.0).normalize())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -452,11 +520,7 @@ mod tests {
                 articulation,
                 ..HexapodSettings::default()
             },
-            Placement {
-                x: 0.0,
-                y: 0.0,
-                yaw: 0.0,
-            },
+            Placement::default(),
             &pose,
         )
     }

@@ -8,7 +8,9 @@ mod ground_contact;
 pub use articulation::{Articulation, IMPULSE_PGS_ITERATIONS, JointDrift, ServoGains};
 pub use ball::{BallConfig, BallSample, BallSim};
 pub use engine::{Engine, STANDARD_GRAVITY};
-pub use hexapod::{DEFAULT_SOLVER_ITERATIONS, Hexapod, HexapodSample, HexapodSettings, Placement};
+pub use hexapod::{
+    Attitude, DEFAULT_SOLVER_ITERATIONS, Hexapod, HexapodSample, HexapodSettings, Placement,
+};
 pub use walker::{WalkSample, Walker};
 pub mod hexapod;
 pub mod walker;
