@@ -218,12 +218,15 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         m.max_penetration * 1e3
     );
     println!("  ground: {}", m.ground.describe());
-    let slip: Vec<String> = m
-        .foot_slip
-        .iter()
-        .map(|s| format!("{:.1}", s * 1e3))
-        .collect();
-    println!("  foot slip (mm, lf lm lr rf rm rr): {}", slip.join(" "));
+    let mm = |slip: &[f64; 6]| -> String {
+        let each: Vec<String> = slip.iter().map(|s| format!("{:.1}", s * 1e3)).collect();
+        each.join(" ")
+    };
+    println!(
+        "  foot slip in contact (mm, lf lm lr rf rm rr): {}; of it under load: {}",
+        mm(&m.foot_slip),
+        mm(&m.foot_slip_loaded)
+    );
     if m.time_off_terrain > 0.0 {
         println!(
             "  warning: the body was beyond the terrain's grid for {:.2} s, on the flat apron its edges extend to",
