@@ -348,6 +348,39 @@ fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
     );
 }
 
+/// A step the user gives is held to the bounds hexsim chooses its own by: `--dt 0.001` on the
+/// 79 kg WORMS, whose landing feet need 0.25 ms, runs but warns, naming the bound and the step
+/// hexsim would choose; at that step, or left out, no such warning.
+#[test]
+fn a_time_step_given_past_the_chosen_bounds_is_warned() {
+    let worms = "tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf";
+    let run = |dt: Option<&str>| {
+        let mut cmd = hexsim();
+        cmd.args(["run", "--robot", worms, "--duration", "0.01", "--no-record"]);
+        if let Some(dt) = dt {
+            cmd.args(["--dt", dt]);
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{stderr}");
+        stderr
+    };
+    let stderr = run(Some("0.001"));
+    assert!(
+        stderr.contains("dt = 0.001 s is larger than hexsim would choose (0.250 ms)")
+            && stderr.contains("the feet land at 0.76 m/s")
+            && stderr.contains("v·dt ≤ 0.5·δ, dt ≤ 2.71e-4 s"),
+        "{stderr}"
+    );
+    for dt in [Some("0.00025"), None] {
+        let stderr = run(dt);
+        assert!(
+            !stderr.contains("larger than hexsim would choose"),
+            "{dt:?}: {stderr}"
+        );
+    }
+}
+
 /// Copies a third-party robot's package folder into `dir`, without its robot file, and returns
 /// the copy of its URDF: the robot as published.
 fn as_published(package: &str, urdf: &str, dir: &std::path::Path) -> std::path::PathBuf {

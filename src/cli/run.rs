@@ -38,8 +38,10 @@ pub struct RunArgs {
     /// ground it does not find, lifts higher when a swing is blocked; the body follows the feet.
     #[arg(long)]
     reactive: bool,
-    /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo needs a
-    /// smaller step to be stable (a warning says so).
+    /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo, the contact
+    /// spring or the landing feet need a smaller step (a warning says so). A step given is
+    /// refused past the servo's bound and warned past the others, naming the step hexsim would
+    /// choose.
     #[arg(long)]
     dt: Option<f64>,
     /// Forward speed (m/s). Default: the gait's nominal stride / (duty · period).
