@@ -41,11 +41,43 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
         .collect()
 }
 
+/// Each foot of a walk touched the ground for at least 5 % of it, so its slip was measured on a
+/// foot that stood: a tripod's feet stand half the walk, and on the natural terrain a blind
+/// tripod's feet can swing over a dip (measured: PhantomX's lr and rf 9 % and 11 % there, every
+/// other foot of every robot 34–51 %). WORMS is the exception, named: its pad
+/// feet's foot spheres never touch — the contact spheres of its `*_link_3` links, fitted from its
+/// collision geometry, stand lower and carry it (on flat ground 0 s of foot contact, 4.0–5.0 s of
+/// `*_link_3` contact in 10 s) — so its `foot_slip` measures nothing there: an open problem
+/// (docs/robots.md), asserted as it is so that a change shows.
+fn feet_carry(metrics: &serde_json::Value, name: &str) {
+    let stance: Vec<f64> = metrics["stance_fraction"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    if name == "worms" {
+        let links = metrics["link_contact_time"].as_object().unwrap();
+        assert!(
+            links.keys().filter(|k| k.ends_with("_link_3")).count() == 6,
+            "worms: {links:?}"
+        );
+        return;
+    }
+    assert!(
+        stance.iter().all(|&s| s >= 0.05),
+        "{name}: the feet touched the ground for {stance:.2?} of the walk"
+    );
+}
+
 /// Every third-party hexapod walks out of the box, with the built-in tripod's lengths fitted to
 /// it: on flat ground at least 80 % of the fitted gait's nominal distance in 10 s with a heading
 /// change under 10°, and over the paper's natural terrain (tiled along x, so that WORMS's 4.6 m
-/// stay on it) at least 60 % of it without tilting past 20°; on both, no loaded foot slides
-/// 0.1 m (the bar). The PhantomX
+/// stay on it) at least 60 % of it without tilting past 20°; on both, no foot slides 0.1 m while
+/// in contact (`foot_slip`, loaded or not: the bar; measured at most 0.037 m flat, on
+/// MushroomRL's, and 0.040 m natural, on elkapod, docs/robots.md), and the feet carry the robot
+/// (each on the ground for ≥ 5 % of the walk), so that bound is not met by feet that never touch.
+/// The PhantomX
 /// is rectangular, the huaibovip hexapod hexagonal, the MushroomRL hexapod's long legs sprawl
 /// from a small body and are mounted ahead of their hips (an offset femur), and its placeholder
 /// leg inertias (1e-2 kg·m²) need servos stiffer than hex18's (fitted). Kraby's round body has
@@ -148,6 +180,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
             slip.iter().all(|&s| s < 0.1),
             "{name}: feet slid {slip:.3?} m over 10 s on flat ground"
         );
+        feet_carry(&flat, name);
         assert!(stance["least_joint_room_deg"].as_f64().unwrap() > 0.0);
         // the body walks at the stance height it was given, measured from the hips' plane
         // whatever the base link's origin (Kraby's is on the ground under its body)
@@ -179,6 +212,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
             slip.iter().all(|&s| s < 0.1),
             "{name}: feet slid {slip:.3?} m over 10 s on the natural terrain"
         );
+        feet_carry(&natural, name);
         let forward = natural["forward_distance"].as_f64().unwrap();
         assert!(
             forward >= 0.6 * nominal,
@@ -312,6 +346,39 @@ fn a_time_step_too_large_for_the_servos_is_refused_or_chosen_smaller() {
         stderr.contains("dt: 0.167 ms, not the default 1 ms: the impulse joints' explicit servo"),
         "{stderr}"
     );
+}
+
+/// A step the user gives is held to the bounds hexsim chooses its own by: `--dt 0.001` on the
+/// 79 kg WORMS, whose landing feet need 0.25 ms, runs but warns, naming the bound and the step
+/// hexsim would choose; at that step, or left out, no such warning.
+#[test]
+fn a_time_step_given_past_the_chosen_bounds_is_warned() {
+    let worms = "tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf";
+    let run = |dt: Option<&str>| {
+        let mut cmd = hexsim();
+        cmd.args(["run", "--robot", worms, "--duration", "0.01", "--no-record"]);
+        if let Some(dt) = dt {
+            cmd.args(["--dt", dt]);
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{stderr}");
+        stderr
+    };
+    let stderr = run(Some("0.001"));
+    assert!(
+        stderr.contains("dt = 0.001 s is larger than hexsim would choose (0.250 ms)")
+            && stderr.contains("the feet land at 0.76 m/s")
+            && stderr.contains("v·dt ≤ 0.5·δ, dt ≤ 2.71e-4 s"),
+        "{stderr}"
+    );
+    for dt in [Some("0.00025"), None] {
+        let stderr = run(dt);
+        assert!(
+            !stderr.contains("larger than hexsim would choose"),
+            "{dt:?}: {stderr}"
+        );
+    }
 }
 
 /// Copies a third-party robot's package folder into `dir`, without its robot file, and returns

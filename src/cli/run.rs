@@ -38,8 +38,10 @@ pub struct RunArgs {
     /// ground it does not find, lifts higher when a swing is blocked; the body follows the feet.
     #[arg(long)]
     reactive: bool,
-    /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo needs a
-    /// smaller step to be stable (a warning says so).
+    /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo, the contact
+    /// spring or the landing feet need a smaller step (a warning says so). A step given is
+    /// refused past the servo's bound and warned past the others, naming the step hexsim would
+    /// choose.
     #[arg(long)]
     dt: Option<f64>,
     /// Forward speed (m/s). Default: the gait's nominal stride / (duty · period).
@@ -227,12 +229,15 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         m.max_penetration * 1e3
     );
     println!("  ground: {}", m.ground.describe());
-    let slip: Vec<String> = m
-        .foot_slip
-        .iter()
-        .map(|s| format!("{:.1}", s * 1e3))
-        .collect();
-    println!("  foot slip (mm, lf lm lr rf rm rr): {}", slip.join(" "));
+    let mm = |slip: &[f64; 6]| -> String {
+        let each: Vec<String> = slip.iter().map(|s| format!("{:.1}", s * 1e3)).collect();
+        each.join(" ")
+    };
+    println!(
+        "  foot slip in contact (mm, lf lm lr rf rm rr): {}; of it under load: {}",
+        mm(&m.foot_slip),
+        mm(&m.foot_slip_loaded)
+    );
     if m.time_off_terrain > 0.0 {
         println!(
             "  warning: the body was beyond the terrain's grid for {:.2} s, on the flat apron its edges extend to",

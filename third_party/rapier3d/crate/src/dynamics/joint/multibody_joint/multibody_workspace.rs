@@ -52,6 +52,10 @@ pub(crate) struct MultibodyWorkspace {
     pub dof_motions: Vec<SVector<Real, SPATIAL_DIM>>,
     /// Per non-kinematic degree of freedom (in order, kinematic ones left out), the one before
     /// it on its path to the root (`NO_PARENT` for none): the tree the factorisations follow.
+    #[cfg_attr(
+        feature = "serde-serialize",
+        serde(with = "super::tree_lu::portable_parents")
+    )]
     pub dof_parents: Vec<usize>,
     /// Per link, the last non-kinematic degree of freedom on its path (scratch).
     link_last_dof: Vec<usize>,

@@ -25,6 +25,7 @@ pub const NO_PARENT: usize = usize::MAX;
 #[cfg_attr(feature = "serde-serialize", derive(Serialize, Deserialize))]
 #[derive(Clone, Debug)]
 pub struct TreeLu {
+    #[cfg_attr(feature = "serde-serialize", serde(with = "portable_parents"))]
     parents: Vec<usize>,
     /// Each degree of freedom's ancestors, nearest first, all lists end to end:
     /// `ancestors[ancestor_start[k]..ancestor_start[k + 1]]` are `k`'s.
@@ -32,6 +33,38 @@ pub struct TreeLu {
     ancestor_start: Vec<usize>,
     factors: DMatrix<Real>,
     singular: bool,
+}
+
+/// Parents in a snapshot as `u32`, [`NO_PARENT`] as `u32::MAX`: `usize::MAX` would be written as
+/// `0xFFFF_FFFF_FFFF_FFFF` on a 64-bit target and `0xFFFF_FFFF` on a 32-bit one (bincode writes a
+/// `usize` as a `u64`), and a snapshot must be the same bytes on both (`snapshot_portability`).
+#[cfg(feature = "serde-serialize")]
+pub(crate) mod portable_parents {
+    use super::NO_PARENT;
+    use crate::alloc_prelude::*;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(parents: &[usize], serializer: S) -> Result<S::Ok, S::Error> {
+        let portable: Vec<u32> = parents
+            .iter()
+            .map(|&p| {
+                if p == NO_PARENT {
+                    u32::MAX
+                } else {
+                    u32::try_from(p).expect("fewer than 2³² − 1 degrees of freedom")
+                }
+            })
+            .collect();
+        portable.serialize(serializer)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<usize>, D::Error> {
+        let portable = Vec::<u32>::deserialize(deserializer)?;
+        Ok(portable
+            .into_iter()
+            .map(|p| if p == u32::MAX { NO_PARENT } else { p as usize })
+            .collect())
+    }
 }
 
 impl Default for TreeLu {
