@@ -1037,11 +1037,7 @@ fn servo_torque_stops_at_the_effort_limit(articulation: Articulation) {
             dt,
             ..settings(articulation)
         },
-        Placement {
-            x: 0.0,
-            y: 0.0,
-            yaw: 0.0,
-        },
+        Placement::default(),
         &pose,
         0.05,
     );

@@ -111,9 +111,11 @@ fn v19_resting_on_the_belly_impulse() {
 
 /// The collapse: hex18 on servos too weak to stand (0.3 N·m/rad against the reference's
 /// 20) used to end with its body 12.6 cm below the ground, every foot "in contact", and nothing
-/// said. Its body now comes down on the ground and stays above it, and the run says so.
+/// said. It now comes down on its links — its belly, or as measured since kinetic friction
+/// resists a reversing slip along the stopping force, its knees (femurs 0.26–0.70 s each) — and
+/// stays above the ground, and the run says so.
 #[test]
-fn a_robot_too_weak_to_stand_rests_on_its_body_and_the_run_says_so() {
+fn a_robot_too_weak_to_stand_rests_on_its_links_and_the_run_says_so() {
     let dir = scratch("collapse");
     let metrics = dir.join("m.json");
     let out = hexsim()
@@ -135,19 +137,22 @@ fn a_robot_too_weak_to_stand_rests_on_its_body_and_the_run_says_so() {
     assert_eq!(out.status.code(), Some(0), "{stdout}");
     let m: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
-    let body = m["body_contact_time"].as_f64().unwrap();
+    let touched = m["link_contact_time"].as_object().unwrap();
     let lowest = m["body_height_min"].as_f64().unwrap();
     let deepest = m["max_link_penetration"].as_f64().unwrap();
     println!(
-        "collapse: body on the ground {body} s, hips at least {lowest} m up, links {deepest} m deep"
+        "collapse: links on the ground {touched:?}, hips at least {lowest} m up, links {deepest} m deep"
     );
-    assert!(body > 0.0, "{m}");
+    let longest = touched
+        .values()
+        .filter_map(|t| t.as_f64())
+        .fold(0.0, f64::max);
+    assert!(longest > 0.1, "{m}");
     // the hips' plane stays above the box's half-height less what the spheres sink
     assert!(lowest > 0.02, "{lowest}");
     assert!(deepest < 5e-3, "{deepest}");
     assert!(
-        stdout.contains("warning: links other than the feet touched the ground")
-            && stdout.contains("base_link"),
+        stdout.contains("links other than the feet touched the ground"),
         "{stdout}"
     );
 }

@@ -602,9 +602,15 @@ mod tests {
                                     * (-(s / stribeck_velocity).powi(2)).exp();
                             -level * slip / s.max(width) - viscous * slip
                         }
-                        // the stopping force projected onto the kinetic disc
+                        // against the slip, or, where the step would reverse it, the
+                        // stopping force projected onto the kinetic disc
                         FrictionLaw::Karnopp { mu_kinetic, .. } => {
-                            mu_kinetic * fn_ * stop / stop.length()
+                            let kinetic = -mu_kinetic * fn_ * slip / s;
+                            if (kinetic - stop).dot(slip) >= 0.0 {
+                                kinetic
+                            } else {
+                                mu_kinetic * fn_ * stop / stop.length()
+                            }
                         }
                         FrictionLaw::None => DVec2::ZERO,
                     }
