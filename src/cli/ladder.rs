@@ -18,7 +18,8 @@ pub struct LadderArgs {
     #[arg(long)]
     robot: Option<PathBuf>,
     /// Folder for the results: ladder.json (per family and per run), results.jsonl (the batch's
-    /// records), ladder.md (the table).
+    /// records), ladder.md (the table), ladder.svg (the chart: a cell per run, coloured by how
+    /// it ended).
     #[arg(short, long, default_value = "ladder-results")]
     output: PathBuf,
     /// Worker threads, one simulation each. Default: all cores.
@@ -91,6 +92,10 @@ pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
     }
     hexsim::record::output::write_json(Some(&args.output.join("ladder.json")), &result)?;
     std::fs::write(args.output.join("ladder.md"), &table)?;
+    std::fs::write(
+        args.output.join("ladder.svg"),
+        hexsim::ladder::chart::svg(&result),
+    )?;
     println!(
         "{:.1} s wall; results in {}",
         outcome.wall_time,

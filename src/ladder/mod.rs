@@ -10,6 +10,8 @@
 //! speed), runs them as one batch and reads each run's record into an [`Outcome`]. A stall, a
 //! slide back, a fall or a divergence is a result, said as such.
 
+pub mod chart;
+
 use crate::batch::results::{Record, Status};
 use crate::scenario::{self, Scenario, ScenarioError, sweep};
 use serde::Serialize;
