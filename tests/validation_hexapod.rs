@@ -633,7 +633,7 @@ fn blind_hex18_climbs_and_descends_6_cm_risers() {
 
 /// Issue #39: hex18 perceptive (`follow_terrain`) climbs 8 cm risers: the swings planned over
 /// the risers, the footholds off their edges, the body pitched with the flight where its legs
-/// cannot level it. Measured: +0.233 m to x 0.85 m in 12 s, pitched up to 24.3°, feet 3.7 mm
+/// cannot level it. Measured: +0.223 m to x 0.98 m in 12 s, pitched up to 29.6°, feet 2.8 mm
 /// deep (before: stalled at the first 8 cm riser).
 #[test]
 fn perceptive_hex18_climbs_8_cm_risers() {
@@ -655,7 +655,7 @@ fn perceptive_hex18_climbs_8_cm_risers() {
 /// stones, 4 cm pits 10 cm deep) a tibia target once jumped 1.85 rad in one step and its foot
 /// landed at 17 m/s, sinking 11.7 mm; now every joint target moves at most a few times the
 /// nominal swing's joint speed (gait::slew). Measured: 0.0101 rad a step at most, the deepest
-/// foot 4.6 mm.
+/// foot 3.3 mm.
 #[test]
 fn perceptive_targets_do_not_jump_across_edges() {
     let stones =
