@@ -19,8 +19,11 @@
 //! own turn of the tibia does not swing the foot sideways. The fit plans the stance without it:
 //! the offset is millimetres, an execution detail like the servos' load feed-forward.
 
+use super::clearance::{self, SwingGround};
+use super::foothold;
 use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
+use super::slew;
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
 use crate::robot::kinematics::{IkSolution, LegChain};
@@ -85,6 +88,21 @@ pub struct GaitController {
     vertical_room: [(f64, f64); 6],
     /// The reactive gait's state, when on (see [`super::reactive`]).
     reactive: Option<Reactive>,
+    /// Perceptive planning per leg ([`Self::targets_on`]): the foothold shift (body frame,
+    /// horizontal) of its stance, the one chosen for the swing under way, the ground its foot
+    /// lifted off (in `ground`'s units; NaN before the first stance), and whether it swings.
+    foothold: [DVec3; 6],
+    next_foothold: [DVec3; 6],
+    stance_ground: [f64; 6],
+    swinging: [bool; 6],
+    /// The last planned foot points and their gait time, for the bound on a target's speed
+    /// ([`super::slew`]).
+    last_planned: [DVec3; 6],
+    last_time: Option<f64>,
+    /// The fastest each joint's target may move (rad/s, at the gait's nominal stride) and the
+    /// last targets given ([`slew::joint_speed_limit`]).
+    joint_speed: [[f64; 3]; 6],
+    last_angles: [[f64; 3]; 6],
 }
 
 /// The share of a leg's vertical reach from its standing target that levelling may use: the rest
@@ -233,7 +251,7 @@ impl GaitController {
             let up = (LEVELLING_SHARE * reach(span) - spec.step_height).max(0.0);
             (down, up)
         });
-        Ok(GaitController {
+        let mut controller = GaitController {
             offsets: spec.offsets,
             spec,
             chains,
@@ -245,7 +263,45 @@ impl GaitController {
             grounded: last,
             vertical_room,
             reactive: None,
-        })
+            foothold: [DVec3::ZERO; 6],
+            next_foothold: [DVec3::ZERO; 6],
+            stance_ground: [f64::NAN; 6],
+            swinging: [false; 6],
+            last_planned: [DVec3::ZERO; 6],
+            last_time: None,
+            joint_speed: [[f64::INFINITY; 3]; 6],
+            last_angles: last,
+        };
+        controller.joint_speed = controller.nominal_joint_speeds();
+        Ok(controller)
+    }
+
+    /// Each joint's fastest rate (rad/s) over one cycle of the gait at its nominal speed on
+    /// level ground, for the bound on a joint target's rate ([`slew`]); the controller's state
+    /// is as new afterwards.
+    fn nominal_joint_speeds(&mut self) -> [[f64; 3]; 6] {
+        let (last, grounded) = (self.last, self.grounded);
+        let command = VelocityCommand {
+            forward: self.spec.nominal_speed(),
+            ..Default::default()
+        };
+        let samples = 400;
+        let h = self.spec.period / samples as f64;
+        let mut speed = [[0.0f64; 3]; 6];
+        let mut before = self.targets(0.0, command, 1.0).joint_angles;
+        for i in 1..=samples {
+            let now = self.targets(i as f64 * h, command, 1.0).joint_angles;
+            for (k, leg) in speed.iter_mut().enumerate() {
+                for (j, v) in leg.iter_mut().enumerate() {
+                    *v = v.max((now[k][j] - before[k][j]).abs() / h);
+                }
+            }
+            before = now;
+        }
+        (self.last, self.grounded, self.last_time) = (last, grounded, None);
+        self.last_planned = [DVec3::ZERO; 6];
+        self.last_angles = last;
+        speed
     }
 
     /// Turns the feet's rolling offset on or off (on after [`Self::new`]; the fit and its
@@ -284,50 +340,91 @@ impl GaitController {
         std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
     }
 
-    /// The share λ ∈ [0, 1] of the ground's rise under each foot that the legs can follow: the
-    /// largest for which every standing target moved by λ·`ground` (see [`Self::targets`]) stays
-    /// within its leg's vertical room. Levelled on a slope the downhill feet reach down and the
-    /// uphill ones up; hex18's legs level at most 10.7° (λ < 1 from 11° on), and a target out of
+    /// The share λ ∈ [0, 1] of the ground plane's rise under each foot that the legs can
+    /// follow: the largest for which every standing target moved by the terrain's departure
+    /// from the plane (`residual`) and λ times the plane's rise (`planar`) stays within its
+    /// leg's vertical room. Levelled on a slope the downhill feet reach down and the uphill
+    /// ones up; hex18's legs level at most 10.7° (λ < 1 from 11° on), and a target out of
     /// reach is clamped — the IK answers with the stretched leg, the body tips onto it, and on
     /// 30° it slid 0.95 m in 10 s. Levelled by λ instead, the body keeps the rest of the tilt.
-    pub fn levelling(&self, ground: impl Fn(DVec3) -> f64) -> f64 {
+    /// On stairs the treads' departure from the flight's plane is followed in full and the
+    /// flight's slope by λ: the body pitches with the stairs by the rest.
+    ///
+    /// Each foot's rise is taken where it would stand: off any edge (the foothold a swing
+    /// would choose, [`foothold::away_from_edges`]) — a standing point over a stone's pit would
+    /// otherwise count the pit's depth, and every foot's target would scale down by it.
+    pub fn levelling(&self, residual: impl Fn(DVec3) -> f64, planar: impl Fn(DVec3) -> f64) -> f64 {
         (0..6).fold(1.0f64, |share, k| {
-            let rise = ground(self.neutral[k]);
+            let n = self.neutral[k];
+            let shift = foothold::away_from_edges(
+                &residual,
+                n,
+                DVec3::X,
+                self.radius[k],
+                self.spec.stride_length,
+            );
+            let (r, q) = (residual(n + shift), planar(n + shift));
             let (down, up) = self.vertical_room[k];
-            let room = if rise < 0.0 { down } else { up };
-            if rise.abs() * share > room {
-                room / rise.abs()
+            // r + λ·q within [−down, up]
+            let most = if q > 0.0 {
+                (up - r) / q
+            } else if q < 0.0 {
+                (down + r) / -q
             } else {
-                share
-            }
+                1.0
+            };
+            share.min(most.max(0.0))
         })
     }
 
     /// Joint angles of the standing pose with each foot lowered or raised to the ground under it
     /// (see `ground` in [`Self::targets`]): the body stands level on a slope.
     pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [[f64; 3]; 6] {
-        std::array::from_fn(|k| {
+        self.last_time = None;
+        let angles = std::array::from_fn(|k| {
             let mut foot = self.neutral[k];
-            foot.z += ground(foot);
+            self.stance_ground[k] = ground(foot);
+            foot.z += self.stance_ground[k];
             let (_, solution) = self.place(k, foot, 0.0);
             self.last[k] = solution.angles;
             solution.angles
-        })
+        });
+        self.last_angles = angles;
+        angles
     }
 
-    /// Targets at gait time `t` (s since the gait started) for a command, with the stride scaled by
-    /// `blend` ∈ [0, 1] (ramped up at start so the feet leave the standing pose smoothly).
-    /// `ground` gives, for a point of a foot's path (body frame), how far the terrain under it lies
-    /// above the terrain under the body (`|_| 0.0` plans for level ground): following it the body
-    /// stays level and at the stance height while the legs reach down a slope or over a bump.
-    pub fn targets(
+    /// Targets at gait time `t` (s since the gait started) for a command on level ground (blind),
+    /// with the stride scaled by `blend` ∈ [0, 1] (ramped up at start so the feet leave the
+    /// standing pose smoothly).
+    pub fn targets(&mut self, t: f64, command: VelocityCommand, blend: f64) -> GaitTargets {
+        self.plan(t, command, blend, None::<fn(DVec3) -> f64>)
+    }
+
+    /// [`Self::targets`] over known terrain (perceptive). `ground` gives, for a point (body
+    /// frame), how far the terrain under it lies above the terrain under the body: following it
+    /// the body stays level and at the stance height while the legs reach down a slope or over
+    /// a bump. A stance foot stands on the ground under it; a swing is planned over the whole
+    /// ground it crosses ([`super::clearance`]), from the ground it lifted off to where it will
+    /// land, which is moved off any edge onto the tread ([`super::foothold`]).
+    pub fn targets_on(
         &mut self,
         t: f64,
         command: VelocityCommand,
         blend: f64,
         ground: impl Fn(DVec3) -> f64,
     ) -> GaitTargets {
+        self.plan(t, command, blend, Some(ground))
+    }
+
+    fn plan(
+        &mut self,
+        t: f64,
+        command: VelocityCommand,
+        blend: f64,
+        ground: Option<impl Fn(DVec3) -> f64>,
+    ) -> GaitTargets {
         let stance_time = self.spec.duty_factor * self.spec.period;
+        let swing_time = self.spec.period - stance_time;
         let v = DVec3::new(command.forward, command.sideways, 0.0);
         let omega = DVec3::new(0.0, 0.0, command.yaw_rate);
         let mut out = GaitTargets {
@@ -343,19 +440,31 @@ impl GaitController {
         if let Some(reactive) = &mut self.reactive {
             reactive.follow_feet(&self.neutral, &phases);
         }
+        // how far a target may move since the last call (the first one is free)
+        let elapsed = self.last_time.map(|last| t - last).filter(|&dt| dt > 0.0);
+        self.last_time = Some(t);
         for (k, &phase) in phases.iter().enumerate() {
             let n = self.neutral[k];
             // ground displacement under the foot over one stance, seen from the body
             let d = -(v + omega.cross(n)) * stance_time * blend;
-            let (mut foot, mut lift) = match phase {
-                LegPhase::Stance(s) => (n + d * (s - 0.5), 0.0),
+            if let Some(ground) = &ground {
+                self.choose_foothold(k, phase, n, d, swing_time / stance_time, ground);
+            }
+            let (mut foot, mut lift, progress) = match phase {
+                LegPhase::Stance(s) => (n + d * (s - 0.5), 0.0, 0.0),
                 LegPhase::Swing(s) => {
                     let duty = self.spec.duty_factor;
                     let (progress, lift) = swing_profile(self.spec.swing, s, -(1.0 - duty) / duty);
                     let lift = self.spec.step_height * lift;
-                    (n + d * (0.5 - progress) + DVec3::Z * lift, lift)
+                    (n + d * (0.5 - progress) + DVec3::Z * lift, lift, progress)
                 }
             };
+            if ground.is_some() {
+                foot += match phase {
+                    LegPhase::Stance(_) => self.foothold[k],
+                    LegPhase::Swing(_) => self.foothold[k].lerp(self.next_foothold[k], progress),
+                };
+            }
             out.grounded[k] = phase.is_stance();
             if let Some(reactive) = &mut self.reactive {
                 let base = foot - DVec3::Z * lift;
@@ -376,15 +485,91 @@ impl GaitController {
                     height.max(0.0)
                 };
             }
-            foot.z += ground(foot);
+            if let Some(ground) = &ground {
+                foot.z += match phase {
+                    LegPhase::Stance(_) => {
+                        self.stance_ground[k] = ground(foot);
+                        self.stance_ground[k]
+                    }
+                    LegPhase::Swing(s) => {
+                        let ratio = swing_time / stance_time;
+                        // where the foot lifted off and where it will land, seen now: the
+                        // ground moves by d over a stance
+                        let from = n + d * (0.5 + s * ratio) + self.foothold[k];
+                        let to = n - d * (0.5 + (1.0 - s) * ratio) + self.next_foothold[k];
+                        let crossed = SwingGround::new(ground, from, to);
+                        let landing = ground(to);
+                        let lifted = if self.stance_ground[k].is_nan() {
+                            ground(from)
+                        } else {
+                            self.stance_ground[k]
+                        };
+                        let under = foot - DVec3::Z * lift;
+                        clearance::swing_ground(
+                            lifted,
+                            landing,
+                            progress,
+                            crossed.envelope(under),
+                            s,
+                        )
+                    }
+                };
+            }
+            if let Some(dt) = elapsed {
+                let stride = d.length();
+                let longest = slew::speed_limit(&self.spec, stride) * dt;
+                foot = slew::limited(self.last_planned[k], foot, longest);
+            }
+            self.last_planned[k] = foot;
             let (foot, solution) = self.place(k, foot, lift);
             self.last[k] = solution.angles;
-            out.joint_angles[k] = solution.angles;
+            let mut angles = solution.angles;
+            if let Some(dt) = elapsed {
+                // an inverse kinematics that answers a target out of reach with the closest
+                // pose may flip from one such pose to another: the joints are bounded too
+                let scale = (d.length() / self.spec.stride_length).max(1.0);
+                for (j, angle) in angles.iter_mut().enumerate() {
+                    let longest = slew::joint_speed_limit(self.joint_speed[k], j) * scale * dt;
+                    let last = self.last_angles[k][j];
+                    *angle = angle.clamp(last - longest, last + longest);
+                }
+            }
+            self.last_angles[k] = angles;
+            out.joint_angles[k] = angles;
             out.feet[k] = foot;
             out.phases[k] = phase;
             out.clamped[k] = solution.error > REACH_TOLERANCE;
         }
         out
+    }
+
+    /// Perceptive: at the start of leg `k`'s swing, where its foot will land, moved off any edge
+    /// ([`foothold::away_from_edges`]) and held through the swing; at touch-down, that foothold
+    /// becomes the stance's. `ratio` is the swing's time over the stance's.
+    fn choose_foothold(
+        &mut self,
+        k: usize,
+        phase: LegPhase,
+        n: DVec3,
+        d: DVec3,
+        ratio: f64,
+        ground: &impl Fn(DVec3) -> f64,
+    ) {
+        match phase {
+            LegPhase::Stance(_) if self.swinging[k] => {
+                self.swinging[k] = false;
+                self.foothold[k] = self.next_foothold[k];
+            }
+            LegPhase::Swing(s) if !self.swinging[k] => {
+                self.swinging[k] = true;
+                // the ground that will be under the touch-down point when the foot lands
+                let landing = n - d * (0.5 + (1.0 - s) * ratio);
+                let longest = self.spec.stride_length.max(d.length());
+                self.next_foothold[k] =
+                    foothold::away_from_edges(ground, landing, -d, self.radius[k], longest);
+            }
+            _ => {}
+        }
     }
 
     /// Leg `k`'s foot centre target and joint angles for the planned point `planned`, `lift`
@@ -474,7 +659,7 @@ mod tests {
             let mut worst = [0.0f64; 6];
             let mut before: Option<GaitTargets> = None;
             for i in 0..=(gait.period / h).round() as usize {
-                let now = c.targets(i as f64 * h, command, 1.0, |_| 0.0);
+                let now = c.targets(i as f64 * h, command, 1.0);
                 if let Some(b) = before {
                     for (k, worst) in worst.iter_mut().enumerate() {
                         if !(b.phases[k].is_stance() && now.phases[k].is_stance()) {

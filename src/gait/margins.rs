@@ -53,7 +53,7 @@ pub(super) fn sampled_margins(
     let mut unreached = None;
     for i in 0..samples {
         let t = gait.period * i as f64 / samples as f64;
-        let targets = controller.targets(t, command, 1.0, |_| 0.0);
+        let targets = controller.targets(t, command, 1.0);
         for (k, leg) in model.legs.iter().enumerate() {
             if targets.clamped[k] && unreached.is_none() {
                 unreached = Some(Unreached {

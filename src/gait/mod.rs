@@ -1,17 +1,21 @@
 //! Gaits: the gait file, its lengths fitted to a robot, the phase schedule (which legs stand when),
 //! and the controller that turns a velocity command into joint targets.
 
+mod clearance;
 mod command;
 mod controller;
 mod fit;
+mod foothold;
 mod margins;
 mod reactive;
 mod schedule;
+mod slew;
 mod spec;
 
 pub use command::{CommandChange, CommandSchedule};
 pub use controller::{GaitController, GaitTargets, REACH_TOLERANCE, StanceError, VelocityCommand};
 pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
+pub use foothold::away_from_edges;
 pub use margins::{CycleMargins, Unreached, cycle_margins};
 pub use reactive::{FootFeel, Reactive};
 pub use schedule::{LegPhase, leg_phase, minimum_support};

@@ -1,0 +1,125 @@
+//! Footholds away from edges (perceptive: the terrain is known).
+//!
+//! A foot planned to land next to a riser's edge, a stone's rim or a trench's lip stands half on
+//! nothing, slips off the edge or stubs the riser, and one landing on the edge itself is where
+//! the contact is stiffest. Where the ground under a foothold's footprint has an edge, the
+//! foothold moves along the leg's direction of travel to the nearest point whose footprint is
+//! edge-free — onto the tread — no farther than the stride allows. The choice is made once per
+//! swing, for where the foot will land, and held: chosen afresh each step it would flip from one
+//! tread to the next as the body carries the planned point across an edge, and the foot target
+//! would jump with it.
+
+use glam::DVec3;
+
+/// Ground that rises more steeply than this between two samples is an edge (tan 60°, the slope
+/// beyond which the terrain itself reads a jump as a wall: physics.md).
+const EDGE_SLOPE: f64 = 1.732;
+/// Distance between the samples across a footprint (m).
+const SAMPLE: f64 = 0.005;
+/// Clear ground kept beyond the foot's radius on each side of a foothold (m).
+pub const EDGE_MARGIN: f64 = 0.04;
+/// The steps in which the search moves a foothold, as shares of its longest move.
+const SEARCH_STEPS: usize = 12;
+
+/// Whether `ground` (height of the terrain under a body-frame point) has an edge within
+/// `half_width` of `p`, along the body's x or y.
+pub fn near_edge(ground: &impl Fn(DVec3) -> f64, p: DVec3, half_width: f64) -> bool {
+    let n = (half_width / SAMPLE).ceil() as i32;
+    let step = half_width / n as f64;
+    [DVec3::X, DVec3::Y].iter().any(|&axis| {
+        let mut last = ground(p - axis * half_width);
+        (-n + 1..=n).any(|i| {
+            let h = ground(p + axis * (i as f64 * step));
+            let edge = (h - last).abs() > EDGE_SLOPE * step;
+            last = h;
+            edge
+        })
+    })
+}
+
+/// The shift (body frame, horizontal) that moves the foothold `p` off any edge within
+/// `radius + EDGE_MARGIN` of it: the shortest up to `longest`, tried along `direction` (the
+/// leg's travel across the ground) first, then against it, to either side and diagonally (a
+/// stone's rim may lie beside the foot); zero where `p` is clear or no shift within `longest`
+/// clears it.
+pub fn away_from_edges(
+    ground: &impl Fn(DVec3) -> f64,
+    p: DVec3,
+    direction: DVec3,
+    radius: f64,
+    longest: f64,
+) -> DVec3 {
+    let half_width = radius + EDGE_MARGIN;
+    if !near_edge(ground, p, half_width) {
+        return DVec3::ZERO;
+    }
+    let ahead = DVec3::new(direction.x, direction.y, 0.0)
+        .try_normalize()
+        .unwrap_or(DVec3::X);
+    let side = DVec3::Z.cross(ahead);
+    let diagonal = std::f64::consts::FRAC_1_SQRT_2;
+    let ways = [
+        ahead,
+        -ahead,
+        side,
+        -side,
+        (ahead + side) * diagonal,
+        (ahead - side) * diagonal,
+        (-ahead + side) * diagonal,
+        (-ahead - side) * diagonal,
+    ];
+    for i in 1..=SEARCH_STEPS {
+        let along = longest * i as f64 / SEARCH_STEPS as f64;
+        for way in ways {
+            if !near_edge(ground, p + way * along, half_width) {
+                return way * along;
+            }
+        }
+    }
+    DVec3::ZERO
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A riser 8 cm high at x = 0.3 m.
+    fn riser(p: DVec3) -> f64 {
+        if p.x < 0.3 { 0.0 } else { 0.08 }
+    }
+
+    #[test]
+    fn a_foothold_on_level_ground_or_a_slope_stays() {
+        let slope = |p: DVec3| 0.7 * p.x; // 35°
+        for ground in [&(|_: DVec3| 0.0) as &dyn Fn(DVec3) -> f64, &slope] {
+            let g = |p: DVec3| ground(p);
+            let shift = away_from_edges(&g, DVec3::new(0.2, 0.1, -0.1), DVec3::X, 0.01, 0.05);
+            assert_eq!(shift, DVec3::ZERO);
+        }
+    }
+
+    /// A foothold 1 cm short of a riser moves back onto its tread, one 1 cm past it forward onto
+    /// the next, each to a full footprint's clearance, no farther than needed.
+    #[test]
+    fn a_foothold_next_to_an_edge_moves_onto_the_tread() {
+        let (radius, longest) = (0.01, 0.06);
+        let clear = radius + EDGE_MARGIN;
+        for (x, back) in [(0.29, true), (0.31, false), (0.3, false)] {
+            let p = DVec3::new(x, 0.12, -0.1);
+            assert!(near_edge(&riser, p, clear));
+            let shift = away_from_edges(&riser, p, DVec3::X, radius, longest);
+            let landed = p + shift;
+            assert!(!near_edge(&riser, landed, clear), "{x}: {shift:?}");
+            assert_eq!(landed.x < 0.3, back, "{x}: {shift:?}");
+            assert!((landed.x - 0.3).abs() < clear + longest / SEARCH_STEPS as f64 + 1e-9);
+            assert_eq!((shift.y, shift.z), (0.0, 0.0));
+        }
+        // beside a stone's rim (an edge along x), the foothold moves sideways
+        let rim = |p: DVec3| if p.y < 0.0 { -0.1 } else { 0.0 };
+        let shift = away_from_edges(&rim, DVec3::new(0.2, 0.01, -0.1), DVec3::X, radius, longest);
+        assert!(shift.x.abs() < 1e-12 && shift.y > 0.02, "{shift:?}");
+        // out of reach: stays
+        let shift = away_from_edges(&riser, DVec3::new(0.29, 0.0, 0.0), DVec3::X, radius, 0.01);
+        assert_eq!(shift, DVec3::ZERO);
+    }
+}
