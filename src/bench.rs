@@ -277,7 +277,10 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
         ),
         (
             "physics",
-            "rapier3d 0.36.1, f32, default features (no simd, no parallel)".into(),
+            format!(
+                "rapier3d 0.36.1 + {}, f32, default features (no simd, no parallel)",
+                rapier_patches()
+            ),
         ),
         ("articulation", articulations),
         (
@@ -304,4 +307,68 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect()
+}
+
+/// rapier's patch series (`third_party/rapier3d/patches`), as built into this binary: a figure
+/// from a build on other patches is not comparable.
+macro_rules! patch {
+    ($name:literal) => {
+        (
+            $name,
+            include_bytes!(concat!("../third_party/rapier3d/patches/", $name)).as_slice(),
+        )
+    };
+}
+pub const RAPIER_PATCHES: &[(&str, &[u8])] = &[
+    patch!("0001-multibody-assemble-the-mass-matrix-on-each-link-s-pa.patch"),
+    patch!("0002-multibody-compute-each-body-Jacobian-on-its-link-s-p.patch"),
+    patch!("0003-multibody-apply-each-link-s-forces-on-its-path-s-deg.patch"),
+    patch!("0004-multibody-copy-the-mass-matrices-for-their-LU-with-o.patch"),
+    patch!("0005-multibody-factorise-the-mass-matrices-along-the-tree.patch"),
+    patch!("0006-multibody-sum-the-mass-matrices-link-terms-as-compos.patch"),
+    patch!("0007-multibody-skip-forward-kinematics-when-nothing-it-re.patch"),
+    patch!("0008-multibody-keep-update_acceleration-s-vectors-between.patch"),
+    patch!("0009-multibody-write-the-tree-s-parents-portably-re-mint-.patch"),
+];
+
+/// The patch series in a line: how many, the first and last number, and the first 12 hex digits
+/// of the SHA-256 of their contents in order.
+pub fn rapier_patches() -> String {
+    use sha2::{Digest, Sha256};
+    let mut hash = Sha256::new();
+    for (_, bytes) in RAPIER_PATCHES {
+        hash.update(bytes);
+    }
+    let digest = hash.finalize();
+    let hex: String = digest.iter().take(6).map(|b| format!("{b:02x}")).collect();
+    let number = |k: usize| RAPIER_PATCHES[k].0.split('-').next().unwrap_or("?");
+    format!(
+        "{} patches ({}–{}, sha256 {hex})",
+        RAPIER_PATCHES.len(),
+        number(0),
+        number(RAPIER_PATCHES.len() - 1)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every patch in `third_party/rapier3d/patches` is in [`super::RAPIER_PATCHES`], in order:
+    /// a patch added to the series and not here would leave the id unchanged.
+    #[test]
+    fn the_patch_id_covers_the_whole_series() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/third_party/rapier3d/patches");
+        let mut files: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".patch"))
+            .collect();
+        files.sort();
+        let listed: Vec<&str> = super::RAPIER_PATCHES.iter().map(|(n, _)| *n).collect();
+        assert_eq!(listed, files);
+        let id = super::rapier_patches();
+        assert!(
+            id.starts_with(&format!("{} patches (0001–", files.len())),
+            "{id}"
+        );
+    }
 }
