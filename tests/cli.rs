@@ -589,3 +589,19 @@ fn a_walk_sliding_back_against_its_command_says_so() {
         "{stdout}"
     );
 }
+
+/// The paper's variant says which of its parts are hexsim's reading, not the paper's (issue 42):
+/// Karnopp's stick force and friction on the ball.
+#[test]
+fn the_paper_variant_names_what_is_hexsims_reading() {
+    for command in ["ball", "run"] {
+        let out = hexsim().args([command, "--help"]).output().unwrap();
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            help.contains("Two parts are hexsim's reading, not the paper's")
+                && help.contains("Karnopp's stick force")
+                && help.contains("friction on the ball"),
+            "{command} --help: {help}"
+        );
+    }
+}

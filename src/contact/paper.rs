@@ -10,10 +10,12 @@
 //!   exact decay over the step, stable on light feet), never pulling;
 //! - **friction** the law as written on the in-plane velocity, with no limit at the force that
 //!   would stop the contact within the step and no drift recovery; Karnopp's stick force cancels
-//!   the load measured from the last step (the law's definition);
+//!   the load measured from the last step — hexsim's reading of Karnopp's definition, since the
+//!   paper gives no formula for it;
 //! - **where it acts**: the force acts at the sphere's centre and its velocity is the centre's (the
 //!   paper's SimMechanics body takes the force at its frame; for the ball it assumed no slip and
-//!   neglected friction), so a ball does not spin; hexsim's acts at the contact point.
+//!   neglected friction — friction on the ball here is hexsim's addition, so the friction laws can
+//!   be compared on it), so a ball does not spin; hexsim's acts at the contact point.
 
 use super::{ContactForce, ContactModel, ContactState, PendingContact, SphereGeometry};
 use crate::terrain::{GroundFrame, HeightGrid};

@@ -282,7 +282,10 @@ pub enum VariantChoice {
     #[default]
     Hexsim,
     /// The paper's as written: vertical penetration from the height table, its finite-difference
-    /// angles, explicit damper, friction laws unlimited, forces at the sphere's centre.
+    /// angles, explicit damper, friction laws unlimited, forces at the sphere's centre. Two parts
+    /// are hexsim's reading, not the paper's: Karnopp's stick force (cancelling last step's load;
+    /// the paper gives no formula) and friction on the ball (the paper assumed no slip and
+    /// neglected it).
     Paper,
 }
 
