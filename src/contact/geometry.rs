@@ -107,11 +107,6 @@ impl Faces {
         &self.faces[..self.len]
     }
 
-    /// The nearest face.
-    pub fn nearest(&self) -> &SphereGeometry {
-        &self.faces[0]
-    }
-
     /// The faces' springs summed as one contact: depth vector Σ xᵢ·nᵢ, its length the depth and
     /// its direction the normal — exactly the springs' force (k·Σ xᵢ·nᵢ) for the linear law, and
     /// continuous as a face starts or stops touching. A sphere squeezed evenly between two faces
@@ -687,7 +682,7 @@ mod tests {
         let faces = sphere_faces(&flat, center, 0.01, Orientation::Exact);
         assert_eq!(faces.as_slice().len(), 1);
         assert_eq!(
-            *faces.nearest(),
+            faces.as_slice()[0],
             sphere_geometry(&flat, center, 0.01, Orientation::Exact)
         );
     }

@@ -18,7 +18,7 @@ use super::ground_contact::GroundContacts;
 pub use super::ground_contact::LinkContact;
 use crate::contact::{ContactForce, ContactModel};
 use crate::robot::RobotModel;
-use crate::terrain::{GroundFrame, HeightGrid, Orientation};
+use crate::terrain::{FittedPlane, GroundFrame, HeightGrid, Orientation};
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
 use std::sync::Arc;
@@ -477,29 +477,11 @@ impl Hexapod {
 /// the terrain under `feet` (offsets from the body at `x`, `y`): the shortest arc, so the heading
 /// is kept. Level for fewer than three feet or feet in a line.
 fn ground_tilt(terrain: &HeightGrid, x: f64, y: f64, feet: &[DVec3]) -> DQuat {
-    // z = a·u + b·v + c over the feet's (u, v): the normal equations of the fit, centred
-    let n = feet.len() as f64;
-    let (mu, mv) = feet
+    let ground: Vec<DVec3> = feet
         .iter()
-        .fold((0.0, 0.0), |(u, v), p| (u + p.x / n, v + p.y / n));
-    let heights: Vec<f64> = feet
-        .iter()
-        .map(|p| terrain.height(x + p.x, y + p.y))
+        .map(|p| DVec3::new(p.x, p.y, terrain.height(x + p.x, y + p.y)))
         .collect();
-    let mz = heights.iter().sum::<f64>() / n;
-    let (mut suu, mut suv, mut svv, mut suz, mut svz) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (p, z) in feet.iter().zip(&heights) {
-        let (u, v, z) = (p.x - mu, p.y - mv, z - mz);
-        (suu, suv, svv) = (suu + u * u, suv + u * v, svv + v * v);
-        (suz, svz) = (suz + u * z, svz + v * z);
-    }
-    let det = suu * svv - suv * suv;
-    if feet.len() < 3 || det.abs() < 1e-12 * (suu * svv).max(1e-300) {
-        return DQuat::IDENTITY;
-    }
-    let a = (suz * svv - svz * suv) / det;
-    let b = (svz * suu - suz * suv) / det;
-    DQuat::from_rotation_arc(DVec3::Z, DVec3::new(-a, -b, 1.0).normalize())
+    DQuat::from_rotation_arc(DVec3::Z, FittedPlane::fit(&ground).normal())
 }
 
 #[cfg(test)]

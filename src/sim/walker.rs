@@ -6,6 +6,7 @@ use crate::gait::{
     FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand, away_from_edges,
 };
 use crate::robot::statics;
+use crate::terrain::FittedPlane;
 use glam::DVec3;
 
 /// The walking robot: a [`Hexapod`] and the [`GaitController`] that sets its servo targets.
@@ -61,20 +62,11 @@ struct GroundPlane {
 impl GroundPlane {
     /// The least-squares plane through `points` (x, y, height).
     fn fit(points: &[DVec3]) -> Self {
-        let n = points.len() as f64;
-        let centre = points.iter().map(|p| p.truncate()).sum::<glam::DVec2>() / n;
-        let level = points.iter().map(|p| p.z).sum::<f64>() / n;
-        let (mut xx, mut xy, mut yy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for p in points {
-            let (x, y, z) = (p.x - centre.x, p.y - centre.y, p.z - level);
-            (xx, xy, yy, xz, yz) = (xx + x * x, xy + x * y, yy + y * y, xz + x * z, yz + y * z);
-        }
-        let det = xx * yy - xy * xy;
-        let slope = if det.abs() > 1e-12 {
-            glam::DVec2::new(yy * xz - xy * yz, xx * yz - xy * xz) / det
-        } else {
-            glam::DVec2::ZERO
-        };
+        let FittedPlane {
+            centre,
+            level,
+            slope,
+        } = FittedPlane::fit(points);
         GroundPlane {
             level,
             measured: level,
@@ -91,7 +83,8 @@ impl GroundPlane {
 
 /// Seconds over which a body set down tilted is brought to the levelling that following the
 /// terrain asks: all at once, a body set down parallel to 30° was pitched 11° in one step, and
-/// the jerk moved hex18 2.0 mm down the slope (V21, multibody; ramped: 0.18 mm).
+/// the jerk moved hex18 2.0 mm down the slope (V21, multibody; ramped: 0.18 mm, 0.19 mm since
+/// the walker rides a fitted ground plane).
 const LEVELLING_RAMP: f64 = 0.5;
 
 /// A step of the walker: the robot's state and the gait's targets for it.

@@ -15,7 +15,7 @@ pub use generate::{
     stairs, stepping_stones, steps,
 };
 pub use grid::{GridError, HeightGrid, Interpolation, MAX_SAMPLES, SurfacePoint};
-pub use orientation::{GroundFrame, Orientation};
+pub use orientation::{FittedPlane, GroundFrame, Orientation};
 pub use source::Source;
 pub use spec::{FARTHEST, TerrainError, TerrainSpec};
 

@@ -14,7 +14,46 @@
 //!   (rotation order, finite step) elsewhere.
 
 use super::HeightGrid;
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DVec2, DVec3};
+
+/// The plane z = level + slope·((x, y) − centre) fitted by least squares to points (x, y, z): the
+/// ground under a robot's feet or hips, seen as one plane. `centre` and `level` are the points'
+/// means; a slope that the points do not determine (fewer than three, or in a line) is zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FittedPlane {
+    pub centre: DVec2,
+    pub level: f64,
+    pub slope: DVec2,
+}
+
+impl FittedPlane {
+    pub fn fit(points: &[DVec3]) -> Self {
+        let n = points.len() as f64;
+        let centre = points.iter().map(|p| p.truncate()).sum::<DVec2>() / n;
+        let level = points.iter().map(|p| p.z).sum::<f64>() / n;
+        let (mut xx, mut xy, mut yy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for p in points {
+            let (x, y, z) = (p.x - centre.x, p.y - centre.y, p.z - level);
+            (xx, xy, yy, xz, yz) = (xx + x * x, xy + x * y, yy + y * y, xz + x * z, yz + y * z);
+        }
+        let det = xx * yy - xy * xy;
+        let slope = if det.abs() > 1e-12 {
+            DVec2::new(yy * xz - xy * yz, xx * yz - xy * xz) / det
+        } else {
+            DVec2::ZERO
+        };
+        FittedPlane {
+            centre,
+            level,
+            slope,
+        }
+    }
+
+    /// The plane's upward unit normal.
+    pub fn normal(&self) -> DVec3 {
+        DVec3::new(-self.slope.x, -self.slope.y, 1.0).normalize()
+    }
+}
 
 /// How the contact finds the ground's orientation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
