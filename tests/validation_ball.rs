@@ -771,8 +771,8 @@ fn v18_a_ball_held_by_rolling_resistance_rests_and_stays() {
 /// V17: a ball spinning at 10 rad/s about the vertical on flat ground, at rest otherwise. With
 /// spin friction μ_t = 1 mm (a torque ≤ μ_t·Fn against the spin, MuJoCo's condim 4) the spin
 /// decays at α = μ_t·m·g/I = 9.81 rad/s² ± 2 % and stops after about 1.02 s, and stays stopped;
-/// with μ_t = 0 (the paper's point contact) it keeps within 0.1 % over 10 s and the ball does not
-/// move.
+/// with μ_t = 0 (the paper's point contact) it keeps within 0.1 % over 10 s (here: to f32's
+/// resolution, since nothing acts on it) and the ball does not move.
 #[test]
 fn v17_spin_friction_stops_a_spinning_ball() {
     let config = BallConfig::default();
@@ -827,8 +827,10 @@ fn v17_spin_friction_stops_a_spinning_ball() {
         "V17 without spin friction: {:.5} rad/s at 10 s, moved {drift:.1e} m",
         last.angular_velocity.z
     );
+    // V17 allows 0.1 %; nothing acts on the spin, so it must keep it to f32's resolution (an ulp
+    // of 10 rad/s is 1e-6; rapier's gyroscopic pass once added one a step: +8.2e-3 in 10 s)
     assert!(
-        (last.angular_velocity.z - 10.0).abs() <= 0.01,
+        (last.angular_velocity.z - 10.0).abs() <= 1e-5,
         "V17: spin {}",
         last.angular_velocity.z
     );
