@@ -96,7 +96,7 @@ fn run(scenario: &Scenario, record: Option<PathBuf>) -> Result<Report> {
     Ok(report)
 }
 
-/// V13 (shared/reference §4): forward ≥ 70 % of the nominal stride/(duty·period)·t, roll and
+/// V13 (docs/validation.md): forward ≥ 70 % of the nominal stride/(duty·period)·t, roll and
 /// pitch under 25°, no foot deeper than 5 mm.
 fn v13(scenario: &Scenario, report: &Report) -> Option<bool> {
     let (Metrics::Walk(m), Some(gait)) = (&report.metrics, scenario.gait()) else {

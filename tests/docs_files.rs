@@ -61,3 +61,48 @@ fn the_files_shown_are_the_files_that_run() {
     // the README shows the batch array job and the search's submission script
     assert!(checked >= 2, "only {checked} files shown");
 }
+
+/// docs/validation.md names the test of every case V1–V21: each case is listed once, and each test
+/// it names (`file::function`, or a bare function continuing the file before it; `…` abbreviates a
+/// name by its start) is a test function in that file.
+#[test]
+fn the_validation_page_names_tests_that_exist() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let page = std::fs::read_to_string(root.join("docs/validation.md")).unwrap();
+    let mut cases = Vec::new();
+    for row in page.lines().filter(|l| l.starts_with("| V")) {
+        let cells: Vec<&str> = row.trim_matches('|').split(" | ").map(str::trim).collect();
+        cases.push(cells[0].to_string());
+        let mut file = String::new();
+        for name in cells[3].split('`').skip(1).step_by(2) {
+            let function = match name.split_once("::") {
+                Some((f, function)) => {
+                    file = f.to_string();
+                    function
+                }
+                None => name,
+            };
+            assert!(
+                !file.is_empty(),
+                "{}: no test file before `{name}`",
+                cells[0]
+            );
+            let source = std::fs::read_to_string(root.join(format!("tests/{file}.rs")))
+                .unwrap_or_else(|e| panic!("{}: tests/{file}.rs: {e}", cells[0]));
+            let found = match function.strip_suffix('…') {
+                Some(start) => source.contains(&format!("fn {start}")),
+                None => source.contains(&format!("fn {function}(")),
+            };
+            assert!(
+                found,
+                "{}: no test `{function}` in tests/{file}.rs",
+                cells[0]
+            );
+        }
+    }
+    let expected: Vec<String> = (1..=21).map(|k| format!("V{k}")).collect();
+    assert_eq!(
+        cases, expected,
+        "docs/validation.md lists each case once, in order"
+    );
+}

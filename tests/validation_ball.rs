@@ -1,4 +1,4 @@
-//! Validation cases V1–V10, V16–V18 and V20 of `shared/reference/README.md`: the paper's contact
+//! Validation cases V1–V10, V16–V18 and V20 of docs/validation.md: the paper's contact
 //! model on a ball.
 //! Expected values and tolerances are the reference's; nothing here is loosened to pass.
 
@@ -544,7 +544,7 @@ fn v10_ball_on_the_natural_terrain_neither_sinks_nor_gains_energy() {
 }
 
 /// Rolling resistance for V9 and V10: ρ = 1 mm, a rolling-resistance coefficient c_rr = ρ/r =
-/// 0.02 for the 5 cm ball — a hard ball on firm ground (shared/reference §4), not the smallest
+/// 0.02 for the 5 cm ball — a hard ball on firm ground (docs/validation.md), not the smallest
 /// value that passes.
 const ROLLING_RESISTANCE: f64 = 1e-3;
 

@@ -1,4 +1,4 @@
-//! Validation cases V11–V15 of `shared/reference/README.md`: the hexapod hex18.
+//! Validation cases V11–V15 of docs/validation.md: the hexapod hex18.
 
 mod common;
 use common::*;
@@ -253,7 +253,7 @@ fn walk(
     samples[(1.0 / DT) as usize - 1..].to_vec()
 }
 
-/// V12's gait, as shared/reference §4 states it: the tripod with period 1 s, duty 0.5, stride
+/// V12's gait, as docs/validation.md states it: the tripod with period 1 s, duty 0.5, stride
 /// 0.06 m and step height 0.03 m (hex18's robot file and the tripod give exactly that).
 fn v12_gait() -> Gait {
     let gait = tripod();

@@ -1,4 +1,4 @@
-//! Validation case V19 of `shared/reference/README.md`: every link touches the ground, not only
+//! Validation case V19 of docs/validation.md: every link touches the ground, not only
 //! the feet — hex18 dropped on its belly with its legs folded up comes to rest on its underside.
 
 mod common;

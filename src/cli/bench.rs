@@ -93,7 +93,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         }
     }
     println!(
-        "V1–V15 in both articulations: cargo test --release --test validation_hexapod --test validation_ball"
+        "V1–V21 (docs/validation.md): cargo test --release --test validation_ball --test validation_hexapod --test validation_whole_body"
     );
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&report)?)

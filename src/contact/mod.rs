@@ -67,7 +67,7 @@ pub enum Variant {
 }
 
 impl Default for ContactModel {
-    /// The reference contact (shared/reference §2), with the default drift recovery.
+    /// The reference contact (docs/validation.md), with the default drift recovery.
     fn default() -> Self {
         ContactModel {
             normal: NormalLaw::default(),

@@ -23,7 +23,7 @@ pub enum NormalLaw {
     },
 }
 
-/// The reference contact's stiffness (N/m) and damping (N·s/m), shared/reference §2: set for
+/// The reference contact's stiffness (N/m) and damping (N·s/m), docs/validation.md: set for
 /// hex18, a 2.52 kg robot whose feet sink 0.41 mm standing on three.
 pub const REFERENCE_STIFFNESS: f64 = 2.0e4;
 pub const REFERENCE_DAMPING: f64 = 150.0;

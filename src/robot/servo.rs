@@ -1,6 +1,6 @@
 //! Servo gains fitted to a robot when neither the scenario nor the robot file gives them.
 //!
-//! The reference servo (shared/reference: 20 N·m/rad, 0.05 N·m·s/rad) is hex18's: on the inertia
+//! The reference servo (docs/validation.md: 20 N·m/rad, 0.05 N·m·s/rad) is hex18's: on the inertia
 //! its leg presents about the coxa standing, 1.59·10⁻³ kg·m², it closes the loop at ω₀ = √(k/I) ≈
 //! 112 rad/s, some eighteen times the tripod's 2π rad/s, so a swinging leg follows its target. A robot
 //! with heavier legs needs a stiffer servo for the same tracking (a leg with ten times the inertia

@@ -7,7 +7,7 @@ pub struct Builtin {
     pub text: &'static str,
 }
 
-/// The reference robot (shared/reference §1).
+/// The reference robot (docs/validation.md, *The reference*).
 pub const HEX18: Builtin = Builtin {
     path: "robots/hex18.urdf",
     text: include_str!("../../robots/hex18.urdf"),

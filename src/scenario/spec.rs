@@ -207,7 +207,7 @@ pub enum OrientationChoice {
 /// The contact's parameters, each defined once: a scenario's `[contact]` field and, with the same
 /// doc, `hexsim run`'s and `hexsim ball`'s option (named after the field, but where the option
 /// says more: `--normal-law`, `--hc-exponent`, `--friction-width`, `--contact-model`). Defaults
-/// are the reference contact of shared/reference §2; the physics of each is in
+/// are the reference contact of docs/validation.md; the physics of each is in
 /// [`crate::contact::ContactModel`], which [`ContactSpec::model`] builds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(deny_unknown_fields, default)]

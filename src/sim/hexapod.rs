@@ -26,7 +26,7 @@ use std::sync::Arc;
 /// Steps between two measurements of the impulse joints' drift (it changes slowly).
 const DRIFT_EVERY: u64 = 10;
 
-/// rapier substeps per step by default: one — V1–V15 hold with it (see docs/performance.md), and
+/// rapier substeps per step by default: one — V1–V21 hold with it (those met: docs/validation.md) (see docs/performance.md), and
 /// each substep rebuilds the multibody's mass matrix.
 pub const DEFAULT_SOLVER_ITERATIONS: usize = 1;
 
