@@ -1,20 +1,26 @@
 """Steps per second stepping hexsim from Python: n steps per call, one step per call, and the
 Gymnasium environment, on hex18's tripod on the natural terrain (the workload of `hexsim bench`'s
-multibody walk). Compare the first with `hexsim bench`'s "walk, multibody" figure.
+multibody walk); then many worlds at once: `step_many` and Python threads each stepping a
+`Simulation`, and the vector environment, against one world. Compare the first with
+`hexsim bench`'s "walk, multibody" figure.
 
-    python examples/bench.py [--steps 20000] [--repeats 3]
+    python examples/bench.py [--steps 20000] [--repeats 3] [--worlds N (default: the cores)]
 """
 
 import argparse
+import os
+import threading
 import time
 
 import gymnasium as gym
+import numpy as np
 
 import hexsim
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--steps", type=int, default=20000)
 parser.add_argument("--repeats", type=int, default=3)
+parser.add_argument("--worlds", type=int, default=os.cpu_count() or 1)
 args = parser.parse_args()
 
 
@@ -61,10 +67,59 @@ def environment():
     return actions * env.unwrapped.frame_skip / (time.perf_counter() - start)
 
 
-for label, measure in [
+def worlds_step_many():
+    sims = [hexsim.Simulation(duration=args.steps * 1e-3) for _ in range(args.worlds)]
+    start = time.perf_counter()
+    taken = sum(hexsim.step_many(sims, sims[0].remaining))
+    return taken / (time.perf_counter() - start)
+
+
+def worlds_threads():
+    def walk(out, k):
+        sim = hexsim.Simulation(duration=args.steps * 1e-3)  # a Simulation stays in its thread
+        barrier.wait()
+        out[k] = sim.step(sim.remaining)
+
+    barrier = threading.Barrier(args.worlds + 1)
+    taken = [0] * args.worlds
+    threads = [threading.Thread(target=walk, args=(taken, k)) for k in range(args.worlds)]
+    for t in threads:
+        t.start()
+    barrier.wait()
+    start = time.perf_counter()
+    for t in threads:
+        t.join()
+    return sum(taken) / (time.perf_counter() - start)
+
+
+def vector_environment():
+    env = hexsim.HexapodVectorEnv(args.worlds, action="gait", duration=args.steps * 1e-3)
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    start = time.perf_counter()
+    actions = 0
+    while True:
+        *_, terminated, truncated, _ = env.step(action)
+        actions += 1
+        if (terminated | truncated).any():
+            break
+    return actions * args.worlds * env.envs[0].frame_skip / (time.perf_counter() - start)
+
+
+single = [
     ("n steps per call", n_per_call),
     ("1 step per call", one_per_call),
     ("1 step per call + state()", one_per_call_with_state),
     ("HexapodGait-v0, 20 steps per action", environment),
-]:
+]
+for label, measure in single:
     print(f"{label:38s} {best(measure):9.0f} steps/s")
+one = best(n_per_call)
+w = args.worlds
+for label, measure in [
+    (f"{w} worlds, step_many", worlds_step_many),
+    (f"{w} worlds, a Python thread each", worlds_threads),
+    (f"HexapodVectorEnv, {w} worlds", vector_environment),
+]:
+    rate = best(measure)
+    print(f"{label:38s} {rate:9.0f} steps/s  ({rate / one:.2f}× one world)")

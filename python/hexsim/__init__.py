@@ -4,13 +4,24 @@
 stretch at a time: step it through the gait with a velocity command or drive its joints directly,
 read its state as NumPy arrays and its metrics as ``hexsim run --metrics`` writes them, record it
 for the rerun viewer. Importing the package registers the Gymnasium environments
-``hexsim/HexapodRough-v0`` (joint targets) and ``hexsim/HexapodGait-v0`` (gait commands).
+``hexsim/HexapodRough-v0`` (joint targets) and ``hexsim/HexapodGait-v0`` (gait commands);
+``step_many`` steps several simulations at once on threads, and ``HexapodVectorEnv`` (or
+``gym.make_vec``) is the vector environment built on it.
 See docs/python.md.
 """
 
-from ._hexsim import DivergedError, HexsimError, Simulation, __version__
+from ._hexsim import DivergedError, HexsimError, Simulation, __version__, step_many
 from . import env as _env
+from .env import HexapodEnv, HexapodVectorEnv
 
 _env.register()
 
-__all__ = ["Simulation", "HexsimError", "DivergedError", "__version__"]
+__all__ = [
+    "Simulation",
+    "step_many",
+    "HexapodEnv",
+    "HexapodVectorEnv",
+    "HexsimError",
+    "DivergedError",
+    "__version__",
+]

@@ -21,8 +21,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
 
-from ._hexsim import DivergedError, Simulation
+from ._hexsim import DivergedError, Simulation, step_many
 
 FEET = 6
 
@@ -86,17 +88,35 @@ class HexapodEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        terrain_seed = int(self.np_random.integers(0, 2**31 - 1))
-        self.sim.reset(seed=terrain_seed)
-        # stand through the scenario's settle time: the gait's standing pose is the action's centre
-        self.sim.step(max(1, round(self.sim.settle_time / self.sim.dt)))
+        self.sim.step(self._begin_reset())
+        return self._end_reset()
+
+    def step(self, action):
+        self._act(action)
+        try:
+            self.sim.step(self.frame_skip)
+        except DivergedError:
+            pass  # the outcome reads it from the simulation
+        return self._outcome()
+
+    # The parts of reset and step around the physics, so that HexapodVectorEnv steps the worlds'
+    # physics together (hexsim.step_many) and does the rest exactly as here.
+
+    def _begin_reset(self) -> int:
+        """Draws the terrain and restarts; returns the steps to stand through the settle time."""
+        self._terrain_seed = int(self.np_random.integers(0, 2**31 - 1))
+        self.sim.reset(seed=self._terrain_seed)
+        return max(1, round(self.sim.settle_time / self.sim.dt))
+
+    def _end_reset(self):
+        # the gait's standing pose at the end of the settle time is the action's centre
         state = self.sim.state()
         self.standing = state["joint_targets"].copy()
         self._x = float(state["body_position"][0])
         self._energy = self.sim.metrics()["servo_energy"]
-        return self._observe(state), {"terrain_seed": terrain_seed}
+        return self._observe(state), {"terrain_seed": self._terrain_seed}
 
-    def step(self, action):
+    def _act(self, action) -> None:
         action = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
         if self.mode == "joints":
             targets = np.clip(
@@ -105,11 +125,9 @@ class HexapodEnv(gym.Env):
             self.sim.set_joint_targets(targets)
         else:
             self.sim.set_command(*(action * self.max_command))
-        diverged = None
-        try:
-            self.sim.step(self.frame_skip)
-        except DivergedError as e:
-            diverged = str(e)
+
+    def _outcome(self):
+        diverged = self.sim.failure
         energy = self.sim.metrics()["servo_energy"]
         work, self._energy = energy - self._energy, energy
         state = self.sim.state()
@@ -129,8 +147,94 @@ class HexapodEnv(gym.Env):
         self.sim.close()
 
 
+class HexapodVectorEnv(VectorEnv):
+    """``num_envs`` hexapod worlds stepped together: Gymnasium's ``VectorEnv``, next-step
+    autoreset (Gymnasium 1.x's default), each world's physics on a thread of its own
+    (``hexsim.step_many``, the GIL released), up to ``threads`` (default: the machine's cores).
+
+    World ``i`` is ``HexapodEnv(**kwargs)`` reset with ``seed + i``, exactly as in
+    ``gymnasium.vector.SyncVectorEnv``: the same observations, rewards and ends, bit for bit,
+    whatever the threads.
+    """
+
+    metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    def __init__(self, num_envs: int = 2, threads: int | None = None, **kwargs: Any):
+        if num_envs < 1:
+            raise ValueError(f"num_envs: {num_envs}, expected at least 1")
+        if threads is not None and threads < 1:
+            raise ValueError(f"threads: {threads}, expected at least 1")
+        self.envs = [HexapodEnv(**kwargs) for _ in range(num_envs)]
+        self.num_envs = num_envs
+        self.threads = threads
+        self.single_observation_space = self.envs[0].observation_space
+        self.single_action_space = self.envs[0].action_space
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self._autoreset = np.zeros(num_envs, dtype=np.bool_)
+
+    def _step_physics(self, worlds: list[int], steps: list[int]) -> None:
+        step_many([self.envs[i].sim for i in worlds], steps, threads=self.threads)
+
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        if seed is None or isinstance(seed, int):
+            seeds = [None if seed is None else seed + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed: {len(seeds)} seeds for {self.num_envs} worlds")
+        settle = []
+        for env, s in zip(self.envs, seeds):
+            gym.Env.reset(env, seed=s)
+            settle.append(env._begin_reset())
+        self._step_physics(list(range(self.num_envs)), settle)
+        observations, infos = [], {}
+        for i, env in enumerate(self.envs):
+            obs, info = env._end_reset()
+            observations.append(obs)
+            infos = self._add_info(infos, info, i)
+        self._autoreset[:] = False
+        return np.stack(observations), infos
+
+    def step(self, actions):
+        actions = np.asarray(actions)
+        resetting = [i for i in range(self.num_envs) if self._autoreset[i]]
+        stepping = [i for i in range(self.num_envs) if not self._autoreset[i]]
+        counts = {}
+        for i in resetting:
+            counts[i] = self.envs[i]._begin_reset()
+        for i in stepping:
+            self.envs[i]._act(actions[i])
+            counts[i] = self.envs[i].frame_skip
+        order = resetting + stepping
+        self._step_physics(order, [counts[i] for i in order])
+        observations = [None] * self.num_envs
+        rewards = np.zeros(self.num_envs, dtype=np.float64)
+        terminations = np.zeros(self.num_envs, dtype=np.bool_)
+        truncations = np.zeros(self.num_envs, dtype=np.bool_)
+        infos = {}
+        for i, env in enumerate(self.envs):
+            if self._autoreset[i]:
+                observations[i], info = env._end_reset()
+            else:
+                observations[i], rewards[i], terminations[i], truncations[i], info = env._outcome()
+            infos = self._add_info(infos, info, i)
+        self._autoreset = np.logical_or(terminations, truncations)
+        return np.stack(observations), rewards, terminations, truncations, infos
+
+    def close_extras(self, **kwargs: Any) -> None:
+        for env in self.envs:
+            env.close()
+
+
 def register() -> None:
-    """Registers the environments with Gymnasium (done on ``import hexsim``)."""
+    """Registers the environments with Gymnasium (done on ``import hexsim``); ``gym.make_vec(id,
+    num_envs=N, vectorization_mode="vector_entry_point")`` makes a ``HexapodVectorEnv``."""
     for env_id, action in (("hexsim/HexapodRough-v0", "joints"), ("hexsim/HexapodGait-v0", "gait")):
         if env_id not in gym.registry:
-            gym.register(id=env_id, entry_point=HexapodEnv, kwargs={"action": action})
+            gym.register(
+                id=env_id,
+                entry_point=HexapodEnv,
+                vector_entry_point=HexapodVectorEnv,
+                kwargs={"action": action},
+            )

@@ -261,6 +261,7 @@ impl Simulation {
     #[pyo3(signature = (n=1, *, command=None, targets=None))]
     fn step(
         &mut self,
+        py: Python<'_>,
         n: u64,
         command: Option<(f64, f64, f64)>,
         targets: Option<&Bound<'_, PyAny>>,
@@ -275,7 +276,8 @@ impl Simulation {
         if let Some(failure) = session.failure() {
             return Err(DivergedError::new_err(failure.to_string()));
         }
-        let taken = session.advance(n);
+        // the GIL released while stepping: other Python threads run their own simulations
+        let taken = py.detach(|| session.advance(n));
         if let Some(failure) = session.failure() {
             return Err(DivergedError::new_err(failure.to_string()));
         }
@@ -483,9 +485,102 @@ impl Simulation {
     }
 }
 
+/// Steps several simulations at once, each on a thread of its own (up to `threads`, default:
+/// the machine's cores), the GIL released: `steps` is one count for all or one per simulation.
+/// Returns the steps each took. Each world is stepped exactly as `Simulation.step` would step it,
+/// so the results are the same bit for bit, whatever the threads. A simulation that diverges
+/// stops without raising (see its `failure`); one that has diverged already takes no step.
+#[pyfunction]
+#[pyo3(signature = (simulations, steps=None, *, threads=None))]
+fn step_many(
+    py: Python<'_>,
+    mut simulations: Vec<PyRefMut<'_, Simulation>>,
+    steps: Option<&Bound<'_, PyAny>>,
+    threads: Option<usize>,
+) -> PyResult<Vec<u64>> {
+    let n = simulations.len();
+    let counts: Vec<u64> = match steps {
+        None => vec![1; n],
+        Some(s) => match s.extract::<u64>() {
+            Ok(k) => vec![k; n],
+            Err(_) => s
+                .extract::<Vec<u64>>()
+                .map_err(|_| error("steps: expected a count of steps, or one per simulation"))?,
+        },
+    };
+    if counts.len() != n {
+        return Err(error(format!(
+            "steps: {} counts for {n} simulations; give one count, or one per simulation",
+            counts.len()
+        )));
+    }
+    if threads == Some(0) {
+        return Err(error("threads: expected at least 1"));
+    }
+    let mut sessions = Vec::with_capacity(n);
+    for (i, sim) in simulations.iter_mut().enumerate() {
+        let session = sim.session.as_mut().ok_or_else(|| {
+            error(format!(
+                "simulation {i} is closed: call reset() to start it again"
+            ))
+        })?;
+        sessions.push(session);
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    let threads = threads.unwrap_or(cores).clamp(1, n.max(1));
+    let taken = py.detach(|| advance_all(&mut sessions, &counts, threads));
+    for sim in &mut simulations {
+        let stopped = sim
+            .session
+            .as_ref()
+            .is_some_and(|s| s.stopped() && s.failure().is_none());
+        if stopped {
+            // an output's error: finishing says which, as `step` does
+            sim.finish()?;
+        }
+    }
+    Ok(taken)
+}
+
+/// Advances `sessions[i]` by `counts[i]` steps, the sessions dealt out to `threads` threads in
+/// contiguous runs. Each session is stepped by one thread, alone, so the result does not depend
+/// on the threads.
+fn advance_all(sessions: &mut [&mut WalkSession], counts: &[u64], threads: usize) -> Vec<u64> {
+    let mut taken = vec![0; sessions.len()];
+    let step = |session: &mut WalkSession, count: u64| {
+        if session.failure().is_some() {
+            0
+        } else {
+            session.advance(count)
+        }
+    };
+    if threads <= 1 {
+        for ((session, &count), out) in sessions.iter_mut().zip(counts).zip(&mut taken) {
+            *out = step(session, count);
+        }
+        return taken;
+    }
+    let run = sessions.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        for ((sessions, counts), out) in sessions
+            .chunks_mut(run)
+            .zip(counts.chunks(run))
+            .zip(taken.chunks_mut(run))
+        {
+            scope.spawn(move || {
+                for ((session, &count), out) in sessions.iter_mut().zip(counts).zip(out) {
+                    *out = step(session, count);
+                }
+            });
+        }
+    });
+    taken
+}
+
 #[pymodule]
 fn _hexsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Simulation>()?;
+    m.add_function(wrap_pyfunction!(step_many, m)?)?;
     m.add("HexsimError", m.py().get_type::<HexsimError>())?;
     m.add("DivergedError", m.py().get_type::<DivergedError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -185,3 +185,40 @@ def test_a_diverging_simulation_raises_and_keeps_its_files(tmp_path):
         sim.step()
     sim.close()
     assert not json.loads(metrics.read_text())["complete"]
+
+
+def test_step_many_steps_each_world_as_step_would_on_any_threads():
+    def worlds(seeds, step, **kwargs):
+        sims = [hexsim.Simulation(duration=1.0, seed=s) for s in seeds]
+        for n in (1, 130, 7):
+            step(sims, n, **kwargs)
+        return [s.state() for s in sims] + [s.metrics() for s in sims]
+
+    def one_by_one(sims, n):
+        for sim in sims:
+            sim.step(n)
+
+    seeds = [3, 4, 5]
+    alone = worlds(seeds, one_by_one)
+    for threads in (1, 2, 3):
+        together = worlds(seeds, hexsim.step_many, threads=threads)
+        for a, b in zip(alone[:3], together[:3]):
+            for key in a:
+                np.testing.assert_array_equal(a[key], b[key], err_msg=f"{key}, {threads} threads")
+        assert alone[3:] == together[3:]
+
+
+def test_step_many_counts_per_world_and_divergence_without_raising():
+    calm = hexsim.Simulation(duration=1.0)
+    wild = hexsim.Simulation(duration=2.0, dt=0.01, allow_unstable_dt=True)
+    taken = hexsim.step_many([calm, wild], [10, wild.remaining])
+    assert taken[0] == 10 and 0 < taken[1] < 200
+    assert calm.failure is None and "sank" in wild.failure
+    assert hexsim.step_many([calm, wild], 5) == [5, 0], "a diverged world takes no step"
+    with pytest.raises(hexsim.HexsimError, match="3 counts for 2 simulations"):
+        hexsim.step_many([calm, wild], [1, 2, 3])
+    with pytest.raises(hexsim.HexsimError, match="threads"):
+        hexsim.step_many([calm], 1, threads=0)
+    wild.close()
+    with pytest.raises(hexsim.HexsimError, match="simulation 1 is closed"):
+        hexsim.step_many([calm, wild], 1)

@@ -68,3 +68,29 @@ def test_standing_still_earns_nothing_and_a_fall_terminates(root):
             break
     assert terminated
     env.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_vector_environment_equals_the_single_ones_bit_for_bit(env_id, root):
+    # 0.6 s episodes: truncated after 30 actions, so the autoreset is compared too
+    kwargs = dict(duration=0.6, terrain=str(root / "terrains" / "natural.toml"))
+    action = "joints" if env_id.endswith("Rough-v0") else "gait"
+    vector = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point", **kwargs)
+    assert isinstance(vector, hexsim.HexapodVectorEnv) and vector.num_envs == 3
+    singles = gym.vector.SyncVectorEnv(
+        [lambda: hexsim.HexapodEnv(action=action, **kwargs) for _ in range(3)]
+    )
+    a, b = vector.reset(seed=11), singles.reset(seed=11)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1]["terrain_seed"], b[1]["terrain_seed"])
+    rng = np.random.default_rng(0)
+    truncated = 0
+    for k in range(40):
+        actions = rng.uniform(-1, 1, size=vector.action_space.shape).astype(np.float32)
+        got, want = vector.step(actions), singles.step(actions)
+        for x, y in zip(got[:4], want[:4]):
+            np.testing.assert_array_equal(x, y, err_msg=f"action {k}")
+        truncated += int(got[3].sum())
+    assert truncated == 3, "each world truncated once, then reset"
+    vector.close()
+    singles.close()

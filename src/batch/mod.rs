@@ -329,7 +329,7 @@ fn run_one(
         Box::new(move |done: u64| {
             let before = reported.swap(done, std::sync::atomic::Ordering::Relaxed);
             bar.inc(done.saturating_sub(before));
-        }) as Box<dyn Fn(u64)>
+        }) as Box<dyn Fn(u64) + Send>
     };
     let file = |extension: &str| options.record_dir.join(format!("{}.{extension}", s.name));
     let outputs = Outputs::new()

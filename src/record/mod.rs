@@ -43,7 +43,7 @@ impl Sample for crate::sim::BallSample {
 
 /// Something that watches a run step by step. `S` is the sample; `W` the simulation after the
 /// step, for what the sample does not carry (a walk's link poses).
-pub trait Observer<S, W: ?Sized> {
+pub trait Observer<S, W: ?Sized>: Send {
     /// Sees one step's sample (an observer keeps what it wants of them: see [`decimation`]).
     fn observe(&mut self, sample: &S, world: &W) -> anyhow::Result<()>;
 
@@ -72,7 +72,7 @@ pub enum Output {
     /// The metrics as JSON, written once every other output is complete.
     Metrics(PathBuf),
     /// Told now and then the steps done so far (a progress bar).
-    Progress(Box<dyn Fn(u64)>),
+    Progress(Box<dyn Fn(u64) + Send>),
 }
 
 impl Output {

@@ -8,12 +8,12 @@ const EVERY: u64 = 256;
 
 /// Calls `report` with the steps done every [`EVERY`] steps and once at the end.
 pub struct Progress {
-    report: Box<dyn Fn(u64)>,
+    report: Box<dyn Fn(u64) + Send>,
     done: u64,
 }
 
 impl Progress {
-    pub fn new(report: Box<dyn Fn(u64)>) -> Self {
+    pub fn new(report: Box<dyn Fn(u64) + Send>) -> Self {
         Progress { report, done: 0 }
     }
 }

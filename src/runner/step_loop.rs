@@ -180,8 +180,7 @@ fn observe<S, W: ?Sized>(
 mod tests {
     use super::*;
     use crate::record::Sample;
-    use std::cell::RefCell;
-    use std::rc::Rc;
+    use std::sync::{Arc, Mutex};
 
     struct Count(u64);
 
@@ -219,14 +218,15 @@ mod tests {
     /// Logs what it saw into a shared list; fails at `fail_at`.
     struct Log {
         name: &'static str,
-        seen: Rc<RefCell<Vec<String>>>,
+        seen: Arc<Mutex<Vec<String>>>,
         fail_at: Option<u64>,
     }
 
     impl Observer<Count, ()> for Log {
         fn observe(&mut self, s: &Count, _: &()) -> Result<()> {
             self.seen
-                .borrow_mut()
+                .lock()
+                .unwrap()
                 .push(format!("{} {}", self.name, s.0));
             if self.fail_at == Some(s.0) {
                 anyhow::bail!("{} cannot write", self.name);
@@ -235,13 +235,14 @@ mod tests {
         }
         fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
             self.seen
-                .borrow_mut()
+                .lock()
+                .unwrap()
                 .push(format!("{} finished {complete}", self.name));
             Ok(Some(PathBuf::from(self.name)))
         }
     }
 
-    fn logs(seen: &Rc<RefCell<Vec<String>>>, fail_at: Option<u64>) -> (Log, Log) {
+    fn logs(seen: &Arc<Mutex<Vec<String>>>, fail_at: Option<u64>) -> (Log, Log) {
         let log = |name| Log {
             name,
             seen: seen.clone(),
@@ -258,7 +259,7 @@ mod tests {
 
     #[test]
     fn a_complete_run_observes_every_step_in_order_then_finishes_each() {
-        let seen = Rc::new(RefCell::new(Vec::new()));
+        let seen = Arc::new(Mutex::new(Vec::new()));
         let (mut a, mut b) = logs(&seen, None);
         let mut counter = Counter {
             n: 0,
@@ -272,12 +273,12 @@ mod tests {
         let expected = ["a 0", "b 0", "a 1", "b 1", "a 2", "b 2"];
         let mut expected: Vec<String> = expected.map(String::from).to_vec();
         expected.extend(["a finished true".into(), "b finished true".into()]);
-        assert_eq!(*seen.borrow(), expected);
+        assert_eq!(*seen.lock().unwrap(), expected);
     }
 
     #[test]
     fn the_diverged_step_is_observed_and_every_file_finished_incomplete() {
-        let seen = Rc::new(RefCell::new(Vec::new()));
+        let seen = Arc::new(Mutex::new(Vec::new()));
         let (mut a, mut b) = logs(&seen, None);
         let mut counter = Counter {
             n: 0,
@@ -288,7 +289,7 @@ mod tests {
         assert!(!end.complete);
         assert_eq!(end.failure.as_deref(), Some("diverged at 3"));
         assert_eq!(end.steps, 3);
-        let seen = seen.borrow();
+        let seen = seen.lock().unwrap();
         assert_eq!(
             seen[4..],
             ["a 3", "b 3", "a finished false", "b finished false"]
@@ -297,7 +298,7 @@ mod tests {
 
     #[test]
     fn an_observer_error_stops_the_run_finishes_the_others_and_names_their_files() {
-        let seen = Rc::new(RefCell::new(Vec::new()));
+        let seen = Arc::new(Mutex::new(Vec::new()));
         let (mut a, mut b) = logs(&seen, Some(2));
         let mut counter = Counter {
             n: 0,
@@ -310,7 +311,7 @@ mod tests {
         let message = format!("{error:#}");
         assert!(message.contains("b cannot write"), "{message}");
         assert!(message.contains("files written: a, b"), "{message}");
-        let seen = seen.borrow();
+        let seen = seen.lock().unwrap();
         assert_eq!(
             seen[seen.len() - 2..],
             ["a finished false", "b finished false"]
