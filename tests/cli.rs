@@ -483,6 +483,69 @@ fn bench_measures_both_articulations_and_says_what_it_measured() {
     assert_eq!(batch["steps"], 2 * 1300, "two worlds of 1.3 s at 1 ms");
 }
 
+/// `bench --mujoco PYTHON` runs the built-in MuJoCo script with that Python, as many steps as
+/// the walk, and prints the walk as a multiple of MuJoCo's figure. A stand-in "Python" that
+/// checks its arguments and writes the figures the real script writes keeps the test free of
+/// MuJoCo; a Python that cannot run is an error that says how to get one.
+#[test]
+#[cfg(unix)]
+fn bench_times_mujoco_beside_itself() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch("bench_mujoco");
+    let python = dir.join("python");
+    std::fs::write(
+        &python,
+        "#!/bin/sh\n\
+         case \"$1\" in *hex18_mujoco.py) ;; *) exit 3;; esac\n\
+         test -s \"$2\" || exit 4\n\
+         while [ $# -gt 0 ]; do\n\
+           case \"$1\" in\n\
+             --steps) steps=$2;;\n\
+             --urdf) grep -q '<robot' \"$2\" || exit 5;;\n\
+             --json) json=$2;;\n\
+           esac; shift\n\
+         done\n\
+         printf '{\"mujoco_version\":\"9.9\",\"steps\":%s,\"repeats\":1,\"loop_steps_per_second\":1000.0,\"rollout_steps_per_second\":2000.0,\"base_end\":[0,0,0.1],\"tilt_deg\":1.0}' \"$steps\" > \"$json\"\n",
+    )
+    .unwrap();
+    std::fs::set_permissions(&python, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let out = hexsim()
+        .args(["bench", "--articulation", "multibody", "--duration", "0.3"])
+        .args(["--repeats", "1", "--jobs", "1", "--mujoco"])
+        .arg(&python)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("MuJoCo 9.9 on this machine, the same walk's 1300 steps: rollout 2000"),
+        "{stdout}"
+    );
+    let ratio = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("multibody walk: "))
+        .unwrap_or_else(|| panic!("no ratio in:\n{stdout}"));
+    let times: f64 = ratio.split('×').next().unwrap().parse().unwrap();
+    assert!(
+        times > 1.0,
+        "hexsim's walk against a stand-in 2000 steps/s: {ratio}"
+    );
+    let missing = hexsim()
+        .args(["bench", "--articulation", "multibody", "--duration", "0.1"])
+        .args(["--repeats", "1", "--mujoco"])
+        .arg(dir.join("no-such-python"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&missing.stderr);
+    assert!(!missing.status.success());
+    assert!(stderr.contains("pip install mujoco"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `joint_limit_time` (and its `max_joint_limit_s` expectation): hex18's tripod at its nominal
 /// speed keeps every joint off its stops; asked for 0.6 m/s (5× the gait's speed), its strides
 /// outrun the legs and a joint stays pressed against a limit for a good part of a step (0.40 s of

@@ -9,11 +9,14 @@ space (hexsim's is a foot-space gait with inverse kinematics; the controller's c
 beside a step either way): period 1 s, duty 0.5, hex18's standing pose (femur −20°, tibia 98°)
 with the coxa sweeping ±0.2 rad and the femur lifting 0.35 rad in swing.
 
-Usage: python3 hex18_mujoco.py TERRAIN.csv [--steps 21000] [--repeats 3]
+Usage: python3 hex18_mujoco.py TERRAIN.csv [--steps 21000] [--repeats 3] [--urdf hex18.urdf]
+                                          [--json OUT.json]
 Prints steps/s for a Python loop (the controller each step) and for mujoco.rollout (the same
-controls precomputed), best of the repeats, and where the base ended (it must walk, not fall).
+controls precomputed), best of the repeats, and where the base ended (it must walk, not fall);
+`--json` also writes them (what `hexsim bench --mujoco` reads).
 """
 import argparse
+import json
 import math
 import time
 import xml.etree.ElementTree as ET
@@ -98,9 +101,11 @@ def main():
     ap.add_argument("--size", type=float, default=4.0, help="terrain side (m)")
     ap.add_argument("--steps", type=int, default=21000)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--urdf", type=Path, default=ROOT / "robots/hex18.urdf")
+    ap.add_argument("--json", type=Path, help="also write the figures here")
     args = ap.parse_args()
     heights = np.loadtxt(args.terrain_csv, delimiter=",", comments="#")
-    model = mujoco.MjModel.from_xml_string(mjcf(ROOT / "robots/hex18.urdf", heights, args.size))
+    model = mujoco.MjModel.from_xml_string(mjcf(args.urdf, heights, args.size))
     low = heights.min()
     model.hfield_data[:] = ((heights - low) / (heights.max() - low)).ravel()
     # the base starts above the ground's height there
@@ -138,6 +143,7 @@ def main():
         data.qpos[:], data.qvel[:] = start
         mujoco.mj_forward(model, data)
 
+    figures = {"mujoco_version": mujoco.__version__, "steps": args.steps, "repeats": args.repeats}
     best = 0.0
     for _ in range(args.repeats):
         reset()
@@ -152,6 +158,10 @@ def main():
     print(f"mujoco {mujoco.__version__}: python loop {best:.0f} steps/s (best of {args.repeats}); "
           f"base from (-1.25, 0) to ({x:.3f}, {y:.3f}, {z:.3f}) m, tilt {tilt:.1f}°, "
           f"{data.ncon} contacts at the end")
+    figures["loop_steps_per_second"] = best
+    figures["base_end"] = [float(x), float(y), float(z)]
+    figures["tilt_deg"] = tilt
+    figures["rollout_steps_per_second"] = None
     try:
         from mujoco import rollout
         best = 0.0
@@ -163,8 +173,11 @@ def main():
             rollout.rollout(model, data, state, ctrl[None, :, :])
             best = max(best, args.steps / (time.perf_counter() - t0))
         print(f"mujoco rollout (controls precomputed): {best:.0f} steps/s (best of {args.repeats})")
+        figures["rollout_steps_per_second"] = best
     except Exception as e:  # rollout's API differs across versions
         print(f"mujoco rollout not measured: {e}")
+    if args.json:
+        args.json.write_text(json.dumps(figures))
 
 
 if __name__ == "__main__":

@@ -22,6 +22,11 @@ pub struct BenchArgs {
     /// Also write the figures and the configuration as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Also time MuJoCo's equivalent of the walk (bench/mujoco, built in) on this machine, now,
+    /// with this Python (default python3; it needs `pip install mujoco numpy`), and print
+    /// hexsim's walks as multiples of it.
+    #[arg(long, value_name = "PYTHON", num_args = 0..=1, default_missing_value = "python3")]
+    mujoco: Option<PathBuf>,
 }
 
 pub fn bench(args: BenchArgs) -> Result<()> {
@@ -40,6 +45,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             .max(1),
         repeats: args.repeats,
         scratch: std::env::temp_dir().join(format!("hexsim-bench-{}.rrd", std::process::id())),
+        mujoco: args.mujoco.clone(),
     };
     for (key, value) in hexsim::bench::configuration(&options) {
         println!("{key:>13}: {value}");
@@ -89,6 +95,33 @@ pub fn bench(args: BenchArgs) -> Result<()> {
                 a.name(),
                 b.threads,
                 b.steps_per_second / s.steps_per_second
+            );
+        }
+    }
+    if let Some(m) = &report.mujoco {
+        println!(
+            "MuJoCo {} on this machine, the same walk's {} steps: rollout {}, Python loop {:.0} \
+             steps/s (best of {}; its base ended at x = {:.2} m, tilted {:.1}°)",
+            m.mujoco_version,
+            m.steps,
+            m.rollout_steps_per_second
+                .map_or("not measured".into(), |r| format!("{r:.0}")),
+            m.loop_steps_per_second,
+            m.repeats,
+            m.base_end[0],
+            m.tilt_deg,
+        );
+        for f in report.figures.iter().filter(|f| f.workload == "walk") {
+            println!(
+                "{} walk: {:.2}× MuJoCo's {} (best against best: {:.2}×)",
+                f.articulation.as_deref().unwrap_or("-"),
+                f.steps_per_second / m.best(),
+                if m.rollout_steps_per_second.is_some() {
+                    "rollout"
+                } else {
+                    "Python loop"
+                },
+                f.best_steps_per_second / m.best(),
             );
         }
     }

@@ -11,6 +11,8 @@
 //! physics broke is flagged as such, and reports the share of its time spent inside rapier's step
 //! (what the figure could be if hexsim's own work cost nothing).
 
+pub mod mujoco;
+
 use crate::scenario::{Metrics, Output, Outputs, Report, Scenario, ScenarioSpec};
 use crate::sim::Articulation;
 use anyhow::{Context, Result};
@@ -30,6 +32,8 @@ pub struct BenchOptions {
     pub repeats: usize,
     /// Where the recording of the "recording on" run goes (deleted afterwards).
     pub scratch: PathBuf,
+    /// A Python with MuJoCo, to time MuJoCo's equivalent of the walk beside ours.
+    pub mujoco: Option<PathBuf>,
 }
 
 /// One measured figure.
@@ -68,6 +72,15 @@ impl Figure {
 pub struct BenchReport {
     pub configuration: Vec<(String, String)>,
     pub figures: Vec<Figure>,
+    /// MuJoCo's equivalent of the walk on the same machine (`hexsim bench --mujoco`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mujoco: Option<mujoco::MujocoFigures>,
+}
+
+/// The terrain the walk crosses (for MuJoCo's copy of the workload).
+fn bench_terrain() -> Result<crate::terrain::HeightGrid> {
+    let scenario = resolve(walk_spec(Articulation::Multibody, 1.0)?, "bench walk")?;
+    Ok(scenario.build_terrain()?)
 }
 
 fn walk_spec(articulation: Articulation, duration: f64) -> Result<ScenarioSpec> {
@@ -218,9 +231,18 @@ pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Res
         ))
     })?;
     push(ball, &mut figures);
+    let mujoco = match &options.mujoco {
+        // as many steps as the walk: 1 s settling and the duration, at 1 ms
+        Some(python) => {
+            let steps = ((options.duration + 1.0) * 1000.0).round() as u64;
+            Some(mujoco::measure(python, steps, options.repeats)?)
+        }
+        None => None,
+    };
     Ok(BenchReport {
         configuration: configuration(options),
         figures,
+        mujoco,
     })
 }
 
@@ -315,7 +337,7 @@ macro_rules! patch {
     ($name:literal) => {
         (
             $name,
-            include_bytes!(concat!("../third_party/rapier3d/patches/", $name)).as_slice(),
+            include_bytes!(concat!("../../third_party/rapier3d/patches/", $name)).as_slice(),
         )
     };
 }
