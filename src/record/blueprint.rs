@@ -12,12 +12,12 @@ use rerun::RecordingStream;
 use rerun::datatypes::{TimeInt, TimeRange, TimeRangeBoundary, VisibleTimeRange};
 use rerun::external::re_log_types::{BlueprintActivationCommand, LogMsg};
 use rerun::external::re_sdk_types::blueprint::archetypes::{
-    ContainerBlueprint, EyeControls3D, PanelBlueprint, TimeAxis, TimePanelBlueprint, ViewBlueprint,
-    ViewContents, ViewportBlueprint, VisibleTimeRanges,
+    ContainerBlueprint, EyeControls3D, PanelBlueprint, PlotLegend, TimeAxis, TimePanelBlueprint,
+    ViewBlueprint, ViewContents, ViewportBlueprint, VisibleTimeRanges,
 };
 use rerun::external::re_sdk_types::blueprint::components::{
-    AutoLayout, AutoViews, ColumnShare, ContainerKind, IncludedContent, LinkAxis, PanelState,
-    QueryExpression, RootContainer, RowShare, TimelineName, ViewClass,
+    AutoLayout, AutoViews, ColumnShare, ContainerKind, Corner2D, IncludedContent, LinkAxis,
+    PanelState, QueryExpression, RootContainer, RowShare, TimelineName, ViewClass,
 };
 
 /// A view or a container of views.
@@ -60,13 +60,49 @@ impl Layout {
         Layout::container(ContainerKind::Tabs, children, Vec::new())
     }
 
+    /// A plot's title from its entity's name — words, and the unit of what it plots (every plot
+    /// hexsim records is listed; another keeps its name) — and whether it draws several series
+    /// (a legend then names them; a lone series is named by the title).
+    pub fn plot_title(entity: &str) -> (String, bool) {
+        let (title, series) = match entity {
+            "height_above_ground" => ("body height above the ground (m)", false),
+            "attitude_deg" => ("body attitude (°)", true),
+            "forward_speed" => ("forward speed (m/s)", false),
+            "normal_force" => ("normal force (N)", true),
+            "slip_speed" => ("slip speed (m/s)", true),
+            "angle" => ("joint angles and targets (rad)", true),
+            "torque" => ("joint torques (N·m)", true),
+            "energy" => ("energy (J)", true),
+            "height" => ("height (m)", false),
+            "force" => ("force (N)", true),
+            "penetration_mm" => ("penetration (mm)", false),
+            "speed" => ("speed (m/s)", false),
+            // a comparison's plots: one series per setting
+            "total_energy" => ("total energy (J)", true),
+            "slip" => ("slip speed (m/s)", true),
+            "forward_x" => ("forward position x (m)", true),
+            "body_z" => ("body height above the ground (m)", true),
+            "roll_deg" => ("roll (°)", true),
+            "pitch_deg" => ("pitch (°)", true),
+            "feet_normal_force" => ("feet's normal forces, summed (N)", true),
+            "feet_slip" => ("feet's slip speeds, summed (m/s)", true),
+            other => (other, true),
+        };
+        (title.to_string(), series)
+    }
+
     /// A tab named `name` of time-series views stacked one above the other, one per entity in
-    /// `origins`, each titled by the entity's last name.
+    /// `origins`, each titled by what the entity's last name plots, with its unit
+    /// ([`Self::plot_title`]).
     pub fn plots(name: &str, origins: &[&str]) -> Self {
         Layout::vertical(
             origins
                 .iter()
-                .map(|o| View::time_series(o.rsplit('/').next().unwrap_or(o), o).into())
+                .map(|o| {
+                    let (title, series) = Self::plot_title(o.rsplit('/').next().unwrap_or(o));
+                    let view = View::time_series(&title, o);
+                    if series { view } else { view.without_legend() }.into()
+                })
                 .collect(),
             Vec::new(),
         )
@@ -92,6 +128,9 @@ pub struct View {
     camera: Option<String>,
     /// Entities drawn with their history (trails) instead of their latest value only.
     history: Vec<(String, History)>,
+    /// A time series' legend (in the top-right corner, the least crowded by curves that start
+    /// at a settled value); hidden for a lone series, which the title names.
+    legend: bool,
 }
 
 /// How much of an entity's past a 3D view draws.
@@ -112,7 +151,14 @@ impl View {
             contents: vec!["$origin/**".into()],
             camera: None,
             history: Vec::new(),
+            legend: true,
         }
+    }
+
+    /// A time series without its legend.
+    pub fn without_legend(mut self) -> Self {
+        self.legend = false;
+        self
     }
 
     /// A 3D view of everything under `origin`.
@@ -293,6 +339,14 @@ fn log_view(
             .with_display_name(view.name.as_str())
             .with_space_origin(view.origin.as_str()),
     )?;
+    if view.class == "TimeSeries" {
+        stream.log(
+            format!("{path}/PlotLegend"),
+            &PlotLegend::new()
+                .with_corner(Corner2D::RightTop)
+                .with_visible(view.legend),
+        )?;
+    }
     if matches!(view.class, "TimeSeries" | "StateTimeline") {
         // plots share their time axis: zooming one zooms all, the footfall diagram included
         stream.log(

@@ -12,7 +12,7 @@ use crate::robot::{LEG_NAMES, RobotModel};
 use crate::sim::{WalkSample, Walker};
 use crate::terrain::HeightGrid;
 use anyhow::Result;
-use glam::DAffine3;
+use glam::{DAffine3, DVec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -142,7 +142,9 @@ impl HexapodRecorder {
                 format!("footfall/{}", leg.name),
                 &rerun::StateConfiguration::new()
                     .with_values(FOOTFALL_STATES)
-                    .with_labels(["", "", ""])
+                    // a blank label: the lanes are named once, in the view's title, not in
+                    // every bar (an empty label shows the state's name, cut to fit the bar)
+                    .with_labels([" ", " ", " "])
                     .with_colors([[235, 235, 235], [60, 130, 200], [0, 0, 0]])
                     .with_visible([true, true, false]),
             )?;
@@ -224,8 +226,28 @@ pub fn robot_radius(model: &RobotModel) -> f64 {
     radius.max(0.05)
 }
 
-/// Metres of arrow per newton so that a foot carrying a sixth of the weight gets an arrow as long
-/// as the mean hip-to-foot distance in the pose `link_frames`.
+/// The whole robot's centre of mass (world), its links at `link_frames`.
+fn centre_of_mass(model: &RobotModel, link_frames: &[DAffine3]) -> DVec3 {
+    let (moment, mass) = model.links.iter().zip(link_frames).fold(
+        (DVec3::ZERO, 0.0),
+        |(moment, mass), (link, frame)| {
+            (
+                moment + link.mass * frame.transform_point3(link.com),
+                mass + link.mass,
+            )
+        },
+    );
+    if mass > 0.0 {
+        moment / mass
+    } else {
+        link_frames[0].translation
+    }
+}
+
+/// Metres of arrow per newton so that a foot carrying a third of the weight (a tripod's stance
+/// foot) gets an arrow half as long as the mean hip-to-foot distance in the pose `link_frames`:
+/// it stays within the legs' own scale (a sixth of the weight to a whole leg drew a tripod's
+/// stance arrows twice a leg's length).
 fn force_scale(model: &RobotModel, link_frames: &[DAffine3]) -> f64 {
     let reach: f64 = model
         .legs
@@ -238,8 +260,8 @@ fn force_scale(model: &RobotModel, link_frames: &[DAffine3]) -> f64 {
         })
         .sum::<f64>()
         / model.legs.len().max(1) as f64;
-    let weight_share = model.total_mass() * crate::sim::STANDARD_GRAVITY / 6.0;
-    reach.max(0.01) / weight_share.max(1e-9)
+    let weight_share = model.total_mass() * crate::sim::STANDARD_GRAVITY / 3.0;
+    0.5 * reach.max(0.01) / weight_share.max(1e-9)
 }
 
 impl HexapodRecorder {
@@ -336,7 +358,11 @@ impl HexapodRecorder {
             .log_frames(rec, model, link_frames, self.joints_drift, false)?;
         let (_, _, yaw) = s.robot.roll_pitch_yaw();
         let frame_dt = self.recording.dt() * (self.every * self.scene_every) as f64;
-        let view = self.camera.follow(s.robot.body.translation, yaw, frame_dt);
+        // aimed at the robot's centre of mass: a base link's origin can sit anywhere (Kraby's is
+        // below its feet, which framed the robot in the top third of the view)
+        let view = self
+            .camera
+            .follow(centre_of_mass(model, link_frames), yaw, frame_dt);
         camera::log_pose(rec, "world/camera", &view)?;
         let force_scale = *self
             .force_scale
@@ -510,5 +536,72 @@ mod tests {
             "{radius} against {stretched}"
         );
         assert!((0.3..0.4).contains(&radius), "{radius}");
+    }
+
+    /// A tripod's stance foot (a third of the weight) draws an arrow half the mean hip-to-foot
+    /// distance; the camera aims at the centre of mass, which for hex18 standing is inside its
+    /// body box, not at the base link's origin alone by accident of the URDF.
+    #[test]
+    fn force_arrows_are_half_a_leg_and_the_camera_aims_at_the_centre_of_mass() {
+        let model = crate::scenario::builtin::hex18();
+        let pose = crate::gait::fit(&model, &crate::gait::tripod_for_tests())
+            .unwrap()
+            .standing_pose;
+        let frames = model.link_poses(&pose);
+        let reach: f64 = model
+            .legs
+            .iter()
+            .map(|leg| {
+                let hip = &model.joints[leg.joints[0]];
+                let hip = (frames[hip.parent] * hip.origin).translation;
+                (frames[leg.foot_link].transform_point3(leg.foot.center) - hip).length()
+            })
+            .sum::<f64>()
+            / 6.0;
+        let third = model.total_mass() * crate::sim::STANDARD_GRAVITY / 3.0;
+        let arrow = third * force_scale(&model, &frames);
+        assert!(
+            (arrow - 0.5 * reach).abs() < 1e-12,
+            "{arrow} m against {reach} m"
+        );
+        // the legs are mirror images about the body's x axis: the centre of mass is on it, and
+        // between the body's origin and the feet, below the origin (the legs hang lower)
+        let com = centre_of_mass(&model, &frames);
+        let origin = frames[0].translation;
+        assert!((com.y - origin.y).abs() < 1e-9, "{com} against {origin}");
+        assert!(
+            com.z < origin.z && com.z > origin.z - 0.05,
+            "{com} against {origin}"
+        );
+        let total: f64 = model.links.iter().map(|l| l.mass).sum();
+        assert!((total - 2.52).abs() < 1e-9);
+    }
+
+    /// Every plot the recorders lay out has a title with its unit, and a legend only where it
+    /// draws several series.
+    #[test]
+    fn plot_titles_carry_units() {
+        for entity in [
+            "height_above_ground",
+            "attitude_deg",
+            "forward_speed",
+            "normal_force",
+            "slip_speed",
+            "angle",
+            "torque",
+            "energy",
+            "height",
+            "force",
+            "penetration_mm",
+            "speed",
+        ] {
+            let (title, _) = Layout::plot_title(entity);
+            assert!(
+                title.ends_with(')') && title.contains(" ("),
+                "{entity}: {title}"
+            );
+        }
+        assert!(!Layout::plot_title("forward_speed").1);
+        assert!(Layout::plot_title("normal_force").1);
     }
 }
