@@ -264,6 +264,53 @@ fn a_moved_metric_fails_against_the_baseline() {
         "{t}"
     );
     assert!(t.contains("1 regressed"), "{t}");
+    // the results file says so too: that record's status, what moved, from what to what
+    let after = records(&dir.join("r.jsonl"));
+    let moved = after
+        .iter()
+        .find(|r| r["name"] == "drops[drop_height=0.3]")
+        .unwrap();
+    assert_eq!(moved["status"], "regressed", "{moved}");
+    let regression = &moved["regressions"][0];
+    assert_eq!(regression["metric"], "first_apex_height", "{moved}");
+    let (old, new) = (
+        regression["baseline"].as_f64().unwrap(),
+        regression["value"].as_f64().unwrap(),
+    );
+    assert!((new - old - 0.02).abs() < 1e-9, "{regression}");
+    assert!(
+        regression["allowed"].as_f64().unwrap() < 0.02,
+        "{regression}"
+    );
+    for r in after
+        .iter()
+        .filter(|r| r["name"] != "drops[drop_height=0.3]")
+    {
+        assert_eq!(r["status"], "passed", "{r}");
+        assert!(r.get("regressions").is_none(), "{r}");
+    }
+    // resumed against the true baseline, the mark goes: the record says what this comparison found
+    let out = hexsim(
+        &[
+            "batch",
+            "scenarios",
+            "-o",
+            "r.jsonl",
+            "--resume",
+            "--baseline",
+            "base.jsonl",
+        ],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    assert!(
+        records(&dir.join("r.jsonl"))
+            .iter()
+            .all(|r| r["status"] == "passed")
+    );
+    // without a baseline there is nothing to regress against, and no line says otherwise
+    let out = hexsim(&["batch", "scenarios", "-o", "plain.jsonl"], &dir);
+    assert!(!text(&out).contains("regressed"), "{}", text(&out));
 }
 
 #[test]

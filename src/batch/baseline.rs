@@ -8,9 +8,10 @@ use crate::scenario::spec::Tolerance;
 use std::collections::BTreeMap;
 
 /// A metric that moved beyond its tolerance.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Regression {
-    /// e.g. `distance`, `foot_slip[2]`.
+    /// e.g. `distance`, `foot_slip[lr]`.
     pub metric: String,
     /// None: the value appeared or disappeared (e.g. no apex any more).
     pub baseline: Option<f64>,

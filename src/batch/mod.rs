@@ -307,6 +307,7 @@ pub fn run(scenarios: &[Scenario], options: &Options) -> Result<Outcome> {
 pub fn status_word(status: Status) -> &'static str {
     match status {
         Status::Passed => "passed",
+        Status::Regressed => "REGRESSED",
         Status::Failed => "FAILED",
         Status::Diverged => "DIVERGED",
         Status::Error => "ERROR",
@@ -361,6 +362,7 @@ fn run_one(
         steps_per_second: 0.0,
         metrics: serde_json::Value::Null,
         expectations: Vec::new(),
+        regressions: Vec::new(),
     };
     match result {
         Err(e) => record.message = Some(format!("{e:#}")),
@@ -449,6 +451,30 @@ pub fn compare_with_baseline(
         }
     }
     (regressions, missing)
+}
+
+/// Marks each record with its regressions against the baseline (`regressions`, by scenario): a
+/// record that met its expectations becomes `Regressed`. Marks from an earlier comparison (a
+/// resumed result) are cleared first, so a record says what this comparison found. Returns
+/// whether any record changed.
+pub fn mark_regressions(
+    records: &mut [Record],
+    regressions: &BTreeMap<String, Vec<Regression>>,
+) -> bool {
+    let mut changed = false;
+    for r in records {
+        let moved = regressions.get(&r.name).cloned().unwrap_or_default();
+        let status = match r.status {
+            Status::Passed | Status::Regressed if !moved.is_empty() => Status::Regressed,
+            Status::Regressed => Status::Passed,
+            other => other,
+        };
+        if status != r.status || moved != r.regressions {
+            (r.status, r.regressions) = (status, moved);
+            changed = true;
+        }
+    }
+    changed
 }
 
 /// Joins shard results into one list: refuses a scenario that appears twice, results from

@@ -12,6 +12,9 @@ use std::path::{Path, PathBuf};
 pub enum Status {
     /// Every expectation met.
     Passed,
+    /// Every expectation met, but a metric moved past its tolerance against the baseline
+    /// (`regressions` says which).
+    Regressed,
     /// Some expectation not met.
     Failed,
     /// The state became non-finite (and the scenario expected it not to).
@@ -46,6 +49,11 @@ pub struct Record {
     /// The run's metrics (see `hexsim run --metrics`); null when the scenario could not run.
     pub metrics: serde_json::Value,
     pub expectations: Vec<Check>,
+    /// The metrics that moved past their tolerance against the baseline (`batch --baseline`):
+    /// each with the baseline's value, this run's and the change allowed. Empty without a
+    /// baseline, or when nothing moved.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub regressions: Vec<super::baseline::Regression>,
 }
 
 impl Record {

@@ -1,11 +1,9 @@
 //! The table printed at the end of a batch.
 
-use super::baseline::Regression;
 use super::results::{Record, Status};
 use super::status_word;
 use crate::metrics::{self, HexapodMetrics, Metric, Side, walk};
 use crate::scenario::Kind;
-use std::collections::BTreeMap;
 use std::fmt::Write;
 
 /// A walk's metric from a result (none for a ball, or a result without metrics).
@@ -18,17 +16,14 @@ fn cell(v: Option<f64>, scale: f64, digits: usize) -> String {
     v.map_or("-".into(), |v| format!("{:.*}", digits, v * scale))
 }
 
-/// One row per result (only the ones that did not pass, when `all` is false), then the counts and
-/// the slowest scenarios.
-pub fn table(
-    records: &[Record],
-    regressions: &BTreeMap<String, Vec<Regression>>,
-    all: bool,
-) -> String {
+/// One row per result (only the ones that did not pass, when `all` is false), then the counts —
+/// with the regressions against the baseline when one was given (`baseline`) — and the slowest
+/// scenarios.
+pub fn table(records: &[Record], baseline: bool, all: bool) -> String {
     let mut out = String::new();
     let shown: Vec<&Record> = records
         .iter()
-        .filter(|r| all || r.status != Status::Passed || regressions.contains_key(&r.name))
+        .filter(|r| all || r.status != Status::Passed)
         .collect();
     if !shown.is_empty() {
         let width = shown
@@ -55,12 +50,9 @@ pub fn table(
                     .map(|m| m.max_penetration),
             };
             let mut notes = r.message.clone().unwrap_or_default();
-            let mut status = status_word(r.status).to_string();
-            if let Some(moved) = regressions.get(&r.name) {
-                if r.status == Status::Passed {
-                    status = "REGRESSED".into();
-                }
-                let moved: Vec<String> = moved.iter().map(|m| m.to_string()).collect();
+            let status = status_word(r.status);
+            if !r.regressions.is_empty() {
+                let moved: Vec<String> = r.regressions.iter().map(|m| m.to_string()).collect();
                 if !notes.is_empty() {
                     notes.push_str("; ");
                 }
@@ -80,16 +72,20 @@ pub fn table(
         out.push('\n');
     }
     let count = |s: Status| records.iter().filter(|r| r.status == s).count();
-    let _ = writeln!(
+    let _ = write!(
         out,
-        "{} scenarios: {} passed, {} failed, {} diverged, {} errors; {} regressed against the baseline",
+        "{} scenarios: {} passed, {} failed, {} diverged, {} errors",
         records.len(),
-        count(Status::Passed),
+        count(Status::Passed) + count(Status::Regressed),
         count(Status::Failed),
         count(Status::Diverged),
         count(Status::Error),
-        regressions.len()
     );
+    if baseline {
+        let moved = records.iter().filter(|r| !r.regressions.is_empty()).count();
+        let _ = write!(out, "; {moved} regressed against the baseline");
+    }
+    out.push('\n');
     let mut slowest: Vec<&Record> = records.iter().collect();
     slowest.sort_by(|a, b| b.wall_time_s.total_cmp(&a.wall_time_s));
     let slowest: Vec<String> = slowest

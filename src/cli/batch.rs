@@ -110,17 +110,21 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
             Progress::Lines
         },
     };
-    let outcome = batch::run(&scenarios, &options)?;
+    let mut outcome = batch::run(&scenarios, &options)?;
     let (regressions, missing) = match &baseline {
         Some(b) => batch::compare_with_baseline(&outcome.records, &scenarios, b, args.rel_tol),
         None => Default::default(),
     };
+    // the results file says what the comparison found: a regressed record's status and what moved
+    if batch::mark_regressions(&mut outcome.records, &regressions) {
+        batch::results::write_all(&args.output, &outcome.records)?;
+    }
     println!();
     print!(
         "{}",
         batch::summary::table(
             &outcome.records,
-            &regressions,
+            baseline.is_some(),
             outcome.records.len() <= 60 || args.all
         )
     );

@@ -92,10 +92,26 @@ pub(crate) fn warn_about<'a>(
     scenarios: impl IntoIterator<Item = &'a Scenario>,
     strict: bool,
 ) -> Result<()> {
-    let warnings: std::collections::BTreeSet<&String> =
-        scenarios.into_iter().flat_map(|s| &s.warnings).collect();
-    for warning in &warnings {
-        eprintln!("{}: {warning}", if strict { "error" } else { "warning" });
+    // each warning once, with the scenarios it concerns (all of them, or up to a few by name)
+    let scenarios: Vec<&Scenario> = scenarios.into_iter().collect();
+    let mut warnings: std::collections::BTreeMap<&String, Vec<&str>> = Default::default();
+    for s in &scenarios {
+        for w in &s.warnings {
+            warnings.entry(w).or_default().push(s.name.as_str());
+        }
+    }
+    for (warning, names) in &warnings {
+        let level = if strict { "error" } else { "warning" };
+        let whose = if scenarios.len() == 1 {
+            String::new()
+        } else if names.len() == scenarios.len() {
+            format!(" (all {} scenarios)", names.len())
+        } else if names.len() <= 3 {
+            format!(" ({})", names.join(", "))
+        } else {
+            format!(" ({}, {} and {} more)", names[0], names[1], names.len() - 2)
+        };
+        eprintln!("{level}: {warning}{whose}");
     }
     if strict && !warnings.is_empty() {
         anyhow::bail!(

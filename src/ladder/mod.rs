@@ -83,7 +83,7 @@ impl Outcome {
         match record.status {
             Status::Error => return Outcome::Error,
             Status::Diverged => return Outcome::Diverged,
-            Status::Passed => return Outcome::Crossed,
+            Status::Passed | Status::Regressed => return Outcome::Crossed,
             Status::Failed => {}
         }
         if metric("fell_at").is_some() {

@@ -147,7 +147,7 @@ pub const TABLE: &[Metric<BallMetrics>] = &[
         noise: Some(0.005),
         better: Better::Neither,
         bounds: &[],
-        value: |m| Value::Each(m.final_position.to_vec()),
+        value: |m| Value::per_axis(&m.final_position),
     },
     Metric {
         name: "final_speed",

@@ -67,8 +67,8 @@ impl Bound {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Value {
     One(f64),
-    /// One per leg (lf lm lr rf rm rr) or per axis.
-    Each(Vec<f64>),
+    /// One per leg (lf lm lr rf rm rr) or per axis (x y z), with those names.
+    Each(Vec<f64>, &'static [&'static str]),
     /// Not measured in this run (e.g. no apex when the ball never left the ground).
     Absent,
 }
@@ -79,7 +79,7 @@ impl Value {
     pub fn bounded(&self, side: Side) -> Option<f64> {
         match self {
             Value::One(v) => Some(*v),
-            Value::Each(vs) => match side {
+            Value::Each(vs, _) => match side {
                 Side::Max => vs.iter().copied().reduce(f64::max),
                 Side::Min => vs.iter().copied().reduce(f64::min),
             },
@@ -87,14 +87,28 @@ impl Value {
         }
     }
 
-    /// Named scalars: `name` itself, or `name[i]` for each entry of a list.
+    /// One value per leg, named by the legs (the per-foot lists' order).
+    pub fn per_leg(values: &[f64; 6]) -> Self {
+        Value::Each(values.to_vec(), &crate::robot::LEG_NAMES)
+    }
+
+    /// One value per axis, x y z.
+    pub fn per_axis(values: &[f64; 3]) -> Self {
+        Value::Each(values.to_vec(), &["x", "y", "z"])
+    }
+
+    /// Named scalars: `name` itself, or `name[entry]` for each entry of a list (`foot_slip[lf]`,
+    /// `final_position[z]`).
     pub fn flatten(&self, name: &str) -> Vec<(String, Option<f64>)> {
         match self {
             Value::One(v) => vec![(name.to_string(), Some(*v))],
-            Value::Each(vs) => vs
+            Value::Each(vs, labels) => vs
                 .iter()
                 .enumerate()
-                .map(|(i, v)| (format!("{name}[{i}]"), Some(*v)))
+                .map(|(i, v)| {
+                    let entry = labels.get(i).map_or(i.to_string(), |l| l.to_string());
+                    (format!("{name}[{entry}]"), Some(*v))
+                })
                 .collect(),
             Value::Absent => vec![(name.to_string(), None)],
         }
@@ -199,13 +213,17 @@ mod tests {
 
     #[test]
     fn a_bound_on_a_list_holds_for_every_entry() {
-        let legs = Value::Each(vec![0.2, 0.5, 0.1]);
+        let legs = Value::per_leg(&[0.2, 0.5, 0.1, 0.3, 0.3, 0.3]);
         assert_eq!(legs.bounded(Side::Max), Some(0.5));
         assert_eq!(legs.bounded(Side::Min), Some(0.1));
         assert_eq!(Value::Absent.bounded(Side::Max), None);
         assert_eq!(
             legs.flatten("foot_slip")[2],
-            ("foot_slip[2]".to_string(), Some(0.1))
+            ("foot_slip[lr]".to_string(), Some(0.1))
+        );
+        assert_eq!(
+            Value::per_axis(&[1.0, 2.0, 3.0]).flatten("final_position")[2],
+            ("final_position[z]".to_string(), Some(3.0))
         );
     }
 }

@@ -618,7 +618,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         noise: Some(0.005),
         better: Better::Lower,
         bounds: &[Bound::max("max_foot_slip_mm").scaled(1e3)],
-        value: |m| Value::Each(m.foot_slip.to_vec()),
+        value: |m| Value::per_leg(&m.foot_slip),
     },
     Metric {
         name: "foot_slip_loaded",
@@ -627,7 +627,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         noise: Some(0.005),
         better: Better::Lower,
         bounds: &[Bound::max("max_foot_slip_loaded_mm").scaled(1e3)],
-        value: |m| Value::Each(m.foot_slip_loaded.to_vec()),
+        value: |m| Value::per_leg(&m.foot_slip_loaded),
     },
     Metric {
         name: "stance_fraction",
@@ -636,7 +636,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         noise: Some(0.02),
         better: Better::Neither,
         bounds: &[],
-        value: |m| Value::Each(m.stance_fraction.to_vec()),
+        value: |m| Value::per_leg(&m.stance_fraction),
     },
     Metric {
         name: "peak_normal_force",
@@ -645,7 +645,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         noise: None,
         better: Better::Lower,
         bounds: &[],
-        value: |m| Value::Each(m.peak_normal_force.to_vec()),
+        value: |m| Value::per_leg(&m.peak_normal_force),
     },
     Metric {
         name: "mean_normal_force",
@@ -654,7 +654,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         noise: Some(0.2),
         better: Better::Neither,
         bounds: &[],
-        value: |m| Value::Each(m.mean_normal_force.to_vec()),
+        value: |m| Value::per_leg(&m.mean_normal_force),
     },
     Metric {
         name: "servo_energy",

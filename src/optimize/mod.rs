@@ -570,7 +570,7 @@ pub fn metric_value(m: &HexapodMetrics, name: &str) -> f64 {
         .find(|t| t.name == name)
         .map_or(f64::NAN, |t| match (t.value)(m) {
             Value::One(v) => v,
-            Value::Each(vs) => vs.iter().sum(),
+            Value::Each(vs, _) => vs.iter().sum(),
             Value::Absent => f64::NAN,
         })
 }
