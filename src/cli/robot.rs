@@ -197,6 +197,41 @@ fn feedforward(out: &mut String, model: &RobotModel, fitted: &Fitted, stiffness:
 }
 
 /// The report, as printed.
+/// The joints hexsim holds still, off the legs and on them, with their angles.
+fn held_joints(model: &RobotModel) -> Option<String> {
+    if model.held.is_empty() {
+        return None;
+    }
+    let list = |on_leg: bool| -> Vec<String> {
+        model
+            .held
+            .iter()
+            .filter(|h| h.on_leg.is_some() == on_leg)
+            .map(|h| format!("{} {}", h.name, deg(h.angle)))
+            .collect()
+    };
+    let mut parts = Vec::new();
+    let off = list(false);
+    if !off.is_empty() {
+        parts.push(format!(
+            "off the legs (a head, an arm, a tail: carried as part of the body): {}",
+            off.join(", ")
+        ));
+    }
+    let on = list(true);
+    if !on.is_empty() {
+        parts.push(format!(
+            "on the legs, beyond the three that sweep the largest workspace: {}",
+            on.join(", ")
+        ));
+    }
+    Some(format!(
+        "  {} joints held still at the angle shown (welded): {}",
+        model.held.len(),
+        parts.join("; ")
+    ))
+}
+
 fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
     use std::fmt::Write;
     let mut out = String::new();
@@ -222,6 +257,9 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             "  {count} URDF links fixed to others, merged: {}",
             merged.join("; ")
         );
+    }
+    if let Some(held) = held_joints(model) {
+        let _ = writeln!(out, "{held}");
     }
     let leg_mass = |leg: &robot::Leg| -> f64 {
         leg.joints

@@ -1,5 +1,6 @@
 //! The six legs of a robot, whatever its outline (rectangular, round, hexagonal) and whichever
-//! way its URDF points: the chains of three joints from the body to a foot, the walking direction,
+//! way its URDF points: the chains of three joints from the body to a foot (`branches` holds
+//! any other joints still first), the walking direction,
 //! and each leg's name (`lf lm lr rf rm rr`) from where it sits around the body about that
 //! direction, so every gait file works for every robot.
 //!
@@ -111,7 +112,7 @@ fn laterals(hips: &[DVec2], yaw: f64) -> (Vec<f64>, f64) {
 
 /// If three hips sit clearly on each side of the walking axis: the smallest distance of a hip
 /// from it.
-fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
+pub(super) fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
     let (lateral, margin) = laterals(hips, yaw);
     let left = lateral.iter().filter(|&&l| l > 0.0).count();
     let clear = lateral.iter().all(|l| l.abs() > margin);
@@ -132,7 +133,7 @@ fn sides(hips: &[DVec2], yaw: f64) -> String {
 
 /// The URDF's +x if it splits the hips three a side; else +y; else, of the whole degrees, the
 /// direction whose nearest hip is farthest from the axis (the first such from +x).
-fn choose_forward(hips: &[DVec2]) -> Option<Forward> {
+pub(super) fn choose_forward(hips: &[DVec2]) -> Option<Forward> {
     if split(hips, 0.0).is_some() {
         return Some(Forward::URDF_X);
     }
@@ -180,17 +181,40 @@ pub(super) fn turn_to_forward(links: &mut [Link], joints: &mut [Joint], yaw: f64
     }
 }
 
-/// The six chains from the body to a foot: every link with a foot, traced back to the root; each
-/// must hang from it by exactly three joints of its own. `unfound`: (link, why) for each leg's
-/// last link whose foot could not be found from its geometry.
+/// The message for a leaf link without a foot: `why` none could be found at its tip.
+pub(super) fn footless_leg(link: &str, why: Option<&String>) -> String {
+    match why {
+        Some(why) => format!(
+            "link `{link}` ends a leg and has no foot sphere, and no foot could be found at its tip: {why}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])"
+        ),
+        None => format!(
+            "link `{link}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot"
+        ),
+    }
+}
+
+/// The six chains from the body to a foot: every leaf link with a foot, traced back to the root;
+/// each must hang from it by exactly three joints of its own (`branches` has held any others
+/// still). A foot on the body or on a link that is not a leaf is contact geometry, not a leg's
+/// end. `unfound`: (link, why) for each leaf whose foot could not be found from its geometry.
 fn chains(
     links: &[Link],
     joints: &[Joint],
     unfound: &[(String, String)],
 ) -> Result<Vec<Chain>, String> {
+    let is_leaf = |k: usize| k != 0 && !joints.iter().any(|j| j.parent == k);
     let mut found = Vec::new();
     for (k, link) in links.iter().enumerate() {
-        let Some(foot) = link.foot else { continue };
+        if !is_leaf(k) {
+            continue;
+        }
+        let Some(foot) = link.foot else {
+            let why = unfound
+                .iter()
+                .find(|(l, _)| *l == link.name)
+                .map(|(_, w)| w);
+            return Err(footless_leg(&link.name, why));
+        };
         let mut chain = Vec::new();
         let mut at = k;
         while let Some(j) = links[at].parent_joint {
@@ -198,48 +222,21 @@ fn chains(
             at = joints[j].parent;
         }
         chain.reverse();
-        if chain.len() > 3 {
+        let [a, b, c] = chain[..] else {
             return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joints: hexsim's legs have 3 (coxa, femur, tibia), and legs with more (a tarsus) are not supported; to walk it, make the extra joints `fixed`",
+                "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",
                 link.name,
                 chain.len()
             ));
-        }
-        if chain.len() != 3 {
-            return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joint{}, expected 3 (coxa, femur, tibia)",
-                link.name,
-                chain.len(),
-                if chain.len() == 1 { "" } else { "s" }
-            ));
-        }
+        };
         found.push(Chain {
-            joints: [chain[0], chain[1], chain[2]],
+            joints: [a, b, c],
             foot_link: k,
             foot,
         });
     }
-    // leaves without a foot are legs without a foot
-    for (k, link) in links.iter().enumerate() {
-        let is_leaf = !joints.iter().any(|j| j.parent == k);
-        if is_leaf && k != 0 && link.foot.is_none() {
-            if let Some((_, why)) = unfound.iter().find(|(l, _)| *l == link.name) {
-                return Err(format!(
-                    "link `{}` ends a leg and has no foot sphere, and no foot could be found at its tip: {why}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
-                    link.name
-                ));
-            }
-            return Err(format!(
-                "link `{}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot",
-                link.name
-            ));
-        }
-    }
     if found.len() != 6 {
-        return Err(format!(
-            "found {} legs (chains of 3 revolute joints ending in a foot sphere), expected 6 for a hexapod",
-            found.len()
-        ));
+        return Err(super::branches::found_too_few(found.len()));
     }
     let shared = found
         .iter()
