@@ -289,7 +289,8 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
         "m (fitted), reach ",
         "standing on six feet (hips 0.100 m above the ground)",
         "the most loaded servo: ",
-        "walking tripod's cycle at 0.120 m/s on level ground: every foot target reached; least room: ",
+        "walking tripod's cycle at 0.120 m/s on level ground: least room ",
+        "planned on level ground step by step as the run plans it: every foot target reached in all 20000 steps",
     ] {
         assert!(stdout.contains(fragment), "no {fragment:?} in\n{stdout}");
     }
@@ -603,5 +604,69 @@ fn the_paper_variant_names_what_is_hexsims_reading() {
                 && help.contains("friction on the ball"),
             "{command} --help: {help}"
         );
+    }
+}
+
+/// `hexsim robot` and `hexsim run` judge reach by one tally (`gait::reach`), the report planning
+/// the run's walk step by step on level ground: hex18 with a 0.19 m stride, which the report once
+/// called out of reach (a cycle sampled without the feet's rolling offset) while the run reached
+/// every target, and with 0.21 m, out of reach in most steps (18525 of 20000): the report's count
+/// is the run's `clamped_ik_steps` on flat ground, exactly.
+#[test]
+fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
+    let dir = scratch("reach");
+    let tripod = std::fs::read_to_string("gaits/tripod.toml").unwrap();
+    for stride in ["0.19", "0.21"] {
+        let gait = dir.join(format!("tripod_{stride}.toml"));
+        let text = tripod.replace(
+            "swing = \"sine\"",
+            &format!("swing = \"sine\"\nstride_length = {stride}"),
+        );
+        std::fs::write(&gait, text).unwrap();
+        let out = hexsim()
+            .args(["robot", "robots/hex18.urdf", "--gait"])
+            .arg(&gait)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{stdout}");
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("as the run plans it: "))
+            .unwrap_or_else(|| panic!("no reach line in {stdout}"));
+        let verdict = line.split("as the run plans it: ").nth(1).unwrap();
+        let reported: u64 = if verdict.starts_with("every foot target reached") {
+            0
+        } else {
+            verdict.split(" of ").next().unwrap().parse().unwrap()
+        };
+        let metrics = dir.join(format!("run_{stride}.json"));
+        let out = hexsim()
+            .args(["run", "--robot", "robots/hex18.urdf", "--gait"])
+            .arg(&gait)
+            .args([
+                "--terrain",
+                "terrains/flat.toml",
+                "--no-record",
+                "--metrics",
+            ])
+            .arg(&metrics)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        assert_eq!(
+            m["clamped_ik_steps"].as_u64().unwrap(),
+            reported,
+            "stride {stride}: {line}"
+        );
+        if stride == "0.21" {
+            assert!(reported > 10_000, "{line}");
+        }
     }
 }

@@ -232,7 +232,7 @@ fn a_fitted_tripod_reaches_every_target_over_the_cycle() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");
     assert!(
-        stdout.contains("on level ground: every foot target reached"),
+        stdout.contains("as the run plans it: every foot target reached"),
         "{stdout}"
     );
     let flat = walk(robot, "terrains/flat.toml", "ant_bot_flat");

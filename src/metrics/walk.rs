@@ -295,7 +295,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
     }
 
     fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {
-        self.clamped_ik_steps = walker.clamped_steps;
+        self.clamped_ik_steps = walker.reach.clamped_steps;
         let r = &s.robot;
         self.steps = r.step;
         self.sim_time = r.time;
