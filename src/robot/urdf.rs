@@ -617,7 +617,7 @@ fn build_holding(
         held,
     };
     check_size(&model)?;
-    warn_implausible_inertias(&mut model);
+    warn_implausible_inertias(&mut model)?;
     unstated.fill(&mut model);
     Ok(model)
 }
@@ -1048,7 +1048,9 @@ fn find_feet(
 /// part of a robot has k > D, and k < 0.5 % of D is a mass far denser than any material — the
 /// marks of an inertia in g·mm² or kg·mm², or a mass in grams, where URDF wants kg·m² and kg
 /// (hex18's links: 2–5 % of D). One warning per kind, naming the links; simulated as given.
-fn warn_implausible_inertias(model: &mut RobotModel) {
+/// A link whose k passes [`IMPOSSIBLE_SPREAD`]·D is refused: its inertia is more than 100 times
+/// what its mass allows inside the robot (placeholder inertials: 10 mg links of 1 kg·m²).
+fn warn_implausible_inertias(model: &mut RobotModel) -> Result<(), String> {
     let poses = model.link_poses(&vec![0.0; model.joints.len()]);
     let mut points: Vec<DVec3> = poses.iter().map(|p| p.translation).collect();
     points.extend(
@@ -1061,7 +1063,7 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
     let high = points.iter().copied().fold(DVec3::NEG_INFINITY, DVec3::max);
     let size = (high - low).length();
     if !(size.is_finite() && size > 0.0) {
-        return;
+        return Ok(());
     }
     let gyration = |l: &Link| {
         let largest = l
@@ -1090,6 +1092,31 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
         };
         (links[0].0.clone(), links[0].1, others)
     };
+    if let Some((name, k)) = wide
+        .iter()
+        .filter(|(_, k)| *k > IMPOSSIBLE_SPREAD * size)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+    {
+        let mass = model.total_mass();
+        let weighs = if mass < 0.1 {
+            format!("{:.2} g", mass * 1e3)
+        } else {
+            format!("{mass:.3} kg")
+        };
+        let ratio = (k / size).powi(2);
+        let count = wide
+            .iter()
+            .filter(|(_, k)| *k > IMPOSSIBLE_SPREAD * size)
+            .count();
+        let others = if count > 1 {
+            format!(" (and {} more link{})", count - 1, plural(count - 1))
+        } else {
+            String::new()
+        };
+        return Err(format!(
+            "the robot weighs {weighs}, and link `{name}`{others} has an inertia {ratio:.0e} times what its mass allows: it spreads its mass {k:.3} m from its centre (√(I/m)), the whole robot is {size:.3} m across — placeholder inertials, or an inertia in kg·mm² instead of kg·m²? No rigid body can be so; give each link its mass (kg) and inertia (kg·m²)"
+        ));
+    }
     if !wide.is_empty() {
         let (name, k, others) = named(&wide);
         model.warnings.push(format!(
@@ -1103,7 +1130,13 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
             k * 1e3
         ));
     }
+    Ok(())
 }
+
+/// A link's radius of gyration beyond this many times the robot's size is refused (see
+/// [`warn_implausible_inertias`]); between 1 and this it is warned about (the PhantomX's
+/// placeholder inertias spread 3.6 times its size, and it walks).
+pub const IMPOSSIBLE_SPREAD: f64 = 10.0;
 
 /// The longest leg a hexapod could have (m): a URDF whose legs are longer is in other units.
 const LONGEST_LEG: f64 = 10.0;
