@@ -670,3 +670,64 @@ fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
         }
     }
 }
+
+/// A walk judged against its command (issue 40): hex18 on a 0.1 s tripod runs ahead of its gait
+/// on sliding feet (measured: the worst foot slid 10.9 % of the 6.6 m travelled in 4 s, hex18's
+/// own tripod 0.9 %); the run says it skated, the metrics flag it (`walk_flags`, `slip_share`),
+/// and a scenario bounding `slip_share_max` fails with exit 1.
+#[test]
+fn a_walk_on_skating_feet_is_flagged_and_fails_its_expectation() {
+    let dir = scratch("skate");
+    let tripod = std::fs::read_to_string("gaits/tripod.toml").unwrap();
+    let fast = dir.join("fast.toml");
+    std::fs::write(&fast, tripod.replace("period = 1.0", "period = 0.1")).unwrap();
+    let judged = |gait: &std::path::Path, name: &str| {
+        let metrics = dir.join(format!("{name}.json"));
+        let out = hexsim()
+            .args(["run", "--gait"])
+            .arg(gait)
+            .args(["--terrain", "terrains/flat.toml", "--duration", "4"])
+            .args(["--no-record", "--metrics"])
+            .arg(&metrics)
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        (String::from_utf8_lossy(&out.stdout).into_owned(), m)
+    };
+    let (stdout, m) = judged(&fast, "fast");
+    assert!(
+        stdout.contains("warning: not the walk commanded: it skated: its worst foot slid"),
+        "{stdout}"
+    );
+    assert!(
+        m["slip_share"].as_f64().unwrap() > 0.10,
+        "{}",
+        m["slip_share"]
+    );
+    assert!(m["walk_flags"][0].as_str().unwrap().starts_with("skated"));
+    let (stdout, m) = judged(std::path::Path::new("gaits/tripod.toml"), "nominal");
+    assert!(!stdout.contains("not the walk commanded"), "{stdout}");
+    assert!(
+        m["slip_share"].as_f64().unwrap() < 0.02,
+        "{}",
+        m["slip_share"]
+    );
+    assert_eq!(m["walk_flags"], serde_json::json!([]));
+    let scenarios = dir.join("scenarios");
+    std::fs::create_dir_all(&scenarios).unwrap();
+    std::fs::write(
+        scenarios.join("skate.toml"),
+        "gait = \"../fast.toml\"\nduration = 4.0\n[terrain.source]\nkind = \"flat\"\nsize = [30.0, 4.0]\n[expect]\nslip_share_max = 0.05\n",
+    )
+    .unwrap();
+    let out = hexsim()
+        .current_dir(dir.path())
+        .args(["batch", "scenarios", "-o", "r.jsonl"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("slip_share_max: 0.10"), "{stdout}");
+}

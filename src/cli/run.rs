@@ -294,6 +294,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             -m.command_progress
         );
     }
+    for flag in m.walk_flags.iter().filter(|f| !f.starts_with("went ")) {
+        println!("  warning: not the walk commanded: it {flag}");
+    }
     if m.clamped_ik_steps > 0 {
         println!(
             "  warning: {} steps had foot targets out of reach (IK clamped)",

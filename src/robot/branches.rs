@@ -77,6 +77,10 @@ pub(super) fn held_joints(
     };
     for leg in &legs {
         if leg.chain.len() < 3 {
+            // a leg whose foot was not found leaves a head or an arm among the six: say so
+            if let Some((link, why)) = unfound.first() {
+                return Err(super::legs::footless_leg(link, Some(why)));
+            }
             return Err(too_few_joints(&links[leg.leaf].name, leg.chain.len()));
         }
     }
