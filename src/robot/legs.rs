@@ -54,12 +54,24 @@ pub(super) fn find_legs(
             }
             f
         }
-        None => choose_forward(&hips).ok_or_else(|| {
-            format!(
-                "the hips cannot be split three on each side of any walking direction (about x: {}); is it a hexapod?",
-                sides(&hips, 0.0)
-            )
-        })?,
+        None => {
+            let chosen = choose_forward(&hips).ok_or_else(|| {
+                format!(
+                    "the hips cannot be split three on each side of any walking direction (about x: {}); is it a hexapod?",
+                    sides(&hips, 0.0)
+                )
+            })?;
+            let names: Vec<Vec<&str>> = chains
+                .iter()
+                .map(|c| {
+                    let mut names: Vec<&str> =
+                        c.joints.iter().map(|&j| joints[j].name.as_str()).collect();
+                    names.push(links[c.foot_link].name.as_str());
+                    names
+                })
+                .collect();
+            front_by_names(chosen, &hips, &names)
+        }
     };
     // name by angle from the walking direction: left legs (to its left) front to rear, then right
     let (along, across) = axes(forward.yaw);
@@ -87,6 +99,52 @@ pub(super) fn find_legs(
         })
         .collect();
     Ok((legs, forward))
+}
+
+/// Where a leg's names put it: +1 ahead (`front`, `fore`, `lf`, `rf`, `fl`, `fr`), −1 behind
+/// (`rear`, `back`, `hind`, `lr`, `rr`, `rl`, `lh`, `rh`, `bl`, `br`, …), 0 neither or both; a
+/// name's words are split at `_`, `-`, `/`, `.` and digits, case aside.
+fn named_end(names: &[&str]) -> i32 {
+    const AHEAD: [&str; 6] = ["front", "fore", "lf", "rf", "fl", "fr"];
+    const BEHIND: [&str; 14] = [
+        "rear", "back", "hind", "lr", "rr", "rl", "lh", "rh", "hl", "hr", "lb", "rb", "bl", "br",
+    ];
+    let words = names.iter().flat_map(|n| {
+        n.split(|c: char| !c.is_ascii_alphabetic())
+            .filter(|w| !w.is_empty())
+            .map(|w| w.to_ascii_lowercase())
+    });
+    let (mut ahead, mut behind) = (false, false);
+    for word in words {
+        ahead |= AHEAD.contains(&word.as_str());
+        behind |= BEHIND.contains(&word.as_str());
+    }
+    i32::from(ahead) - i32::from(behind)
+}
+
+/// A direction chosen from the legs, turned about when the legs' names put the front behind it:
+/// the legs named front sit, on average, behind the hips' centre along it. The URDF's own x is
+/// never turned (REP 103: x forward); names only settle which way along a chosen axis.
+fn front_by_names(chosen: Forward, hips: &[DVec2], names: &[Vec<&str>]) -> Forward {
+    if chosen.from != ForwardFrom::Legs {
+        return chosen;
+    }
+    let (along, _) = axes(chosen.yaw);
+    let middle = centre(hips);
+    let lean: f64 = hips
+        .iter()
+        .zip(names)
+        .map(|(h, n)| f64::from(named_end(n)) * (*h - middle).dot(along))
+        .sum();
+    if lean < 0.0 {
+        let yaw = chosen.yaw + std::f64::consts::PI;
+        Forward {
+            yaw: yaw.sin().atan2(yaw.cos()),
+            from: ForwardFrom::LegNames,
+        }
+    } else {
+        chosen
+    }
 }
 
 /// The walking direction and the direction to its left, in the body's xy plane.
@@ -303,6 +361,43 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Legs on the x axis make hexsim walk along y; front legs named at −y turn it to −y (issue
+    /// 40: a robot walked along +y although its `front_*` legs sat at −y), and names that say
+    /// nothing, or the URDF's own x, leave the direction as it is.
+    #[test]
+    fn leg_names_put_the_front_where_the_geometry_leaves_it_open() {
+        let hips = ring(&[0.0, 45.0, 135.0, 180.0, 225.0, 315.0]);
+        let chosen = choose_forward(&hips).unwrap();
+        assert!((chosen.yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        // front legs at −y (225° and 315°), rear legs at +y (45°, 135°)
+        let named = |deg: f64| -> Vec<&str> {
+            match deg as i32 {
+                225 | 315 => vec!["front_left_coxa_joint"],
+                45 | 135 => vec!["rear_right_coxa_joint"],
+                _ => vec!["middle_coxa_joint"],
+            }
+        };
+        let degrees = [0.0, 45.0, 135.0, 180.0, 225.0, 315.0];
+        let names: Vec<Vec<&str>> = degrees.iter().map(|&d| named(d)).collect();
+        let turned = front_by_names(chosen, &hips, &names);
+        assert_eq!(turned.from, ForwardFrom::LegNames);
+        assert!(
+            (turned.yaw + std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+            "{}",
+            turned.yaw
+        );
+        assert!(turned.describe().starts_with("-y"), "{}", turned.describe());
+        let silent: Vec<Vec<&str>> = degrees.iter().map(|_| vec!["leg_joint_1"]).collect();
+        assert_eq!(front_by_names(chosen, &hips, &silent), chosen);
+        assert_eq!(
+            front_by_names(Forward::URDF_X, &hips, &names),
+            Forward::URDF_X
+        );
+        assert_eq!(named_end(&["leg_FR_1"]), 1);
+        assert_eq!(named_end(&["hind_left_femur", "lh_foot"]), -1);
+        assert_eq!(named_end(&["AR_coxa_joint"]), 0);
     }
 
     #[test]
