@@ -289,7 +289,8 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
         "m (fitted), reach ",
         "standing on six feet (hips 0.100 m above the ground)",
         "the most loaded servo: ",
-        "walking tripod's cycle at 0.120 m/s on level ground: every foot target reached; least room: ",
+        "walking tripod's cycle at 0.120 m/s on level ground: least room ",
+        "planned on level ground step by step as the run plans it: every foot target reached in all 20000 steps",
     ] {
         assert!(stdout.contains(fragment), "no {fragment:?} in\n{stdout}");
     }
@@ -667,4 +668,129 @@ fn the_paper_variant_names_what_is_hexsims_reading() {
             "{command} --help: {help}"
         );
     }
+}
+
+/// `hexsim robot` and `hexsim run` judge reach by one tally (`gait::reach`), the report planning
+/// the run's walk step by step on level ground: hex18 with a 0.19 m stride, which the report once
+/// called out of reach (a cycle sampled without the feet's rolling offset) while the run reached
+/// every target, and with 0.21 m, out of reach in most steps (18525 of 20000): the report's count
+/// is the run's `clamped_ik_steps` on flat ground, exactly.
+#[test]
+fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
+    let dir = scratch("reach");
+    let tripod = std::fs::read_to_string("gaits/tripod.toml").unwrap();
+    for stride in ["0.19", "0.21"] {
+        let gait = dir.join(format!("tripod_{stride}.toml"));
+        let text = tripod.replace(
+            "swing = \"sine\"",
+            &format!("swing = \"sine\"\nstride_length = {stride}"),
+        );
+        std::fs::write(&gait, text).unwrap();
+        let out = hexsim()
+            .args(["robot", "robots/hex18.urdf", "--gait"])
+            .arg(&gait)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{stdout}");
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("as the run plans it: "))
+            .unwrap_or_else(|| panic!("no reach line in {stdout}"));
+        let verdict = line.split("as the run plans it: ").nth(1).unwrap();
+        let reported: u64 = if verdict.starts_with("every foot target reached") {
+            0
+        } else {
+            verdict.split(" of ").next().unwrap().parse().unwrap()
+        };
+        let metrics = dir.join(format!("run_{stride}.json"));
+        let out = hexsim()
+            .args(["run", "--robot", "robots/hex18.urdf", "--gait"])
+            .arg(&gait)
+            .args([
+                "--terrain",
+                "terrains/flat.toml",
+                "--no-record",
+                "--metrics",
+            ])
+            .arg(&metrics)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        assert_eq!(
+            m["clamped_ik_steps"].as_u64().unwrap(),
+            reported,
+            "stride {stride}: {line}"
+        );
+        if stride == "0.21" {
+            assert!(reported > 10_000, "{line}");
+        }
+    }
+}
+
+/// A walk judged against its command (issue 40): hex18 on a 0.1 s tripod runs ahead of its gait
+/// on sliding feet (measured: the worst foot slid 10.9 % of the 6.6 m travelled in 4 s, hex18's
+/// own tripod 0.9 %); the run says it skated, the metrics flag it (`walk_flags`, `slip_share`),
+/// and a scenario bounding `slip_share_max` fails with exit 1.
+#[test]
+fn a_walk_on_skating_feet_is_flagged_and_fails_its_expectation() {
+    let dir = scratch("skate");
+    let tripod = std::fs::read_to_string("gaits/tripod.toml").unwrap();
+    let fast = dir.join("fast.toml");
+    std::fs::write(&fast, tripod.replace("period = 1.0", "period = 0.1")).unwrap();
+    let judged = |gait: &std::path::Path, name: &str| {
+        let metrics = dir.join(format!("{name}.json"));
+        let out = hexsim()
+            .args(["run", "--gait"])
+            .arg(gait)
+            .args(["--terrain", "terrains/flat.toml", "--duration", "4"])
+            .args(["--no-record", "--metrics"])
+            .arg(&metrics)
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        (String::from_utf8_lossy(&out.stdout).into_owned(), m)
+    };
+    let (stdout, m) = judged(&fast, "fast");
+    assert!(
+        stdout.contains("warning: not the walk commanded: it skated: its worst foot slid"),
+        "{stdout}"
+    );
+    assert!(
+        m["slip_share"].as_f64().unwrap() > 0.10,
+        "{}",
+        m["slip_share"]
+    );
+    assert!(m["walk_flags"][0].as_str().unwrap().starts_with("skated"));
+    let (stdout, m) = judged(std::path::Path::new("gaits/tripod.toml"), "nominal");
+    assert!(!stdout.contains("not the walk commanded"), "{stdout}");
+    assert!(
+        m["slip_share"].as_f64().unwrap() < 0.02,
+        "{}",
+        m["slip_share"]
+    );
+    assert_eq!(m["walk_flags"], serde_json::json!([]));
+    let scenarios = dir.join("scenarios");
+    std::fs::create_dir_all(&scenarios).unwrap();
+    std::fs::write(
+        scenarios.join("skate.toml"),
+        "gait = \"../fast.toml\"\nduration = 4.0\n[terrain.source]\nkind = \"flat\"\nsize = [30.0, 4.0]\n[expect]\nslip_share_max = 0.05\n",
+    )
+    .unwrap();
+    let out = hexsim()
+        .current_dir(dir.path())
+        .args(["batch", "scenarios", "-o", "r.jsonl"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("slip_share_max: 0.10"), "{stdout}");
 }

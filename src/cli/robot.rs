@@ -7,7 +7,7 @@ use hexsim::gait::{Fitted, GaitSpec, fit};
 use hexsim::metrics::walk::significant;
 use hexsim::record::standing;
 use hexsim::robot::{self, GaitHints, RobotModel, statics};
-use hexsim::scenario::builtin;
+use hexsim::scenario::{Scenario, builtin};
 use hexsim::sim::STANDARD_GRAVITY;
 use std::path::{Path, PathBuf};
 
@@ -41,7 +41,8 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
         Some(path) => GaitSpec::from_file(path)?,
         None => GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))?,
     };
-    let report = describe(&args.robot, &model, &gait);
+    let mut report = describe(&args.robot, &model, &gait);
+    report.push_str(&walk_reach(&args.robot, args.gait.as_deref()));
     print!("{report}");
     if args.strict && !model.warnings.is_empty() {
         anyhow::bail!(
@@ -197,6 +198,78 @@ fn feedforward(out: &mut String, model: &RobotModel, fitted: &Fitted, stiffness:
 }
 
 /// The report, as printed.
+/// Whether the foot targets of `hexsim run --robot ROBOT [--gait GAIT]` are in reach, planned
+/// on level ground step by step as the run plans them (`Scenario::planned_reach`): the run's
+/// own count of steps out of reach (`clamped_ik_steps`) on flat ground.
+fn walk_reach(robot: &Path, gait: Option<&Path>) -> String {
+    let spec = super::run::default_walk(robot, gait);
+    let duration = spec.duration;
+    let scenario = match Scenario::resolve(spec, "robot".into(), Path::new("hexsim robot")) {
+        Ok(scenario) => scenario,
+        Err(e) => {
+            return format!(
+                "  `hexsim run` of this robot would not start: {}\n",
+                e.message
+            );
+        }
+    };
+    let dt = scenario.spec.dt();
+    let speed = scenario.drive().map_or(0.0, |(_, c)| c.at(0.0).forward);
+    let verdict = match scenario.planned_reach() {
+        None => return String::new(),
+        Some(Err(e)) => return format!("  its walk cannot be planned: {e}\n"),
+        Some(Ok(tally)) => match tally.first {
+            None => format!("every foot target reached in all {} steps", tally.steps),
+            Some((leg, t)) => {
+                let names = scenario.robot().map(|m| m.legs[leg].name).unwrap_or("?");
+                format!(
+                    "{} of {} steps had foot targets out of reach (IK clamped), the first leg {names}'s at {t:.3} s",
+                    tally.clamped_steps, tally.steps
+                )
+            }
+        },
+    };
+    format!(
+        "  `hexsim run` of it ({duration} s at {speed:.3} m/s, dt {} ms), planned on level ground step by step as the run plans it: {verdict}\n",
+        significant(dt * 1e3)
+    )
+}
+
+/// The joints hexsim holds still, off the legs and on them, with their angles.
+fn held_joints(model: &RobotModel) -> Option<String> {
+    if model.held.is_empty() {
+        return None;
+    }
+    let list = |on_leg: bool| -> Vec<String> {
+        model
+            .held
+            .iter()
+            .filter(|h| h.on_leg.is_some() == on_leg)
+            .map(|h| format!("{} {}", h.name, deg(h.angle)))
+            .collect()
+    };
+    let mut parts = Vec::new();
+    let off = list(false);
+    if !off.is_empty() {
+        parts.push(format!(
+            "off the legs (a head, an arm, a tail: carried as part of the body): {}",
+            off.join(", ")
+        ));
+    }
+    let on = list(true);
+    if !on.is_empty() {
+        parts.push(format!(
+            "on the legs, beyond the three that sweep the largest workspace: {}",
+            on.join(", ")
+        ));
+    }
+    Some(format!(
+        "  {} joints held still at the angle shown (welded): {}",
+        model.held.len(),
+        parts.join("; ")
+    ))
+}
+
 fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
     use std::fmt::Write;
     let mut out = String::new();
@@ -222,6 +295,9 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             "  {count} URDF links fixed to others, merged: {}",
             merged.join("; ")
         );
+    }
+    if let Some(held) = held_joints(model) {
+        let _ = writeln!(out, "{held}");
     }
     let leg_mass = |leg: &robot::Leg| -> f64 {
         leg.joints
@@ -307,18 +383,11 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
                 }
             }
             standing(&mut out, model, &fitted);
-            let margins = &fitted.margins;
-            let (joint, room) = margins.worst;
-            let reached = match margins.unreached {
-                None => "every foot target reached".to_string(),
-                Some(u) => format!(
-                    "leg {}'s target out of reach at {:.2} s",
-                    model.legs[u.leg].name, u.time
-                ),
-            };
+            let (joint, room) = fitted.margins.worst;
+            // whether its targets are reached: the walk planned as a run plans it (below)
             let _ = writeln!(
                 out,
-                "  walking {}'s cycle at {:.3} m/s on level ground: {reached}; least room: {} {} from a limit",
+                "  walking {}'s cycle at {:.3} m/s on level ground: least room {} {} from a limit",
                 gait.name,
                 fitted.gait.nominal_speed(),
                 model.joints[joint].name,

@@ -132,8 +132,19 @@ impl Default for RunArgs {
     }
 }
 
-pub fn run(args: RunArgs) -> Result<ExitCode> {
-    let spec = ScenarioSpec {
+/// The scenario `hexsim run --robot ROBOT [--gait GAIT]` resolves, every other flag at its
+/// default: what `hexsim robot` plans the walk's reach over.
+pub(super) fn default_walk(robot: &Path, gait: Option<&Path>) -> ScenarioSpec {
+    spec(&RunArgs {
+        robot: Some(robot.to_path_buf()),
+        gait: gait.map(Path::to_path_buf),
+        ..RunArgs::default()
+    })
+}
+
+/// The scenario the flags describe.
+fn spec(args: &RunArgs) -> ScenarioSpec {
+    ScenarioSpec {
         name: Some("run".into()),
         description: String::new(),
         kind: Kind::Walk,
@@ -181,7 +192,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         },
         expect: Default::default(),
         tolerance: Default::default(),
-    };
+    }
+}
+
+pub fn run(args: RunArgs) -> Result<ExitCode> {
+    let spec = spec(&args);
     let scenario = Scenario::resolve(spec, "run".into(), Path::new(COMMAND_LINE))?;
     warn_about([&scenario], args.strict)?;
     let gait_name = scenario.gait().map_or(String::new(), |g| g.name.clone());
@@ -278,6 +293,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             "  warning: the body went {:.3} m backwards against the command (slid?)",
             -m.command_progress
         );
+    }
+    for flag in m.walk_flags.iter().filter(|f| !f.starts_with("went ")) {
+        println!("  warning: not the walk commanded: it {flag}");
     }
     if m.clamped_ik_steps > 0 {
         println!(

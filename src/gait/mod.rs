@@ -7,6 +7,7 @@ mod controller;
 mod fit;
 mod foothold;
 mod margins;
+pub mod reach;
 mod reactive;
 mod schedule;
 mod slew;

@@ -13,6 +13,16 @@ use std::path::PathBuf;
 /// stepping off from standing sways back and forth by a millimetre or so.
 pub const BACKWARDS_NOISE: f64 = 0.01;
 
+/// A walk whose worst foot slid more than this share of the distance the body travelled skated
+/// rather than walked (issue 40's bar: a robot at 10 times hex18's scale "walked" 13.5 m with
+/// each foot sliding 0.6–1.3 m; hex18's walks slide at most 2 %).
+pub const SKATE_SHARE: f64 = 0.10;
+/// A walk commanded straight ahead that drifted sideways more than this share of its forward
+/// travel went somewhere else.
+pub const SIDEWAYS_SHARE: f64 = 0.10;
+/// A walk commanded straight ahead that turned more than this (deg) lost its heading.
+pub const HEADING_BOUND_DEG: f64 = 10.0;
+
 /// A hexapod run's summary, written as JSON.
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default)]
@@ -73,6 +83,14 @@ pub struct HexapodMetrics {
     pub cost_of_transport: Option<f64>,
     /// Steps in which some leg's target was out of reach and was clamped.
     pub clamped_ik_steps: u64,
+    /// The worst foot's slip over the distance the body travelled (None when it did not travel
+    /// 1 cm): above [`SKATE_SHARE`] the robot skated.
+    pub slip_share: Option<f64>,
+    /// What makes the walk not the walk commanded, each said in a sentence: its feet skated
+    /// ([`SKATE_SHARE`]), it went backwards against the command, drifted sideways
+    /// ([`SIDEWAYS_SHARE`]) or turned ([`HEADING_BOUND_DEG`]) when commanded straight ahead.
+    /// Empty for an honest walk.
+    pub walk_flags: Vec<String>,
     /// The longest time any joint stayed within [`NEAR_LIMIT`] of a URDF limit over the walk (s):
     /// a servo pressed against its stop (a gait asking for more than the leg has).
     pub joint_limit_time: f64,
@@ -220,6 +238,10 @@ struct Accumulators {
     link_steps: Vec<u64>,
     /// The body's position at the last step (for [`HexapodMetrics::command_progress`]).
     last_position: Option<glam::DVec3>,
+    /// Whether any step was commanded to move, to move sideways, or to turn.
+    moving: bool,
+    strafing: bool,
+    turning: bool,
 }
 
 /// How far a contact slid over a step of `dt`, as (in contact, bearing load): its in-plane speed
@@ -281,6 +303,47 @@ impl HexapodMetrics {
 }
 
 impl HexapodMetrics {
+    /// Judges the walk against its commands ([`Self::slip_share`], [`Self::walk_flags`]).
+    fn judge(&mut self) {
+        let a = &self.acc;
+        let worst = self.foot_slip.iter().copied().fold(0.0, f64::max);
+        self.slip_share = (self.distance >= 0.01).then(|| worst / self.distance);
+        let mut flags = Vec::new();
+        if let Some(share) = self.slip_share.filter(|&s| s > SKATE_SHARE) {
+            flags.push(format!(
+                "skated: its worst foot slid {worst:.3} m in contact, {:.1} % of the {:.3} m the body travelled (more than {:.0} %)",
+                share * 100.0,
+                self.distance,
+                SKATE_SHARE * 100.0
+            ));
+        }
+        if a.moving && self.command_progress < -BACKWARDS_NOISE {
+            flags.push(format!(
+                "went {:.3} m backwards against its command",
+                -self.command_progress
+            ));
+        }
+        let straight = a.moving && !a.strafing && !a.turning;
+        if straight
+            && self.sideways_distance.abs() > 0.01
+            && self.sideways_distance.abs() > SIDEWAYS_SHARE * self.forward_distance.abs()
+        {
+            flags.push(format!(
+                "drifted {:.3} m sideways against {:.3} m forward, commanded straight ahead (more than {:.0} %)",
+                self.sideways_distance.abs(),
+                self.forward_distance,
+                SIDEWAYS_SHARE * 100.0
+            ));
+        }
+        if straight && self.heading_change_deg.abs() > HEADING_BOUND_DEG {
+            flags.push(format!(
+                "turned {:+.1}° off its heading, commanded straight ahead (more than {HEADING_BOUND_DEG:.0}°)",
+                self.heading_change_deg
+            ));
+        }
+        self.walk_flags = flags;
+    }
+
     /// Also measures the time spent beyond a terrain grid of these x and y ranges.
     pub fn on_terrain(mut self, x: [f64; 2], y: [f64; 2]) -> Self {
         self.acc.terrain = Some((x, y));
@@ -291,11 +354,12 @@ impl HexapodMetrics {
 impl Observer<WalkSample, Walker> for HexapodMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
+        self.judge();
         crate::record::output::write_json(self.output.as_deref(), self)
     }
 
     fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {
-        self.clamped_ik_steps = walker.clamped_steps;
+        self.clamped_ik_steps = walker.reach.clamped_steps;
         let r = &s.robot;
         self.steps = r.step;
         self.sim_time = r.time;
@@ -326,6 +390,9 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             self.time_off_terrain += dt;
         }
         let command = walker.command();
+        a.moving |= command.forward != 0.0 || command.sideways != 0.0;
+        a.strafing |= command.sideways != 0.0;
+        a.turning |= command.yaw_rate != 0.0;
         let along = glam::DVec2::new(command.forward, command.sideways).normalize_or_zero();
         if let Some(last) = a.last_position {
             let step = glam::DMat2::from_angle(yaw) * along;
@@ -628,6 +695,15 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
         better: Better::Lower,
         bounds: &[Bound::max("max_foot_slip_loaded_mm").scaled(1e3)],
         value: |m| Value::per_leg(&m.foot_slip_loaded),
+    },
+    Metric {
+        name: "slip_share",
+        unit: "1",
+        what: "the worst foot's slip over the distance the body travelled (absent: it did not travel 1 cm)",
+        noise: None,
+        better: Better::Lower,
+        bounds: &[Bound::max("slip_share_max")],
+        value: |m| m.slip_share.map_or(Value::Absent, Value::One),
     },
     Metric {
         name: "stance_fraction",

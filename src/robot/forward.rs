@@ -12,6 +12,9 @@ pub enum ForwardFrom {
     RobotFile,
     /// Chosen from the legs: the URDF's x does not split them three a side.
     Legs,
+    /// Chosen from the legs, and turned about to where their names put the front (`front_*`,
+    /// `lf`/`rf`, … ahead; `rear_*`, `lr`/`rr`, `hind`, … behind).
+    LegNames,
 }
 
 /// The walking direction: its angle about z in the URDF's base link frame (rad), and where it
@@ -45,6 +48,9 @@ impl Forward {
             ForwardFrom::Urdf => "the URDF's",
             ForwardFrom::RobotFile => "set in the robot file",
             ForwardFrom::Legs => "chosen: the legs do not split three a side about x",
+            ForwardFrom::LegNames => {
+                "chosen: the legs do not split three a side about x, and their names say where the front is"
+            }
         };
         format!("{name} ({from})")
     }

@@ -1,5 +1,6 @@
 //! The six legs of a robot, whatever its outline (rectangular, round, hexagonal) and whichever
-//! way its URDF points: the chains of three joints from the body to a foot, the walking direction,
+//! way its URDF points: the chains of three joints from the body to a foot (`branches` holds
+//! any other joints still first), the walking direction,
 //! and each leg's name (`lf lm lr rf rm rr`) from where it sits around the body about that
 //! direction, so every gait file works for every robot.
 //!
@@ -53,12 +54,24 @@ pub(super) fn find_legs(
             }
             f
         }
-        None => choose_forward(&hips).ok_or_else(|| {
-            format!(
-                "the hips cannot be split three on each side of any walking direction (about x: {}); is it a hexapod?",
-                sides(&hips, 0.0)
-            )
-        })?,
+        None => {
+            let chosen = choose_forward(&hips).ok_or_else(|| {
+                format!(
+                    "the hips cannot be split three on each side of any walking direction (about x: {}); is it a hexapod?",
+                    sides(&hips, 0.0)
+                )
+            })?;
+            let names: Vec<Vec<&str>> = chains
+                .iter()
+                .map(|c| {
+                    let mut names: Vec<&str> =
+                        c.joints.iter().map(|&j| joints[j].name.as_str()).collect();
+                    names.push(links[c.foot_link].name.as_str());
+                    names
+                })
+                .collect();
+            front_by_names(chosen, &hips, &names)
+        }
     };
     // name by angle from the walking direction: left legs (to its left) front to rear, then right
     let (along, across) = axes(forward.yaw);
@@ -88,6 +101,52 @@ pub(super) fn find_legs(
     Ok((legs, forward))
 }
 
+/// Where a leg's names put it: +1 ahead (`front`, `fore`, `lf`, `rf`, `fl`, `fr`), −1 behind
+/// (`rear`, `back`, `hind`, `lr`, `rr`, `rl`, `lh`, `rh`, `bl`, `br`, …), 0 neither or both; a
+/// name's words are split at `_`, `-`, `/`, `.` and digits, case aside.
+fn named_end(names: &[&str]) -> i32 {
+    const AHEAD: [&str; 6] = ["front", "fore", "lf", "rf", "fl", "fr"];
+    const BEHIND: [&str; 14] = [
+        "rear", "back", "hind", "lr", "rr", "rl", "lh", "rh", "hl", "hr", "lb", "rb", "bl", "br",
+    ];
+    let words = names.iter().flat_map(|n| {
+        n.split(|c: char| !c.is_ascii_alphabetic())
+            .filter(|w| !w.is_empty())
+            .map(|w| w.to_ascii_lowercase())
+    });
+    let (mut ahead, mut behind) = (false, false);
+    for word in words {
+        ahead |= AHEAD.contains(&word.as_str());
+        behind |= BEHIND.contains(&word.as_str());
+    }
+    i32::from(ahead) - i32::from(behind)
+}
+
+/// A direction chosen from the legs, turned about when the legs' names put the front behind it:
+/// the legs named front sit, on average, behind the hips' centre along it. The URDF's own x is
+/// never turned (REP 103: x forward); names only settle which way along a chosen axis.
+fn front_by_names(chosen: Forward, hips: &[DVec2], names: &[Vec<&str>]) -> Forward {
+    if chosen.from != ForwardFrom::Legs {
+        return chosen;
+    }
+    let (along, _) = axes(chosen.yaw);
+    let middle = centre(hips);
+    let lean: f64 = hips
+        .iter()
+        .zip(names)
+        .map(|(h, n)| f64::from(named_end(n)) * (*h - middle).dot(along))
+        .sum();
+    if lean < 0.0 {
+        let yaw = chosen.yaw + std::f64::consts::PI;
+        Forward {
+            yaw: yaw.sin().atan2(yaw.cos()),
+            from: ForwardFrom::LegNames,
+        }
+    } else {
+        chosen
+    }
+}
+
 /// The walking direction and the direction to its left, in the body's xy plane.
 fn axes(yaw: f64) -> (DVec2, DVec2) {
     let (s, c) = yaw.sin_cos();
@@ -111,7 +170,7 @@ fn laterals(hips: &[DVec2], yaw: f64) -> (Vec<f64>, f64) {
 
 /// If three hips sit clearly on each side of the walking axis: the smallest distance of a hip
 /// from it.
-fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
+pub(super) fn split(hips: &[DVec2], yaw: f64) -> Option<f64> {
     let (lateral, margin) = laterals(hips, yaw);
     let left = lateral.iter().filter(|&&l| l > 0.0).count();
     let clear = lateral.iter().all(|l| l.abs() > margin);
@@ -132,7 +191,7 @@ fn sides(hips: &[DVec2], yaw: f64) -> String {
 
 /// The URDF's +x if it splits the hips three a side; else +y; else, of the whole degrees, the
 /// direction whose nearest hip is farthest from the axis (the first such from +x).
-fn choose_forward(hips: &[DVec2]) -> Option<Forward> {
+pub(super) fn choose_forward(hips: &[DVec2]) -> Option<Forward> {
     if split(hips, 0.0).is_some() {
         return Some(Forward::URDF_X);
     }
@@ -180,17 +239,40 @@ pub(super) fn turn_to_forward(links: &mut [Link], joints: &mut [Joint], yaw: f64
     }
 }
 
-/// The six chains from the body to a foot: every link with a foot, traced back to the root; each
-/// must hang from it by exactly three joints of its own. `unfound`: (link, why) for each leg's
-/// last link whose foot could not be found from its geometry.
+/// The message for a leaf link without a foot: `why` none could be found at its tip.
+pub(super) fn footless_leg(link: &str, why: Option<&String>) -> String {
+    match why {
+        Some(why) => format!(
+            "link `{link}` ends a leg and has no foot sphere, and no foot could be found at its tip: {why}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])"
+        ),
+        None => format!(
+            "link `{link}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot"
+        ),
+    }
+}
+
+/// The six chains from the body to a foot: every leaf link with a foot, traced back to the root;
+/// each must hang from it by exactly three joints of its own (`branches` has held any others
+/// still). A foot on the body or on a link that is not a leaf is contact geometry, not a leg's
+/// end. `unfound`: (link, why) for each leaf whose foot could not be found from its geometry.
 fn chains(
     links: &[Link],
     joints: &[Joint],
     unfound: &[(String, String)],
 ) -> Result<Vec<Chain>, String> {
+    let is_leaf = |k: usize| k != 0 && !joints.iter().any(|j| j.parent == k);
     let mut found = Vec::new();
     for (k, link) in links.iter().enumerate() {
-        let Some(foot) = link.foot else { continue };
+        if !is_leaf(k) {
+            continue;
+        }
+        let Some(foot) = link.foot else {
+            let why = unfound
+                .iter()
+                .find(|(l, _)| *l == link.name)
+                .map(|(_, w)| w);
+            return Err(footless_leg(&link.name, why));
+        };
         let mut chain = Vec::new();
         let mut at = k;
         while let Some(j) = links[at].parent_joint {
@@ -198,48 +280,21 @@ fn chains(
             at = joints[j].parent;
         }
         chain.reverse();
-        if chain.len() > 3 {
+        let [a, b, c] = chain[..] else {
             return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joints: hexsim's legs have 3 (coxa, femur, tibia), and legs with more (a tarsus) are not supported; to walk it, make the extra joints `fixed`",
+                "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",
                 link.name,
                 chain.len()
             ));
-        }
-        if chain.len() != 3 {
-            return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joint{}, expected 3 (coxa, femur, tibia)",
-                link.name,
-                chain.len(),
-                if chain.len() == 1 { "" } else { "s" }
-            ));
-        }
+        };
         found.push(Chain {
-            joints: [chain[0], chain[1], chain[2]],
+            joints: [a, b, c],
             foot_link: k,
             foot,
         });
     }
-    // leaves without a foot are legs without a foot
-    for (k, link) in links.iter().enumerate() {
-        let is_leaf = !joints.iter().any(|j| j.parent == k);
-        if is_leaf && k != 0 && link.foot.is_none() {
-            if let Some((_, why)) = unfound.iter().find(|(l, _)| *l == link.name) {
-                return Err(format!(
-                    "link `{}` ends a leg and has no foot sphere, and no foot could be found at its tip: {why}; give the foot a <collision> with a <sphere>, or name it in a robot file (NAME.toml, [feet])",
-                    link.name
-                ));
-            }
-            return Err(format!(
-                "link `{}` ends a chain but carries no foot: give it a <collision> with a <sphere> at the foot",
-                link.name
-            ));
-        }
-    }
     if found.len() != 6 {
-        return Err(format!(
-            "found {} legs (chains of 3 revolute joints ending in a foot sphere), expected 6 for a hexapod",
-            found.len()
-        ));
+        return Err(super::branches::found_too_few(found.len()));
     }
     let shared = found
         .iter()
@@ -306,6 +361,43 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Legs on the x axis make hexsim walk along y; front legs named at −y turn it to −y (issue
+    /// 40: a robot walked along +y although its `front_*` legs sat at −y), and names that say
+    /// nothing, or the URDF's own x, leave the direction as it is.
+    #[test]
+    fn leg_names_put_the_front_where_the_geometry_leaves_it_open() {
+        let hips = ring(&[0.0, 45.0, 135.0, 180.0, 225.0, 315.0]);
+        let chosen = choose_forward(&hips).unwrap();
+        assert!((chosen.yaw - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        // front legs at −y (225° and 315°), rear legs at +y (45°, 135°)
+        let named = |deg: f64| -> Vec<&str> {
+            match deg as i32 {
+                225 | 315 => vec!["front_left_coxa_joint"],
+                45 | 135 => vec!["rear_right_coxa_joint"],
+                _ => vec!["middle_coxa_joint"],
+            }
+        };
+        let degrees = [0.0, 45.0, 135.0, 180.0, 225.0, 315.0];
+        let names: Vec<Vec<&str>> = degrees.iter().map(|&d| named(d)).collect();
+        let turned = front_by_names(chosen, &hips, &names);
+        assert_eq!(turned.from, ForwardFrom::LegNames);
+        assert!(
+            (turned.yaw + std::f64::consts::FRAC_PI_2).abs() < 1e-12,
+            "{}",
+            turned.yaw
+        );
+        assert!(turned.describe().starts_with("-y"), "{}", turned.describe());
+        let silent: Vec<Vec<&str>> = degrees.iter().map(|_| vec!["leg_joint_1"]).collect();
+        assert_eq!(front_by_names(chosen, &hips, &silent), chosen);
+        assert_eq!(
+            front_by_names(Forward::URDF_X, &hips, &names),
+            Forward::URDF_X
+        );
+        assert_eq!(named_end(&["leg_FR_1"]), 1);
+        assert_eq!(named_end(&["hind_left_femur", "lh_foot"]), -1);
+        assert_eq!(named_end(&["AR_coxa_joint"]), 0);
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! The robot: URDF loading and validation, leg discovery, and leg kinematics.
 
+mod branches;
 pub mod contact_set;
 pub mod foot;
 mod forward;
@@ -12,8 +13,8 @@ pub mod statics;
 pub mod urdf;
 
 pub use model::{
-    ContactSphere, Foot, FootFrom, GaitHints, Joint, LEG_NAMES, Leg, Link, RobotModel, Shape,
-    Visual,
+    ContactSphere, Foot, FootFrom, GaitHints, HeldJoint, Joint, LEG_NAMES, Leg, Link, RobotModel,
+    Shape, Visual,
 };
 
 /// Loads a URDF robot file.

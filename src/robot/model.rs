@@ -129,6 +129,19 @@ pub struct Leg {
     pub foot: Foot,
 }
 
+/// A revolute joint of the URDF that hexsim holds still at an angle (welded there: it is not in
+/// [`RobotModel::joints`]): a joint off the six legs (a head, an arm, a tail: a passive body held
+/// in its pose), or a leg's joint beyond the three its gait drives (a tarsus). See `branches`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldJoint {
+    /// The URDF joint's name.
+    pub name: String,
+    /// The angle it is held at (rad): its zero, or the nearest limit when zero is outside them.
+    pub angle: f64,
+    /// On a leg (the link at the leg's end, as the URDF names it), or off the legs (None).
+    pub on_leg: Option<String>,
+}
+
 /// A loaded, validated robot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RobotModel {
@@ -146,6 +159,9 @@ pub struct RobotModel {
     pub gait_hints: GaitHints,
     /// Things that were accepted with a fallback (e.g. a missing visual mesh).
     pub warnings: Vec<String>,
+    /// The URDF's revolute joints held still (welded at an angle): off the legs, or a leg's
+    /// beyond three.
+    pub held: Vec<HeldJoint>,
 }
 
 /// Gait lengths a robot's file states (its designer's stance): a gait file's own values take

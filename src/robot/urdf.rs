@@ -3,11 +3,12 @@
 //!
 //! Every error names the file and the element (link or joint) and says what was expected.
 
+use super::branches;
 use super::contact_set;
 use super::foot::{self, Placed};
 use super::legs::{self, Forward};
 use super::mesh;
-use super::model::{Foot, FootFrom, GaitHints, Joint, Link, RobotModel, Shape, Visual};
+use super::model::{Foot, FootFrom, GaitHints, HeldJoint, Joint, Link, RobotModel, Shape, Visual};
 use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -516,20 +517,33 @@ fn shape(
 
 /// The model of a parsed URDF, in named steps: its bodies (links welded by fixed joints merged),
 /// joints and shapes read from the root down; masses checked; feet found where none is given;
-/// legs and the walking direction found; then its size checked, its inertias warned about and
-/// its unstated efforts fitted.
+/// the joints off six legs of three held still (`branches`: the model is built again with them
+/// welded); legs and the walking direction found; then its size checked, its inertias warned
+/// about and its unstated efforts fitted.
 fn build(
     robot: &urdf_rs::Robot,
     base: &Path,
     settings: RobotFileSettings,
+) -> Result<RobotModel, String> {
+    build_holding(robot, base, &settings, Vec::new())
+}
+
+/// [`build`], with the joints `held` welded at their angles.
+fn build_holding(
+    robot: &urdf_rs::Robot,
+    base: &Path,
+    settings: &RobotFileSettings,
+    held: Vec<HeldJoint>,
 ) -> Result<RobotModel, String> {
     let RobotFileSettings {
         feet,
         forward,
         gait: gait_hints,
     } = settings;
+    let (forward, gait_hints) = (*forward, *gait_hints);
     let tree = tree(robot)?;
-    let mut bodies = Bodies::new(robot, base, feet.as_ref());
+    let held_at: HashMap<&str, f64> = held.iter().map(|h| (h.name.as_str(), h.angle)).collect();
+    let mut bodies = Bodies::new(robot, base, feet.as_ref(), &held_at);
     // Walk the tree from the root, parents before children.
     let mut order = vec![tree.root];
     let mut cursor = 0;
@@ -549,6 +563,7 @@ fn build(
         mesh_problems,
         unstated,
         slides_welded,
+        passive_welded,
         point_masses,
         ..
     } = bodies;
@@ -564,6 +579,15 @@ fn build(
             slides_welded.join(", ")
         ));
     }
+    if !passive_welded.is_empty() {
+        warnings.push(format!(
+            "{} revolute joint{} carr{} a massless link (no <inertial>) at the end of a leg, a passive foot: held at zero, welded to the link above: {}",
+            passive_welded.len(),
+            plural(passive_welded.len()),
+            if passive_welded.len() == 1 { "ies" } else { "y" },
+            passive_welded.join(", ")
+        ));
+    }
     warnings.extend(mesh_problems.warnings());
     let unfound = if feet.is_none() {
         let (unfound, warning) = find_feet(&mut links, &joints, &shapes, base);
@@ -572,6 +596,12 @@ fn build(
     } else {
         Vec::new()
     };
+    if held.is_empty() {
+        let to_hold = branches::held_joints(&links, &joints, &unfound, forward)?;
+        if !to_hold.is_empty() {
+            return build_holding(robot, base, settings, to_hold);
+        }
+    }
     warnings.extend(contact_set::attach(&mut links, &shapes, base).warnings());
     let (legs, forward): (_, Forward) = legs::find_legs(&links, &joints, &unfound, forward)?;
     legs::turn_to_forward(&mut links, &mut joints, forward.yaw);
@@ -584,9 +614,10 @@ fn build(
         forward,
         gait_hints,
         warnings,
+        held,
     };
     check_size(&model)?;
-    warn_implausible_inertias(&mut model);
+    warn_implausible_inertias(&mut model)?;
     unstated.fill(&mut model);
     Ok(model)
 }
@@ -612,6 +643,16 @@ struct Bodies<'a> {
     /// URDF links with a mass but a zero inertia tensor, by name: named if a body then has no
     /// inertia about some axis.
     point_masses: Vec<String>,
+    /// The joints held still (`branches`), by name, at their angle: welded like fixed joints.
+    held: &'a HashMap<&'a str, f64>,
+    /// Per URDF link: whether a held joint lies between it and its body. Its collision sphere is
+    /// then the body's foot (a tarsus's sphere, not the tibia's).
+    via_held: Vec<bool>,
+    /// Revolute joints whose child is a massless leaf beyond three joints (a passive foot),
+    /// welded at zero, by name.
+    passive_welded: Vec<String>,
+    /// Per URDF link: the joints between it and the root that are not welded.
+    depth: Vec<usize>,
 }
 
 /// The most a prismatic joint may travel (m) to be read as fixed: simulators' descriptions mount a
@@ -630,7 +671,12 @@ fn slide_travel(joint: &urdf_rs::Joint) -> f64 {
 }
 
 impl<'a> Bodies<'a> {
-    fn new(robot: &'a urdf_rs::Robot, base: &'a Path, feet: Option<&'a FeetConfig>) -> Self {
+    fn new(
+        robot: &'a urdf_rs::Robot,
+        base: &'a Path,
+        feet: Option<&'a FeetConfig>,
+        held: &'a HashMap<&'a str, f64>,
+    ) -> Self {
         Bodies {
             robot,
             base,
@@ -644,6 +690,10 @@ impl<'a> Bodies<'a> {
             unstated: Unstated::default(),
             slides_welded: Vec::new(),
             point_masses: Vec::new(),
+            held,
+            via_held: vec![false; robot.links.len()],
+            passive_welded: Vec::new(),
+            depth: vec![0; robot.links.len()],
         }
     }
 
@@ -660,6 +710,33 @@ impl<'a> Bodies<'a> {
         let joint = &self.robot.joints[j];
         let parent = tree.index[joint.parent.link.as_str()];
         let origin = self.in_body[parent] * pose(&joint.origin);
+        let revolute_joint = matches!(
+            joint.joint_type,
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous
+        );
+        let held_at = self.held.get(joint.name.as_str()).copied();
+        // a passive foot: a massless leaf beyond a leg's three joints (a massless tibia is a
+        // mistake, refused by the mass check)
+        let passive = revolute_joint
+            && held_at.is_none()
+            && self.depth[parent] >= 3
+            && tree.children[k].is_empty()
+            && massless(urdf_link);
+        if revolute_joint && (held_at.is_some() || passive) {
+            let (axis, lower, upper, _) = revolute(joint, &mut Unstated::default())?;
+            let angle = held_at.unwrap_or_else(|| 0.0_f64.clamp(lower, upper));
+            if passive {
+                self.passive_welded.push(joint.name.clone());
+            }
+            self.body_of[k] = self.body_of[parent];
+            self.in_body[k] = origin * DAffine3::from_axis_angle(axis, angle);
+            self.via_held[k] = held_at.is_some() || self.via_held[parent];
+            self.depth[k] = self.depth[parent];
+            self.links[self.body_of[k]]
+                .merged
+                .push(urdf_link.name.clone());
+            return Ok(());
+        }
         let welded = match &joint.joint_type {
             urdf_rs::JointType::Fixed => true,
             urdf_rs::JointType::Prismatic if slide_travel(joint) <= SLIDE_AS_FIXED => {
@@ -675,6 +752,8 @@ impl<'a> Bodies<'a> {
             let axis = DVec3::from_array(joint.axis.xyz.0).normalize_or_zero();
             self.body_of[k] = self.body_of[parent];
             self.in_body[k] = origin * DAffine3::from_translation(axis * at);
+            self.via_held[k] = self.via_held[parent];
+            self.depth[k] = self.depth[parent];
             self.links[self.body_of[k]]
                 .merged
                 .push(urdf_link.name.clone());
@@ -683,6 +762,7 @@ impl<'a> Bodies<'a> {
         match &joint.joint_type {
             urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
                 let (axis, lower, upper, effort) = revolute(joint, &mut self.unstated)?;
+                self.depth[k] = self.depth[parent] + 1;
                 self.body_of[k] = self.links.len();
                 self.links
                     .push(empty_link(&urdf_link.name, Some(self.joints.len())));
@@ -792,7 +872,7 @@ impl<'a> Bodies<'a> {
                         urdf_link.name
                     ));
                 }
-                if body.foot.is_none() {
+                if body.foot.is_none() || self.via_held[k] {
                     body.foot = Some(Foot {
                         center: (frame * pose(&collision.origin)).translation,
                         radius,
@@ -803,6 +883,16 @@ impl<'a> Bodies<'a> {
         }
         Ok(())
     }
+}
+
+/// Whether a URDF link carries neither mass nor inertia (no `<inertial>`: a frame, a passive
+/// foot's).
+fn massless(link: &urdf_rs::Link) -> bool {
+    let i = &link.inertial.inertia;
+    link.inertial.mass.value == 0.0
+        && [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz]
+            .iter()
+            .all(|&v| v == 0.0)
 }
 
 /// A revolute (or continuous) joint's unit axis, limits and effort. A CAD exporter's placeholder
@@ -958,7 +1048,9 @@ fn find_feet(
 /// part of a robot has k > D, and k < 0.5 % of D is a mass far denser than any material — the
 /// marks of an inertia in g·mm² or kg·mm², or a mass in grams, where URDF wants kg·m² and kg
 /// (hex18's links: 2–5 % of D). One warning per kind, naming the links; simulated as given.
-fn warn_implausible_inertias(model: &mut RobotModel) {
+/// A link whose k passes [`IMPOSSIBLE_SPREAD`]·D is refused: its inertia is more than 100 times
+/// what its mass allows inside the robot (placeholder inertials: 10 mg links of 1 kg·m²).
+fn warn_implausible_inertias(model: &mut RobotModel) -> Result<(), String> {
     let poses = model.link_poses(&vec![0.0; model.joints.len()]);
     let mut points: Vec<DVec3> = poses.iter().map(|p| p.translation).collect();
     points.extend(
@@ -971,7 +1063,7 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
     let high = points.iter().copied().fold(DVec3::NEG_INFINITY, DVec3::max);
     let size = (high - low).length();
     if !(size.is_finite() && size > 0.0) {
-        return;
+        return Ok(());
     }
     let gyration = |l: &Link| {
         let largest = l
@@ -1000,6 +1092,31 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
         };
         (links[0].0.clone(), links[0].1, others)
     };
+    if let Some((name, k)) = wide
+        .iter()
+        .filter(|(_, k)| *k > IMPOSSIBLE_SPREAD * size)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+    {
+        let mass = model.total_mass();
+        let weighs = if mass < 0.1 {
+            format!("{:.2} g", mass * 1e3)
+        } else {
+            format!("{mass:.3} kg")
+        };
+        let ratio = (k / size).powi(2);
+        let count = wide
+            .iter()
+            .filter(|(_, k)| *k > IMPOSSIBLE_SPREAD * size)
+            .count();
+        let others = if count > 1 {
+            format!(" (and {} more link{})", count - 1, plural(count - 1))
+        } else {
+            String::new()
+        };
+        return Err(format!(
+            "the robot weighs {weighs}, and link `{name}`{others} has an inertia {ratio:.0e} times what its mass allows: it spreads its mass {k:.3} m from its centre (√(I/m)), the whole robot is {size:.3} m across — placeholder inertials, or an inertia in kg·mm² instead of kg·m²? No rigid body can be so; give each link its mass (kg) and inertia (kg·m²)"
+        ));
+    }
     if !wide.is_empty() {
         let (name, k, others) = named(&wide);
         model.warnings.push(format!(
@@ -1013,7 +1130,13 @@ fn warn_implausible_inertias(model: &mut RobotModel) {
             k * 1e3
         ));
     }
+    Ok(())
 }
+
+/// A link's radius of gyration beyond this many times the robot's size is refused (see
+/// [`warn_implausible_inertias`]); between 1 and this it is warned about (the PhantomX's
+/// placeholder inertias spread 3.6 times its size, and it walks).
+pub const IMPOSSIBLE_SPREAD: f64 = 10.0;
 
 /// The longest leg a hexapod could have (m): a URDF whose legs are longer is in other units.
 const LONGEST_LEG: f64 = 10.0;

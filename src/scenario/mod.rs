@@ -14,7 +14,8 @@ pub use expect::Check;
 pub use spec::{FileOr, Kind, ScenarioSpec};
 
 use crate::contact::ContactModel;
-use crate::gait::{CommandSchedule, Fitted, Gait};
+use crate::gait::reach::{self, ReachTally};
+use crate::gait::{CommandSchedule, Fitted, Gait, GaitController};
 use crate::robot::RobotModel;
 use crate::runner::ball::BallRun;
 use crate::runner::walk::{WalkRun, WalkSession};
@@ -264,6 +265,29 @@ impl Scenario {
             Setup::Walk(w) => Some((w.settings.gains, &w.commands)),
             Setup::Ball(_) => None,
         }
+    }
+
+    /// For a walk, whether its foot targets are in reach, planned on level ground step by step
+    /// as the run plans them (`gait::reach`): on flat ground without terrain following or the
+    /// reactive gait, the run's own tally (its `clamped_ik_steps`). `hexsim robot` reports it.
+    pub fn planned_reach(&self) -> Option<Result<ReachTally, crate::gait::StanceError>> {
+        let Setup::Walk(w) = &self.setup else {
+            return None;
+        };
+        let controller = GaitController::new(&w.robot, w.gait.gait.clone());
+        Some(controller.map(|c| {
+            let mut controller = c.with_rolling_feet(w.rolling_feet);
+            reach::planned(
+                &mut controller,
+                reach::Stepping {
+                    dt: w.settings.dt,
+                    settle: w.settle,
+                    duration: self.spec.duration,
+                    commands: &w.commands,
+                    stands_by_controller: w.feedforward && !w.follow_terrain,
+                },
+            )
+        }))
     }
 
     /// Steps the run will take.

@@ -2,6 +2,7 @@
 
 use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
+use crate::gait::reach::ReachTally;
 use crate::gait::{
     FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand, away_from_edges,
 };
@@ -18,8 +19,9 @@ pub struct Walker {
     settle_time: f64,
     targets_by_joint: Vec<f64>,
     last_targets: Option<GaitTargets>,
-    /// Steps in which some leg's target was out of reach (IK clamped).
-    pub clamped_steps: u64,
+    /// Steps in which some leg's target was out of reach (IK clamped): the tally `hexsim
+    /// robot` plans too (`gait::reach`).
+    pub reach: ReachTally,
     /// Follow the terrain under the feet (see [`GaitController::targets`]); off: every foot path
     /// is planned for level ground.
     pub terrain_following: bool,
@@ -114,7 +116,7 @@ impl Walker {
             settle_time,
             targets_by_joint: vec![0.0; n],
             last_targets: None,
-            clamped_steps: 0,
+            reach: ReachTally::default(),
             terrain_following: false,
             load_feedforward: true,
             reactive: false,
@@ -351,9 +353,7 @@ impl Walker {
                 self.controller.targets(t, self.command, blend)
             };
             self.set_leg_targets(targets.joint_angles, targets.grounded);
-            if targets.clamped.iter().any(|&c| c) {
-                self.clamped_steps += 1;
-            }
+            self.reach.record(t, &targets);
             self.last_targets = Some(targets);
         } else if self.terrain_following {
             // stand level from the start, so the walk does not begin tilted with the ground

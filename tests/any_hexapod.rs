@@ -1,0 +1,150 @@
+//! Hexapods with more than six legs of three joints (issue 40): a head, an arm and eyes on the
+//! body; legs of four and five joints; passive, massless feet. Each is hex18 (robots/hex18.urdf)
+//! with the trait added (tests/data/robots/hex18_*.urdf), so hex18 is the reference it is held
+//! to, and each walks 10 s on flat ground with the built-in tripod and no robot file.
+
+mod common;
+use common::{hexsim, scratch};
+use std::path::Path;
+
+/// `hexsim robot`'s report on `robot`.
+fn report(robot: &str) -> String {
+    let out = hexsim().args(["robot", robot]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "{robot}: {stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+/// Walks `robot` 10 s on flat ground and returns its metrics.
+fn walk(robot: &Path, dir: &Path, name: &str) -> serde_json::Value {
+    let json = dir.join(format!("{name}.json"));
+    let out = hexsim()
+        .args(["run", "--robot"])
+        .arg(robot)
+        .args(["--terrain", "terrains/flat.toml", "--duration", "10"])
+        .args(["--no-record", "--metrics"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{name}: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+}
+
+/// The forward distance and the tripod's nominal distance over 10 s (duty 0.5, period 1 s).
+fn forward_of_nominal(metrics: &serde_json::Value) -> (f64, f64) {
+    let stride = metrics["stance"]["stride_length"].as_f64().unwrap();
+    (
+        metrics["forward_distance"].as_f64().unwrap(),
+        stride / 0.5 * 10.0,
+    )
+}
+
+/// hex18 without its robot file (its stance fitted, as the variants' are).
+fn bare_hex18(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("hex18.urdf");
+    std::fs::copy("robots/hex18.urdf", &path).unwrap();
+    path
+}
+
+/// A pan-tilt head, a two-joint arm whose gripper ends in a collision sphere, and two eye spheres
+/// fixed to the body: the legs are hex18's six (the arm, on the walking axis, is no leg's pair;
+/// the head does not reach the ground), every joint off them is held at zero, the spheres on the
+/// body and the gripper are contact geometry, not feet, and it walks as hex18 does (measured:
+/// 1.175 m of 1.237 m nominal; hex18 bare 1.166 m).
+#[test]
+fn a_head_an_arm_and_eyes_ride_on_the_body() {
+    let robot = "tests/data/robots/hex18_head_arm.urdf";
+    let text = report(robot);
+    assert!(text.contains("4 joints held still"), "{text}");
+    for joint in [
+        "head_pan_joint 0°",
+        "head_tilt_joint 0°",
+        "arm_shoulder_joint 0°",
+        "arm_elbow_joint 0°",
+    ] {
+        assert!(text.contains(joint), "{joint}: {text}");
+    }
+    for leg in ["lf", "lm", "lr", "rf", "rm", "rr"] {
+        let line = format!("joints {leg}_coxa_joint {leg}_femur_joint {leg}_tibia_joint");
+        assert!(text.contains(&line), "{line}: {text}");
+    }
+    let dir = scratch("any_hexapod_head");
+    let metrics = walk(Path::new(robot), &dir, "head_arm");
+    let (forward, nominal) = forward_of_nominal(&metrics);
+    println!("head and arm: {forward:.3} m of {nominal:.3} m nominal");
+    assert!(forward >= 0.9 * nominal, "{forward:.3} m of {nominal:.3}");
+    let heading = metrics["heading_change_deg"].as_f64().unwrap();
+    assert!(heading.abs() < 1.0, "turned {heading:.2}°");
+}
+
+/// Legs of four joints (coxa, femur, tibia, tarsus) and of five (a hip roll besides) walk on the
+/// three joints that sweep the largest workspace — coxa, femur, tibia — the others held at zero,
+/// where each leg is hex18's: they walk as far as hex18 (measured: 1.166 m each of 1.237 m
+/// nominal, as hex18 bare).
+#[test]
+fn legs_of_four_and_five_joints_walk_on_three() {
+    let dir = scratch("any_hexapod_joints");
+    let reference = walk(&bare_hex18(&dir), &dir, "hex18");
+    let (hex18, _) = forward_of_nominal(&reference);
+    for (name, held) in [
+        ("tarsus", vec!["lf_tarsus_joint 0°", "rr_tarsus_joint 0°"]),
+        (
+            "five_joint",
+            vec!["lf_roll_joint 0°", "lf_tarsus_joint 0°", "rm_roll_joint 0°"],
+        ),
+    ] {
+        let robot = format!("tests/data/robots/hex18_{name}.urdf");
+        let text = report(&robot);
+        assert!(text.contains("on the legs, beyond the three"), "{text}");
+        for joint in held {
+            assert!(text.contains(joint), "{joint}: {text}");
+        }
+        assert!(
+            text.contains("joints lf_coxa_joint lf_femur_joint lf_tibia_joint"),
+            "{text}"
+        );
+        let metrics = walk(Path::new(&robot), &dir, name);
+        let (forward, nominal) = forward_of_nominal(&metrics);
+        println!("{name}: {forward:.3} m of {nominal:.3} m nominal (hex18: {hex18:.3} m)");
+        assert!(
+            forward >= 0.9 * nominal,
+            "{name}: {forward:.3} m of {nominal:.3}"
+        );
+        assert!(
+            (forward - hex18).abs() < 0.02 * hex18,
+            "{name}: {forward:.3} m, hex18 {hex18:.3} m"
+        );
+    }
+}
+
+/// Feet on massless links hung by revolute ankles fold into their tibias (the ankle held at zero,
+/// with a warning): the robot is then hex18, and walks bit for bit as hex18 does.
+#[test]
+fn passive_massless_feet_fold_into_their_legs() {
+    let dir = scratch("any_hexapod_passive");
+    let reference = walk(&bare_hex18(&dir), &dir, "hex18");
+    let robot = Path::new("tests/data/robots/hex18_passive_feet.urdf");
+    let text = report("tests/data/robots/hex18_passive_feet.urdf");
+    assert!(
+        text.contains("6 revolute joints carry a massless link") && text.contains("lf_ankle_joint"),
+        "{text}"
+    );
+    let metrics = walk(robot, &dir, "passive");
+    for key in [
+        "forward_distance",
+        "sideways_distance",
+        "heading_change_deg",
+        "servo_energy",
+    ] {
+        assert_eq!(metrics[key], reference[key], "{key}");
+    }
+}
