@@ -544,7 +544,33 @@ fn bench_times_mujoco_beside_itself() {
     let stderr = String::from_utf8_lossy(&missing.stderr);
     assert!(!missing.status.success());
     assert!(stderr.contains("pip install mujoco"), "{stderr}");
-    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `hexsim` without a subcommand is `hexsim run` with the options given: the same metrics, bit
+/// for bit; a subcommand's name after run's options is refused rather than mixed.
+#[test]
+fn hexsim_alone_takes_runs_options() {
+    let dir = scratch("alone");
+    let metrics = |prefix: &[&str], name: &str| {
+        let out = hexsim()
+            .args(prefix)
+            .args(["--duration", "0.5", "--no-record", "--metrics"])
+            .arg(dir.join(name))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read_to_string(dir.join(name)).unwrap()
+    };
+    assert_eq!(metrics(&[], "alone.json"), metrics(&["run"], "run.json"));
+    let mixed = hexsim()
+        .args(["--duration", "0.5", "ball"])
+        .output()
+        .unwrap();
+    assert_eq!(mixed.status.code(), Some(2));
 }
 
 /// `joint_limit_time` (and its `max_joint_limit_s` expectation): hex18's tripod at its nominal

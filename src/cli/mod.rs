@@ -25,12 +25,17 @@ use std::process::ExitCode;
     about = "Hexapod walking-robot simulator on uneven ground, built on the Burkus & Odry ground contact model",
     long_about = "Hexapod walking-robot simulator on uneven ground, built on the Burkus & Odry ground contact \
                   model (spring-damper normal force, exchangeable friction laws, height-grid terrain).\n\n\
-                  Without a subcommand, runs `hexsim run`: hex18 walks a tripod gait on the paper's natural terrain for 20 s \
-                  and the run is recorded to hexsim.rrd."
+                  Without a subcommand, runs `hexsim run` with the options given (`hexsim --duration 2` is \
+                  `hexsim run --duration 2`): by default hex18 walks a tripod gait on the paper's natural terrain \
+                  for 20 s and the run is recorded to hexsim.rrd.",
+    args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// `hexsim run`'s options, for `hexsim` without a subcommand.
+    #[command(flatten)]
+    run: Box<run::RunArgs>,
 }
 
 #[derive(Subcommand)]
@@ -69,7 +74,7 @@ impl Cli {
     /// run failed (diverged, expectations not met), 2 a usage or input error, 130 interrupted.
     pub fn execute(self) -> Result<ExitCode> {
         match self.command {
-            None => run::run(run::RunArgs::default()),
+            None => run::run(*self.run),
             Some(Command::Run(args)) => run::run(*args),
             Some(Command::Ball(args)) => ball::ball(*args),
             Some(Command::Batch(args)) => batch::batch(*args),
