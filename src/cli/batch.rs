@@ -15,7 +15,7 @@ pub struct BatchArgs {
     #[arg(required = true)]
     scenarios: Vec<String>,
     /// Worker threads, one simulation each. Default: all cores.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Results file (JSON Lines, one record per scenario, written as each finishes).
     #[arg(short, long, default_value = "results.jsonl")]

@@ -14,7 +14,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 20.0)]
     duration: f64,
     /// Threads for the batch figure. Default: all cores.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Runs per figure; the median is reported, and the best beside it.
     #[arg(long, default_value_t = 5)]

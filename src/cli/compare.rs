@@ -26,7 +26,7 @@ pub struct CompareArgs {
     #[arg(long)]
     trajectories: Option<PathBuf>,
     /// Worker threads, one run each. Default: all cores.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Open the recording in the rerun viewer when done.
     #[arg(long)]

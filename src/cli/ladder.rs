@@ -23,7 +23,7 @@ pub struct LadderArgs {
     #[arg(short, long, default_value = "ladder-results")]
     output: PathBuf,
     /// Worker threads, one simulation each. Default: all cores.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// No progress output.
     #[arg(short, long)]

@@ -20,7 +20,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value = "optimize")]
     output: PathBuf,
     /// Worker threads. Default: all cores.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Continue an interrupted (or sharded) search: the evaluations already in the output
     /// folder's log and shard files are replayed (the same specification and seed ask for the

@@ -114,7 +114,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         file: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path)
+    let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| fail(format!("cannot read the optimisation file: {e}")))?;
     let spec: OptimizeSpec =
         toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
@@ -134,8 +134,25 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     if spec.generations == 0 {
         return Err(fail("generations: expected at least 1".into()));
     }
-    if spec.population.is_some_and(|p| p < 2) {
-        return Err(fail("population: expected at least 2".into()));
+    let most = crate::limits::MAX_POPULATION;
+    if let Some(p) = spec.population
+        && !(2..=most).contains(&p)
+    {
+        return Err(fail(format!(
+            "population: expected 2 to {most} candidates a generation, got {p}"
+        )));
+    }
+    let evaluations = spec.generations as f64 * spec.population.unwrap_or(2) as f64;
+    if evaluations > crate::limits::MAX_EVALUATIONS {
+        return Err(fail(format!(
+            "generations: {} generations of {} candidates are {} evaluations, more than the {} a \
+             search runs (each is a walk on every terrain and seed)",
+            spec.generations,
+            spec.population
+                .map_or("at least 2".into(), |p| p.to_string()),
+            crate::limits::num(evaluations),
+            crate::limits::num(crate::limits::MAX_EVALUATIONS)
+        )));
     }
     if spec.parameters.is_empty() {
         return Err(fail(
@@ -205,12 +222,14 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     let gait_text = match base.get("gait") {
         Some(toml::Value::String(file)) => {
             let gait_path = scenario_path.parent().unwrap_or(Path::new("")).join(file);
-            std::fs::read_to_string(&gait_path).map_err(|e| {
-                fail(format!(
-                    "scenario's gait: cannot read {}: {e}",
-                    gait_path.display()
-                ))
-            })?
+            crate::limits::read_to_string(&gait_path, crate::limits::TEXT_FILE_BYTES).map_err(
+                |e| {
+                    fail(format!(
+                        "scenario's gait: cannot read {}: {e}",
+                        gait_path.display()
+                    ))
+                },
+            )?
         }
         Some(_) => String::new(),
         None => crate::scenario::builtin::TRIPOD.text.to_string(),

@@ -85,6 +85,11 @@ pub fn drawable(path: &Path) -> bool {
 /// None if it cannot be read (the caller falls back to what it knows without the mesh).
 pub fn mesh_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
     let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+    // a mesh is read whole: a device or a file past the data limit is not one
+    let meta = std::fs::metadata(path).ok()?;
+    if !meta.is_file() || meta.len() > crate::limits::DATA_FILE_BYTES {
+        return None;
+    }
     match extension.as_str() {
         "stl" => {
             let mut file = std::fs::File::open(path).ok()?;

@@ -83,10 +83,13 @@ fn forward_yaw(value: &toml::Value) -> Result<f64, String> {
 
 /// Loads and validates a URDF robot, with the robot file beside it if there is one.
 pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
-    let text = std::fs::read_to_string(path).map_err(|e| RobotError {
-        file: path.to_path_buf(),
-        message: format!("cannot read the URDF: {e}"),
-    })?;
+    let text =
+        crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(|e| {
+            RobotError {
+                file: path.to_path_buf(),
+                message: format!("cannot read the URDF: {e}"),
+            }
+        })?;
     refuse_xacro(&text, path).map_err(|message| RobotError {
         file: path.to_path_buf(),
         message,
@@ -94,10 +97,12 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
     let robot_file = path.with_extension("toml");
     let robot_text = if robot_file.is_file() {
         Some(
-            std::fs::read_to_string(&robot_file).map_err(|e| RobotError {
-                file: robot_file.clone(),
-                message: format!("cannot read the robot file: {e}"),
-            })?,
+            crate::limits::read_to_string(&robot_file, crate::limits::TEXT_FILE_BYTES).map_err(
+                |e| RobotError {
+                    file: robot_file.clone(),
+                    message: format!("cannot read the robot file: {e}"),
+                },
+            )?,
         )
     } else {
         None
@@ -215,6 +220,13 @@ pub fn from_str_with(
         file: origin.to_path_buf(),
         message,
     };
+    // a recursive parser: its nesting is checked first, or a deep one overflows the stack
+    crate::limits::xml_depth(text, crate::limits::XML_DEPTH).map_err(|(depth, line)| {
+        fail(format!(
+            "not a valid URDF: line {line}: elements nested {depth} deep, deeper than the {} hexsim reads (a URDF's are 4 or 5)",
+            crate::limits::XML_DEPTH
+        ))
+    })?;
     let mut robot =
         urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
     let dropped = drop_marker_frames(&mut robot);

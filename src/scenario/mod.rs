@@ -135,7 +135,7 @@ impl Report {
 /// Returns the scenario's path (its relative paths resolve against it) and its table.
 pub fn read_table(spec: &Path, file: &Path) -> Result<(PathBuf, toml::Table), String> {
     let path = spec.parent().unwrap_or(Path::new("")).join(file);
-    let text = std::fs::read_to_string(&path)
+    let text = crate::limits::read_to_string(&path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| format!("scenario: cannot read {}: {e}", path.display()))?;
     let table = text.parse().map_err(|e: toml::de::Error| {
         format!("scenario {}: {}", path.display(), e.to_string().trim_end())
@@ -181,7 +181,7 @@ pub fn load_file(path: &Path) -> Result<Vec<Scenario>, ScenarioError> {
         file: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path)
+    let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| fail(format!("cannot read the scenario file: {e}")))?;
     let table: toml::Table = text
         .parse()

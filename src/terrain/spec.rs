@@ -58,10 +58,12 @@ pub enum TerrainError {
 impl TerrainSpec {
     /// Reads and parses a terrain file (without building the grid).
     pub fn from_file(path: &Path) -> Result<Self, TerrainError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| TerrainError::Read {
-            file: path.to_path_buf(),
-            cause,
-        })?;
+        let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(
+            |cause| TerrainError::Read {
+                file: path.to_path_buf(),
+                cause,
+            },
+        )?;
         Self::from_toml(&text, path)
     }
 
