@@ -66,6 +66,16 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
             );
         }
     };
+    // the results file (and the baseline it is compared with) must not be a file the batch reads
+    let inputs: Vec<(&'static str, std::path::PathBuf)> = scenarios
+        .iter()
+        .flat_map(|s| s.inputs())
+        .chain(args.baseline.iter().map(|b| ("baseline", b.clone())))
+        .collect();
+    hexsim::record::output::check_distinct(
+        [("results file -o", args.output.as_path())],
+        inputs.iter().map(|(what, path)| (*what, path.as_path())),
+    )?;
     let baseline = match &args.baseline {
         Some(path) => Some(results::read(path, false)?.0),
         None => None,

@@ -161,12 +161,45 @@ impl Recording {
     }
 
     /// Completes the file (writes its footer) and moves it to its final name.
+    /// A write that failed (a full disk) is an error naming the file, and the truncated file
+    /// keeps its temporary name.
     pub fn finish(self) -> Result<PathBuf> {
-        self.stream.flush_blocking().ok();
+        let flushed = self.stream.flush_blocking();
         drop(self.stream);
+        let failed = |why: String| {
+            anyhow::anyhow!(
+                "cannot write the recording {}: {why}; the file is incomplete",
+                self.path.display()
+            )
+        };
+        flushed.map_err(|e| failed(e.to_string()))?;
+        let partial = partial_path(&self.path);
+        if std::fs::metadata(&partial).is_ok_and(|m| m.is_file()) && !has_footer(&partial) {
+            // the writer thread only logs a failure to write the footer
+            return Err(failed(
+                "its footer was not written (is the disk full?)".into(),
+            ));
+        }
         commit(&self.path)?;
         Ok(self.path)
     }
+}
+
+/// True if the file ends with an RRD stream footer (`RRF2` … `FOOT` in its last 32 bytes), as
+/// a recording finished whole does.
+fn has_footer(path: &Path) -> bool {
+    use std::io::{Read, Seek, SeekFrom};
+    let tail = std::fs::File::open(path).and_then(|mut file| {
+        let length = file.metadata()?.len();
+        file.seek(SeekFrom::Start(length.saturating_sub(32)))?;
+        let mut tail = Vec::new();
+        file.read_to_end(&mut tail)?;
+        Ok(tail)
+    });
+    tail.is_ok_and(|tail| {
+        let has = |word: &[u8]| tail.windows(4).any(|w| w == word);
+        has(b"RRF2") && has(b"FOOT")
+    })
 }
 
 /// The `rerun` viewer binary on PATH, if installed.
