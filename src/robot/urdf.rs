@@ -307,6 +307,27 @@ fn tree(robot: &urdf_rs::Robot) -> Result<Tree<'_>, String> {
             return Err(format!("link `{}` is defined twice", link.name));
         }
     }
+    let mut joint_names = std::collections::HashSet::new();
+    for joint in &robot.joints {
+        if !joint_names.insert(joint.name.as_str()) {
+            return Err(format!(
+                "joint `{}` is defined twice (joint names must be unique: they name the trajectory's columns)",
+                joint.name
+            ));
+        }
+        let origin = &joint.origin;
+        if origin
+            .xyz
+            .iter()
+            .chain(origin.rpy.iter())
+            .any(|v| !v.is_finite())
+        {
+            return Err(format!(
+                "joint `{}`: <origin xyz rpy> must be finite numbers, got xyz = {:?}, rpy = {:?}",
+                joint.name, *origin.xyz, *origin.rpy
+            ));
+        }
+    }
     let mut parent = vec![None; robot.links.len()];
     let mut children = vec![Vec::new(); robot.links.len()];
     for (j, joint) in robot.joints.iter().enumerate() {

@@ -137,7 +137,18 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
         ));
     }
     spec.expect.validate(spec.kind)?;
+    // a tolerance is of a metric compared with the baseline (one with a noise floor), or default
+    let compared: Vec<&str> = match spec.kind {
+        Kind::Walk => compared_metrics(crate::metrics::walk::TABLE),
+        Kind::Ball => compared_metrics(crate::metrics::ball::TABLE),
+    };
     for (field, tolerance) in &spec.tolerance {
+        if field != "default" && !compared.contains(&field.as_str()) {
+            return Err(format!(
+                "tolerance.{field}: unknown field `{field}`, expected `default` or a metric compared with a baseline: {}",
+                compared.join(", ")
+            ));
+        }
         for v in [tolerance.rel, tolerance.abs].into_iter().flatten() {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("tolerance.{field}: expected numbers ≥ 0, got {v}"));
@@ -152,6 +163,15 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The names of the metrics a baseline compares (those with a noise floor).
+fn compared_metrics<M>(table: &[crate::metrics::Metric<M>]) -> Vec<&'static str> {
+    table
+        .iter()
+        .filter(|m| m.noise.is_some())
+        .map(|m| m.name)
+        .collect()
 }
 
 /// Refuses a run of more than [`crate::limits::MAX_STEPS`] steps, with its count and an estimate
@@ -315,6 +335,7 @@ fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfi
     if let Err((field, expected)) = config.validate() {
         return Err(format!("ball.{field}: {expected}"));
     }
+    check_ball_scale(&b)?;
     check_stable_dt(
         spec,
         contact,
@@ -323,6 +344,59 @@ fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfi
         &format!("a {} kg ball", b.mass),
     )?;
     Ok(config)
+}
+
+/// The ball's numbers held to a physical scale, as the robot's start is: a ball of 10³⁰⁸ kg, at
+/// 10⁶ m, or thrown at 10³⁰⁰ m/s is a typo, and would run as nonsense rather than fail.
+fn check_ball_scale(b: &super::spec::BallSpec) -> Result<(), String> {
+    // the length, scaled so that 1e300 does not overflow to inf
+    let speed = |v: [f64; 3]| {
+        let most = v.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+        if most == 0.0 {
+            0.0
+        } else {
+            most * v.iter().map(|c| (c / most).powi(2)).sum::<f64>().sqrt()
+        }
+    };
+    let far = crate::terrain::FARTHEST;
+    let checks: [(&str, f64, f64, &str); 6] = [
+        ("radius", b.radius, 10.0, "m"),
+        ("mass", b.mass, 1e6, "kg"),
+        (
+            "drop_height",
+            b.drop_height.abs(),
+            1000.0,
+            "m (|drop_height|)",
+        ),
+        ("velocity", speed(b.velocity), 1000.0, "m/s (its length)"),
+        (
+            "angular_velocity",
+            speed(b.angular_velocity),
+            1e4,
+            "rad/s (its length)",
+        ),
+        (
+            "at",
+            b.at[0].abs().max(b.at[1].abs()),
+            far,
+            "m from the origin",
+        ),
+    ];
+    for (field, value, most, unit) in checks {
+        if value > most {
+            let why = if field == "at" {
+                ", where the physics' f32 positions resolve too coarsely for the contact; place the terrain and the ball near the origin"
+            } else {
+                ""
+            };
+            return Err(format!(
+                "ball.{field}: expected at most {} {unit}, got {}{why}",
+                num(most),
+                num(value)
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A walk's robot, gait, commands and settings.
