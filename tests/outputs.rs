@@ -216,3 +216,47 @@ fn ctrl_c_ends_terrain_generation_and_compare_with_130() {
     let json = std::fs::read_to_string(&metrics).unwrap();
     assert!(json.contains("\"complete\": false"), "{json}");
 }
+
+#[test]
+fn optimize_and_robot_refuse_to_write_over_what_they_read() {
+    let dir = scratch("optimize-clobber");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // a second round of a search, from the first's best gait, into the same folder
+    let spec = std::fs::read_to_string(root.join("optimizations/hex18_cost_of_transport.toml"))
+        .unwrap()
+        .replace(
+            "\"../terrains/natural.toml\"",
+            &format!("{:?}", root.join("terrains/natural.toml")),
+        )
+        .replace("[scenario]", "[scenario]\ngait = \"best_gait.toml\"");
+    std::fs::write(dir.join("o.toml"), spec).unwrap();
+    let gait = dir.join("best_gait.toml");
+    std::fs::copy(root.join("gaits/tripod.toml"), &gait).unwrap();
+    let before = std::fs::read(&gait).unwrap();
+    let out = hexsim()
+        .arg("optimize")
+        .arg(dir.join("o.toml"))
+        .arg("--output")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(text(&out).contains("it is the gait file"), "{}", text(&out));
+    assert_eq!(std::fs::read(&gait).unwrap(), before);
+
+    let out = hexsim()
+        .args([
+            "robot",
+            "robots/hex18.urdf",
+            "--record",
+            "robots/../robots/hex18.toml",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(
+        text(&out).contains("it is the robot file"),
+        "{}",
+        text(&out)
+    );
+}

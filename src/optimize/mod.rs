@@ -91,6 +91,8 @@ fn default_seed() -> u64 {
 /// An optimisation ready to run.
 pub struct Optimization {
     pub file: PathBuf,
+    /// Every file the search reads, with what it is: no output may be one of them.
+    pub inputs: Vec<(&'static str, PathBuf)>,
     pub description: Option<String>,
     /// The scenario's table, with the duration, articulation and constraints applied and its
     /// gait inline; candidates change its parameters.
@@ -218,10 +220,15 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         "expect".into(),
         toml::Value::Table(spec.constraints.clone()),
     );
+    let mut inputs = vec![
+        ("optimisation file", path.to_path_buf()),
+        ("scenario file", scenario_path.clone()),
+    ];
     // the gait as an inline table, so candidates can change its fields
     let gait_text = match base.get("gait") {
         Some(toml::Value::String(file)) => {
             let gait_path = scenario_path.parent().unwrap_or(Path::new("")).join(file);
+            inputs.push(("gait file", gait_path.clone()));
             crate::limits::read_to_string(&gait_path, crate::limits::TEXT_FILE_BYTES).map_err(
                 |e| {
                     fail(format!(
@@ -265,7 +272,19 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
     let cases = cases(&spec, path, &base, &scenario_path, &reference).map_err(fail)?;
     let start = start_point(&parameters, &base, &reference);
+    inputs.extend(
+        reference
+            .inputs()
+            .into_iter()
+            .filter(|(what, _)| *what != "scenario file"),
+    );
+    inputs.extend(
+        cases
+            .iter()
+            .filter_map(|c| Some(("terrain file", c.terrain.clone()?))),
+    );
     Ok(Optimization {
+        inputs,
         file: path.to_path_buf(),
         description: spec.description,
         base,
