@@ -82,6 +82,12 @@ pub fn run(
     let mut es = cma_es(opt, population);
     let logged = read_log(opt, setting)?;
     let mut out = open_log(setting)?;
+    // a failed write (a full disk) names the log
+    let log_path = match setting.shard {
+        Some(shard) => log::shard_file(setting.output, shard),
+        None => log::main_file(setting.output),
+    };
+    let named = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {e}", log_path.display());
     let mine = |index: usize| setting.shard.is_none_or(|s| s.contains(index));
     // None: another shard's candidate, not logged yet
     let evaluate = |generation: usize, index: usize, x: &[f64]| -> Option<(Evaluation, Source)> {
@@ -117,7 +123,7 @@ pub fn run(
         stopped_at: None,
     };
     if let Some(result) = evaluate(0, 0, &opt.start) {
-        write(&mut out, 0, 0, &opt.start, &result)?;
+        write(&mut out, 0, 0, &opt.start, &result).map_err(named)?;
         let (start, source) = result;
         searched.run += usize::from(matches!(source, Source::Run));
         searched.interrupted = start.interrupted();
@@ -143,10 +149,10 @@ pub fn run(
             .collect();
         for (i, (x, result)) in xs.iter().zip(&results).enumerate() {
             if let Some(result) = result {
-                write(&mut out, generation, i, x, result)?;
+                write(&mut out, generation, i, x, result).map_err(named)?;
             }
         }
-        out.flush()?;
+        out.flush().map_err(named)?;
         let ran = results
             .iter()
             .flatten()
@@ -187,7 +193,7 @@ pub fn run(
             break;
         }
     }
-    out.flush()?;
+    out.flush().map_err(named)?;
     Ok(searched)
 }
 
