@@ -522,6 +522,18 @@ fn shape(
                 .as_ref()
                 .map_or(DVec3::ONE, |s| DVec3::from_array(s.0));
             match mesh::resolve(filename, base) {
+                Ok(path) if let Some(why) = mesh::unreadable(&path) => {
+                    problems.missing.push(format!(
+                        "link `{link}`: visual mesh {filename} ({}) cannot be read: {why}; drawn as {}",
+                        path.display(),
+                        if has_fallback {
+                            "its collision shape"
+                        } else {
+                            "a small sphere"
+                        }
+                    ));
+                    return None;
+                }
                 Ok(path) if mesh::drawable(&path) => Shape::Mesh { path, scale },
                 Ok(path) => {
                     problems.undrawable.push((link.to_string(), path));
