@@ -106,6 +106,13 @@ pub fn load(files: &[PathBuf]) -> Result<Vec<Scenario>, Vec<ScenarioError>> {
     let mut scenarios = Vec::new();
     let mut errors = Vec::new();
     for file in files {
+        // set-up can take a while over many files: Ctrl-C ends it between them
+        if crate::interrupt::interrupted() {
+            return Err(vec![ScenarioError {
+                file: file.clone(),
+                message: crate::interrupt::MESSAGE.into(),
+            }]);
+        }
         match scenario::load_file(file) {
             Ok(list) => scenarios.extend(list),
             Err(e) => errors.push(e),
