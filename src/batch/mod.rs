@@ -370,6 +370,8 @@ fn run_one(
         expectations: Vec::new(),
     };
     match result {
+        // a set-up cut short by Ctrl-C (the terrain's generation): not a result, --resume runs it
+        Err(_) if crate::interrupt::interrupted() => return None,
         Err(e) => record.message = Some(format!("{e:#}")),
         Ok(report) => {
             if !report.metrics.complete() && report.failure.is_none() {

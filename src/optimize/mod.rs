@@ -566,7 +566,14 @@ impl Optimization {
 /// diverged, broke a constraint, or Ctrl-C cut it short: [`INTERRUPTED`]).
 pub fn judge(case: &Case, report: &anyhow::Result<Report>) -> Result<HexapodMetrics, String> {
     let label = case.label();
-    let report = report.as_ref().map_err(|e| format!("{label}: {e:#}"))?;
+    let report = report.as_ref().map_err(|e| {
+        // a set-up cut short by Ctrl-C (the terrain's generation) is an interruption
+        if crate::interrupt::interrupted() {
+            INTERRUPTED.to_string()
+        } else {
+            format!("{label}: {e:#}")
+        }
+    })?;
     if let Some(failure) = &report.failure {
         return Err(format!("{label}: {failure}"));
     }

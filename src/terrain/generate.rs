@@ -55,6 +55,9 @@ pub fn natural(
     // is the spectrum and the heights (1.6 GB), not also the phases and a rescaled copy.
     let mut spectrum = vec![Complex::default(); n * n];
     for j in 0..n {
+        if crate::interrupt::interrupted() {
+            return Err(GridError::Interrupted);
+        }
         for i in 0..n {
             let (x, y) = (j as f64 - half, i as f64 - half);
             let amplitude = (x.hypot(y) + 0.1).powf(-1.7);
@@ -62,7 +65,7 @@ pub fn natural(
                 Complex::from_polar(amplitude, 2.0 * std::f64::consts::PI * rng.next_f64());
         }
     }
-    inverse_fft_2d(&mut spectrum, n);
+    inverse_fft_2d(&mut spectrum, n)?;
     let mut heights: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
     drop(spectrum);
     rescale_in_place(&mut heights, peak_to_peak);
@@ -104,14 +107,24 @@ pub fn tiled(tile: HeightGrid, tiles: [usize; 2]) -> Result<HeightGrid, GridErro
     )
 }
 
-/// In-place 2-D inverse DFT of a row-major n×n array (unnormalised; the caller rescales).
-fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) {
+/// In-place 2-D inverse DFT of a row-major n×n array (unnormalised; the caller rescales). Ctrl-C
+/// ends it between rows and columns (at 8192² it takes some seconds).
+fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) -> Result<(), GridError> {
+    let interrupted = || {
+        if crate::interrupt::interrupted() {
+            Err(GridError::Interrupted)
+        } else {
+            Ok(())
+        }
+    };
     let fft = FftPlanner::new().plan_fft_inverse(n);
     for row in data.chunks_exact_mut(n) {
+        interrupted()?;
         fft.process(row);
     }
     let mut column = vec![Complex::default(); n];
     for j in 0..n {
+        interrupted()?;
         for i in 0..n {
             column[i] = data[i * n + j];
         }
@@ -120,6 +133,7 @@ fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) {
             data[i * n + j] = column[i];
         }
     }
+    Ok(())
 }
 
 /// [`rescale`] without a copy.
