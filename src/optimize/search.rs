@@ -147,7 +147,14 @@ pub fn run(
             .enumerate()
             .map(|(i, x)| evaluate(generation, i, x))
             .collect();
-        for (i, (x, result)) in xs.iter().zip(&results).enumerate() {
+        // cut short by Ctrl-C: only the candidates before the first interrupted one are logged,
+        // so that --resume appends the rest in order and the log reads line for line as an
+        // uninterrupted search's (the later ones finished are run again: the same results)
+        let cut = results
+            .iter()
+            .position(|r| r.as_ref().is_some_and(|(e, _)| e.interrupted()))
+            .unwrap_or(results.len());
+        for (i, (x, result)) in xs.iter().zip(&results).enumerate().take(cut) {
             if let Some(result) = result {
                 write(&mut out, generation, i, x, result).map_err(named)?;
             }
