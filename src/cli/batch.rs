@@ -14,7 +14,7 @@ pub struct BatchArgs {
     /// Scenario files, folders (every .toml below them) or glob patterns.
     #[arg(required = true)]
     scenarios: Vec<String>,
-    /// Worker threads, one simulation each. Default: all cores.
+    /// Worker threads, one simulation each. Default: all cores; at most 1024.
     #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Results file (JSON Lines, one record per scenario, written as each finishes).

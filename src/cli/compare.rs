@@ -25,7 +25,7 @@ pub struct CompareArgs {
     /// is drawn from the trajectories in memory).
     #[arg(long)]
     trajectories: Option<PathBuf>,
-    /// Worker threads, one run each. Default: all cores.
+    /// Worker threads, one run each. Default: all cores; at most 1024.
     #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Open the recording in the rerun viewer when done.

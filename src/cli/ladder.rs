@@ -22,7 +22,7 @@ pub struct LadderArgs {
     /// it ended).
     #[arg(short, long, default_value = "ladder-results")]
     output: PathBuf,
-    /// Worker threads, one simulation each. Default: all cores.
+    /// Worker threads, one simulation each. Default: all cores; at most 1024.
     #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// No progress output.

@@ -19,7 +19,7 @@ pub struct OptimizeArgs {
     /// of the start and the best walking each terrain and seed (TERRAIN-seed-S.rrd).
     #[arg(long, default_value = "optimize")]
     output: PathBuf,
-    /// Worker threads. Default: all cores.
+    /// Worker threads. Default: all cores; at most 1024.
     #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Continue an interrupted (or sharded) search: the evaluations already in the output
