@@ -10,11 +10,16 @@ fn main() -> ExitCode {
     let cli = cli::Cli::parse();
     // Ctrl-C / SIGTERM stop the run at the next step; it then writes what it has, marked incomplete.
     let _ = ctrlc::set_handler(|| {
-        hexsim::runner::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+        hexsim::interrupt::INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
     });
     let result = cli.execute();
     match result {
         Ok(code) => code,
+        // work cut short by Ctrl-C (terrain generation, set-up) ends as an interruption
+        Err(_) if hexsim::interrupt::interrupted() => {
+            eprintln!("{}", hexsim::interrupt::MESSAGE);
+            ExitCode::from(130)
+        }
         Err(error) => {
             eprintln!("error: {error:#}");
             ExitCode::from(2)

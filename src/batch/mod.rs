@@ -106,6 +106,13 @@ pub fn load(files: &[PathBuf]) -> Result<Vec<Scenario>, Vec<ScenarioError>> {
     let mut scenarios = Vec::new();
     let mut errors = Vec::new();
     for file in files {
+        // set-up can take a while over many files: Ctrl-C ends it between them
+        if crate::interrupt::interrupted() {
+            return Err(vec![ScenarioError {
+                file: file.clone(),
+                message: crate::interrupt::MESSAGE.into(),
+            }]);
+        }
         match scenario::load_file(file) {
             Ok(list) => scenarios.extend(list),
             Err(e) => errors.push(e),
@@ -365,6 +372,8 @@ fn run_one(
         regressions: Vec::new(),
     };
     match result {
+        // a set-up cut short by Ctrl-C (the terrain's generation): not a result, --resume runs it
+        Err(_) if crate::interrupt::interrupted() => return None,
         Err(e) => record.message = Some(format!("{e:#}")),
         Ok(report) => {
             if !report.metrics.complete() && report.failure.is_none() {

@@ -83,7 +83,15 @@ pub fn read(path: &Path, lenient: bool) -> Result<(Vec<Record>, usize), ResultsE
         file: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        fail(format!(
+            "line {line}: not UTF-8 text (byte {} of the file); a hexsim results file is JSON Lines",
+            valid.len() + 1
+        ))
+    })?;
     let mut records = Vec::new();
     let mut skipped = 0;
     for (i, line) in text.lines().enumerate() {
@@ -149,6 +157,18 @@ mod tests {
     /// very numbers that were written. serde_json's default float parser may be one ulp off; this
     /// value, a ball's final height from `scenarios/ball_bell.toml`, was (`hexsim merge` changed
     /// it) until the `float_roundtrip` feature was turned on.
+    #[test]
+    fn a_tail_that_is_not_utf8_is_named_by_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("results.jsonl");
+        std::fs::write(&path, b"{}\n\xff\xfe\n").unwrap();
+        let e = super::read(&path, true).unwrap_err().to_string();
+        assert!(
+            e.contains("results.jsonl") && e.contains("line 2: not UTF-8"),
+            "{e}"
+        );
+    }
+
     #[test]
     fn numbers_read_back_bit_for_bit() {
         for value in [

@@ -45,7 +45,7 @@ pub struct BallArgs {
     #[arg(long, default_value_t = DEFAULT_DT)]
     dt: f64,
     /// Recording file (.rrd) for the rerun viewer.
-    #[arg(long, default_value = "ball.rrd")]
+    #[arg(long, default_value = "ball.rrd", conflicts_with = "no_record")]
     record: PathBuf,
     /// Do not write a recording.
     #[arg(long)]

@@ -14,8 +14,8 @@ pub struct BatchArgs {
     /// Scenario files, folders (every .toml below them) or glob patterns.
     #[arg(required = true)]
     scenarios: Vec<String>,
-    /// Worker threads, one simulation each. Default: all cores.
-    #[arg(short, long)]
+    /// Worker threads, one simulation each. Default: all cores; at most 1024.
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Results file (JSON Lines, one record per scenario, written as each finishes).
     #[arg(short, long, default_value = "results.jsonl")]
@@ -66,6 +66,16 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
             );
         }
     };
+    // the results file (and the baseline it is compared with) must not be a file the batch reads
+    let inputs: Vec<(&'static str, std::path::PathBuf)> = scenarios
+        .iter()
+        .flat_map(|s| s.inputs())
+        .chain(args.baseline.iter().map(|b| ("baseline", b.clone())))
+        .collect();
+    hexsim::record::output::check_distinct(
+        [("results file -o", args.output.as_path())],
+        inputs.iter().map(|(what, path)| (*what, path.as_path())),
+    )?;
     let baseline = match &args.baseline {
         Some(path) => Some(results::read(path, false)?.0),
         None => None,

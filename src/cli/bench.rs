@@ -13,8 +13,8 @@ pub struct BenchArgs {
     /// Seconds walked (after 1 s settling), and seconds of the ball.
     #[arg(long, default_value_t = 20.0)]
     duration: f64,
-    /// Threads for the batch figure. Default: all cores.
-    #[arg(short, long)]
+    /// Threads for the batch figure. Default: all cores; at most 1024.
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Runs per figure; the median is reported, and the best beside it.
     #[arg(long, default_value_t = 5)]

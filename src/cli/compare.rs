@@ -13,7 +13,7 @@ pub struct CompareArgs {
     /// comparisons/).
     file: PathBuf,
     /// The recording of every setting superposed.
-    #[arg(long, default_value = "compare.rrd")]
+    #[arg(long, default_value = "compare.rrd", conflicts_with = "no_record")]
     record: PathBuf,
     /// Do not write a recording.
     #[arg(long)]
@@ -25,8 +25,8 @@ pub struct CompareArgs {
     /// is drawn from the trajectories in memory).
     #[arg(long)]
     trajectories: Option<PathBuf>,
-    /// Worker threads, one run each. Default: all cores.
-    #[arg(short, long)]
+    /// Worker threads, one run each. Default: all cores; at most 1024.
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Open the recording in the rerun viewer when done.
     #[arg(long)]
@@ -37,6 +37,28 @@ pub struct CompareArgs {
 /// and recorded), 2 an input error.
 pub fn compare(args: CompareArgs) -> Result<ExitCode> {
     let comparison = compare::load(&args.file)?;
+    // no output may be the comparison file, a file a setting reads, or another output
+    let trajectories: Vec<PathBuf> = match &args.trajectories {
+        Some(dir) => comparison
+            .settings
+            .iter()
+            .map(|s| dir.join(format!("{}.csv", s.name.replace(' ', "_"))))
+            .collect(),
+        None => Vec::new(),
+    };
+    let record = (!args.no_record).then_some(args.record.as_path());
+    let outputs = [("--record", record), ("--metrics", args.metrics.as_deref())]
+        .into_iter()
+        .filter_map(|(what, path)| Some((what, path?)))
+        .chain(trajectories.iter().map(|p| ("trajectory", p.as_path())));
+    let inputs: Vec<(&'static str, PathBuf)> =
+        std::iter::once(("comparison file", args.file.clone()))
+            .chain(comparison.settings.iter().flat_map(|s| s.inputs()))
+            .collect();
+    hexsim::record::output::check_distinct(
+        outputs,
+        inputs.iter().map(|(what, path)| (*what, path.as_path())),
+    )?;
     if !args.no_record {
         hexsim::record::output::check_writable(&args.record)?;
     }
@@ -50,6 +72,12 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         println!("{d}");
     }
     let outcomes = compare::run(&comparison, args.trajectories.as_deref(), jobs)?;
+    // Ctrl-C cuts some runs short: their columns are marked, never mixed in unmarked
+    let interrupted = hexsim::interrupt::interrupted();
+    let complete = |outcome: &compare::Outcome| match &outcome.report {
+        Ok(r) => r.metrics.complete() || r.failure.is_some(),
+        Err(_) => !interrupted,
+    };
     let mut failed = false;
     let mut json = Vec::new();
     let mut rows: Vec<(String, Vec<String>)> = Vec::new();
@@ -75,11 +103,21 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         }
         json.push(serde_json::json!({
             "name": outcome.name,
+            "complete": complete(outcome),
             "metrics": metrics,
             "failure": failure,
         }));
     }
-    let names: Vec<&str> = outcomes.iter().map(|o| o.name.as_str()).collect();
+    let names: Vec<String> = outcomes
+        .iter()
+        .map(|o| {
+            if complete(o) {
+                o.name.clone()
+            } else {
+                format!("{} (cut short)", o.name)
+            }
+        })
+        .collect();
     let width = rows.iter().map(|(k, _)| k.len()).max().unwrap_or(6).max(6);
     let cell_width = names.iter().map(|n| n.len()).max().unwrap_or(8).max(10);
     print!("{:width$}", "metric");
@@ -104,7 +142,8 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
             "comparison": args.file.display().to_string(),
             "settings": json,
         });
-        std::fs::write(path, serde_json::to_string_pretty(&all)? + "\n")?;
+        let text = serde_json::to_string_pretty(&all)? + "\n";
+        hexsim::record::output::write_atomically(path, text.as_bytes())?;
         println!("wrote {}", path.display());
     }
     if !args.no_record {
@@ -114,7 +153,12 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
             hexsim::record::rerun::spawn_viewer(&written)?;
         }
     }
-    Ok(if failed {
+    Ok(if interrupted {
+        eprintln!(
+            "interrupted: the settings marked (cut short) stopped early; their figures are not comparable with the others'"
+        );
+        ExitCode::from(130)
+    } else if failed {
         ExitCode::from(1)
     } else {
         ExitCode::SUCCESS

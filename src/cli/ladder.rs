@@ -22,8 +22,8 @@ pub struct LadderArgs {
     /// it ended).
     #[arg(short, long, default_value = "ladder-results")]
     output: PathBuf,
-    /// Worker threads, one simulation each. Default: all cores.
-    #[arg(short, long)]
+    /// Worker threads, one simulation each. Default: all cores; at most 1024.
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// No progress output.
     #[arg(short, long)]
@@ -91,10 +91,11 @@ pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
         );
     }
     hexsim::record::output::write_json(Some(&args.output.join("ladder.json")), &result)?;
-    std::fs::write(args.output.join("ladder.md"), &table)?;
-    std::fs::write(
-        args.output.join("ladder.svg"),
-        hexsim::ladder::chart::svg(&result),
+    // each write names its file when it fails (a full disk)
+    hexsim::record::output::write_atomically(&args.output.join("ladder.md"), table.as_bytes())?;
+    hexsim::record::output::write_atomically(
+        &args.output.join("ladder.svg"),
+        hexsim::ladder::chart::svg(&result).as_bytes(),
     )?;
     println!(
         "{:.1} s wall; results in {}",

@@ -16,6 +16,11 @@ pub struct MergeArgs {
 
 pub fn merge(args: MergeArgs) -> Result<()> {
     use hexsim::batch::{self, results};
+    // the merged file must not replace a shard it is made from
+    hexsim::record::output::check_distinct(
+        [("--output", args.output.as_path())],
+        args.shards.iter().map(|p| ("shard", p.as_path())),
+    )?;
     let mut parts = Vec::new();
     for path in &args.shards {
         let (records, _) = results::read(path, false)?;

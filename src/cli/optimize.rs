@@ -19,8 +19,8 @@ pub struct OptimizeArgs {
     /// of the start and the best walking each terrain and seed (TERRAIN-seed-S.rrd).
     #[arg(long, default_value = "optimize")]
     output: PathBuf,
-    /// Worker threads. Default: all cores.
-    #[arg(short, long)]
+    /// Worker threads. Default: all cores; at most 1024.
+    #[arg(short, long, value_parser = hexsim::limits::threads)]
     jobs: Option<usize>,
     /// Continue an interrupted (or sharded) search: the evaluations already in the output
     /// folder's log and shard files are replayed (the same specification and seed ask for the
@@ -42,6 +42,18 @@ pub struct OptimizeArgs {
 /// error, 130 interrupted (what was found so far written; `--resume` continues).
 pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     let opt = optimize::load(&args.file)?;
+    // what the search writes in its folder must not replace what it reads
+    let written = [
+        "best_gait.toml",
+        "summary.json",
+        "search.rrd",
+        "evaluations.jsonl",
+    ]
+    .map(|name| args.output.join(name));
+    hexsim::record::output::check_distinct(
+        written.iter().map(|p| ("output", p.as_path())),
+        opt.inputs.iter().map(|(what, p)| (*what, p.as_path())),
+    )?;
     std::fs::create_dir_all(&args.output)?;
     let jobs = args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)

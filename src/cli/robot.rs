@@ -36,6 +36,18 @@ pub struct RobotArgs {
 }
 
 pub fn robot_command(args: RobotArgs) -> Result<()> {
+    if let Some(path) = &args.record {
+        // the recording must not replace the robot, its robot file or the gait
+        let robot_file = args.robot.with_extension("toml");
+        let inputs = [
+            ("robot", Some(&args.robot)),
+            ("robot file", Some(&robot_file)),
+        ]
+        .into_iter()
+        .chain([("gait file", args.gait.as_ref())])
+        .filter_map(|(what, path)| Some((what, path?.as_path())));
+        hexsim::record::output::check_distinct([("--record", path.as_path())], inputs)?;
+    }
     let model = robot::load(&args.robot)?;
     let gait = match &args.gait {
         Some(path) => GaitSpec::from_file(path)?,

@@ -97,7 +97,7 @@ pub struct RunArgs {
     #[arg(long)]
     pgs_iterations: Option<usize>,
     /// Recording file (.rrd) for the rerun viewer.
-    #[arg(long, default_value = "hexsim.rrd")]
+    #[arg(long, default_value = "hexsim.rrd", conflicts_with = "no_record")]
     record: PathBuf,
     /// Do not write a recording.
     #[arg(long)]

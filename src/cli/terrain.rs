@@ -30,10 +30,24 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
             png,
             csv,
         } => {
-            let grid = terrain::load(&terrain)?;
             if stl.is_none() && png.is_none() && csv.is_none() {
                 anyhow::bail!("nothing to export: give --stl FILE, --png FILE and/or --csv FILE");
             }
+            // no export may overwrite the terrain file or its height file, or another export
+            let spec = terrain::TerrainSpec::from_file(&terrain)?;
+            let mut inputs = vec![("terrain file", terrain.clone())];
+            if let Some(data) = spec.source.get().data_file() {
+                let folder = terrain.parent().unwrap_or(std::path::Path::new(""));
+                inputs.push(("terrain's height file", folder.join(data)));
+            }
+            let outputs = [("--stl", &stl), ("--png", &png), ("--csv", &csv)];
+            hexsim::record::output::check_distinct(
+                outputs
+                    .iter()
+                    .filter_map(|(flag, path)| Some((*flag, path.as_deref()?))),
+                inputs.iter().map(|(what, path)| (*what, path.as_path())),
+            )?;
+            let grid = terrain::load(&terrain)?;
             if let Some(path) = stl {
                 terrain::io::write_stl(&grid, &path)
                     .with_context(|| format!("writing {}", path.display()))?;

@@ -61,7 +61,7 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
         file: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path)
+    let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| fail(format!("cannot read the comparison file: {e}")))?;
     let spec: CompareSpec =
         toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;

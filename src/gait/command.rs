@@ -19,6 +19,12 @@ pub struct CommandSchedule {
     changes: Vec<CommandChange>,
 }
 
+/// The fastest walk a command may ask for (m/s), forward or sideways.
+pub const MAX_SPEED: f64 = 10.0;
+
+/// The fastest turn a command may ask for (°/s).
+pub const MAX_TURN_DEG_S: f64 = 3600.0;
+
 impl CommandSchedule {
     /// Changes must be in time order with finite values and ramps ≥ 0; the error names the entry.
     pub fn new(changes: Vec<CommandChange>) -> Result<Self, String> {
@@ -35,6 +41,19 @@ impl CommandSchedule {
                 return Err(format!(
                     "command[{i}]: expected finite `at`, `forward`, `sideways` and `turn_deg_s`"
                 ));
+            }
+            // a legged robot's walk: 10 m/s is some thirty times a fast hexapod's
+            for (field, value, most, unit) in [
+                ("forward", forward, MAX_SPEED, "m/s"),
+                ("sideways", sideways, MAX_SPEED, "m/s"),
+                ("turn_deg_s", yaw_rate.to_degrees(), MAX_TURN_DEG_S, "°/s"),
+            ] {
+                if value.abs() > most {
+                    return Err(format!(
+                        "command[{i}].{field}: expected at most {most} {unit} either way, got {}",
+                        crate::limits::num(value)
+                    ));
+                }
             }
             if c.at < 0.0 || !(c.ramp.is_finite() && c.ramp >= 0.0) {
                 return Err(format!(

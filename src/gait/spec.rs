@@ -111,10 +111,13 @@ pub struct GaitError {
 
 impl GaitSpec {
     pub fn from_file(path: &Path) -> Result<Self, GaitError> {
-        let text = std::fs::read_to_string(path).map_err(|e| GaitError {
-            file: path.to_path_buf(),
-            message: format!("cannot read the gait file: {e}"),
-        })?;
+        let text =
+            crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(|e| {
+                GaitError {
+                    file: path.to_path_buf(),
+                    message: format!("cannot read the gait file: {e}"),
+                }
+            })?;
         Self::from_toml(&text, path)
     }
 

@@ -91,6 +91,8 @@ fn default_seed() -> u64 {
 /// An optimisation ready to run.
 pub struct Optimization {
     pub file: PathBuf,
+    /// Every file the search reads, with what it is: no output may be one of them.
+    pub inputs: Vec<(&'static str, PathBuf)>,
     pub description: Option<String>,
     /// The scenario's table, with the duration, articulation and constraints applied and its
     /// gait inline; candidates change its parameters.
@@ -114,7 +116,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         file: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path)
+    let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| fail(format!("cannot read the optimisation file: {e}")))?;
     let spec: OptimizeSpec =
         toml::from_str(&text).map_err(|e| fail(e.to_string().trim_end().to_string()))?;
@@ -134,8 +136,25 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     if spec.generations == 0 {
         return Err(fail("generations: expected at least 1".into()));
     }
-    if spec.population.is_some_and(|p| p < 2) {
-        return Err(fail("population: expected at least 2".into()));
+    let most = crate::limits::MAX_POPULATION;
+    if let Some(p) = spec.population
+        && !(2..=most).contains(&p)
+    {
+        return Err(fail(format!(
+            "population: expected 2 to {most} candidates a generation, got {p}"
+        )));
+    }
+    let evaluations = spec.generations as f64 * spec.population.unwrap_or(2) as f64;
+    if evaluations > crate::limits::MAX_EVALUATIONS {
+        return Err(fail(format!(
+            "generations: {} generations of {} candidates are {} evaluations, more than the {} a \
+             search runs (each is a walk on every terrain and seed)",
+            spec.generations,
+            spec.population
+                .map_or("at least 2".into(), |p| p.to_string()),
+            crate::limits::num(evaluations),
+            crate::limits::num(crate::limits::MAX_EVALUATIONS)
+        )));
     }
     if spec.parameters.is_empty() {
         return Err(fail(
@@ -201,16 +220,23 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         "expect".into(),
         toml::Value::Table(spec.constraints.clone()),
     );
+    let mut inputs = vec![
+        ("optimisation file", path.to_path_buf()),
+        ("scenario file", scenario_path.clone()),
+    ];
     // the gait as an inline table, so candidates can change its fields
     let gait_text = match base.get("gait") {
         Some(toml::Value::String(file)) => {
             let gait_path = scenario_path.parent().unwrap_or(Path::new("")).join(file);
-            std::fs::read_to_string(&gait_path).map_err(|e| {
-                fail(format!(
-                    "scenario's gait: cannot read {}: {e}",
-                    gait_path.display()
-                ))
-            })?
+            inputs.push(("gait file", gait_path.clone()));
+            crate::limits::read_to_string(&gait_path, crate::limits::TEXT_FILE_BYTES).map_err(
+                |e| {
+                    fail(format!(
+                        "scenario's gait: cannot read {}: {e}",
+                        gait_path.display()
+                    ))
+                },
+            )?
         }
         Some(_) => String::new(),
         None => crate::scenario::builtin::TRIPOD.text.to_string(),
@@ -246,7 +272,19 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
         .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
     let cases = cases(&spec, path, &base, &scenario_path, &reference).map_err(fail)?;
     let start = start_point(&parameters, &base, &reference);
+    inputs.extend(
+        reference
+            .inputs()
+            .into_iter()
+            .filter(|(what, _)| *what != "scenario file"),
+    );
+    inputs.extend(
+        cases
+            .iter()
+            .filter_map(|c| Some(("terrain file", c.terrain.clone()?))),
+    );
     Ok(Optimization {
+        inputs,
         file: path.to_path_buf(),
         description: spec.description,
         base,
@@ -528,7 +566,14 @@ impl Optimization {
 /// diverged, broke a constraint, or Ctrl-C cut it short: [`INTERRUPTED`]).
 pub fn judge(case: &Case, report: &anyhow::Result<Report>) -> Result<HexapodMetrics, String> {
     let label = case.label();
-    let report = report.as_ref().map_err(|e| format!("{label}: {e:#}"))?;
+    let report = report.as_ref().map_err(|e| {
+        // a set-up cut short by Ctrl-C (the terrain's generation) is an interruption
+        if crate::interrupt::interrupted() {
+            INTERRUPTED.to_string()
+        } else {
+            format!("{label}: {e:#}")
+        }
+    })?;
     if let Some(failure) = &report.failure {
         return Err(format!("{label}: {failure}"));
     }

@@ -30,14 +30,15 @@ pub fn write(
     let start_objective = searched.start.as_ref().and_then(|s| s.objective);
     let shown = |o: Option<f64>| o.map_or("failed".to_string(), |o| format!("{o:.4}"));
     let gait = output.join("best_gait.toml");
-    std::fs::write(
+    crate::record::output::write_atomically(
         &gait,
         format!(
             "# found by `hexsim optimize {}`: objective {objective:.4} (start {})\n{}",
             file.display(),
             shown(start_objective),
             opt.gait_file(x)
-        ),
+        )
+        .as_bytes(),
     )?;
     let summary = serde_json::json!({
         "optimization": file.display().to_string(),
@@ -78,9 +79,9 @@ pub fn write(
 
 impl Results {
     fn write_summary(&self) -> Result<()> {
-        std::fs::write(
+        crate::record::output::write_atomically(
             &self.summary_path,
-            serde_json::to_string_pretty(&self.summary)? + "\n",
+            (serde_json::to_string_pretty(&self.summary)? + "\n").as_bytes(),
         )?;
         Ok(())
     }

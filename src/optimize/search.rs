@@ -82,6 +82,12 @@ pub fn run(
     let mut es = cma_es(opt, population);
     let logged = read_log(opt, setting)?;
     let mut out = open_log(setting)?;
+    // a failed write (a full disk) names the log
+    let log_path = match setting.shard {
+        Some(shard) => log::shard_file(setting.output, shard),
+        None => log::main_file(setting.output),
+    };
+    let named = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {e}", log_path.display());
     let mine = |index: usize| setting.shard.is_none_or(|s| s.contains(index));
     // None: another shard's candidate, not logged yet
     let evaluate = |generation: usize, index: usize, x: &[f64]| -> Option<(Evaluation, Source)> {
@@ -117,7 +123,7 @@ pub fn run(
         stopped_at: None,
     };
     if let Some(result) = evaluate(0, 0, &opt.start) {
-        write(&mut out, 0, 0, &opt.start, &result)?;
+        write(&mut out, 0, 0, &opt.start, &result).map_err(named)?;
         let (start, source) = result;
         searched.run += usize::from(matches!(source, Source::Run));
         searched.interrupted = start.interrupted();
@@ -141,12 +147,19 @@ pub fn run(
             .enumerate()
             .map(|(i, x)| evaluate(generation, i, x))
             .collect();
-        for (i, (x, result)) in xs.iter().zip(&results).enumerate() {
+        // cut short by Ctrl-C: only the candidates before the first interrupted one are logged,
+        // so that --resume appends the rest in order and the log reads line for line as an
+        // uninterrupted search's (the later ones finished are run again: the same results)
+        let cut = results
+            .iter()
+            .position(|r| r.as_ref().is_some_and(|(e, _)| e.interrupted()))
+            .unwrap_or(results.len());
+        for (i, (x, result)) in xs.iter().zip(&results).enumerate().take(cut) {
             if let Some(result) = result {
-                write(&mut out, generation, i, x, result)?;
+                write(&mut out, generation, i, x, result).map_err(named)?;
             }
         }
-        out.flush()?;
+        out.flush().map_err(named)?;
         let ran = results
             .iter()
             .flatten()
@@ -187,7 +200,7 @@ pub fn run(
             break;
         }
     }
-    out.flush()?;
+    out.flush().map_err(named)?;
     Ok(searched)
 }
 

@@ -121,6 +121,16 @@ impl Outputs {
             .with_some(metrics.map(Output::Metrics))
     }
 
+    /// The files of the list, each with what it is (for a message).
+    pub fn named(&self) -> impl Iterator<Item = (&'static str, &Path)> {
+        self.0.iter().filter_map(|output| match output {
+            Output::Recording(p) => Some(("recording", p.as_path())),
+            Output::Trajectory(p) => Some(("trajectory", p.as_path())),
+            Output::Metrics(p) => Some(("metrics file", p.as_path())),
+            Output::Table(_) | Output::Progress(_) => None,
+        })
+    }
+
     /// Checks, before a simulation starts, that every file can be written.
     pub fn check_writable(&self) -> Result<()> {
         for path in self.0.iter().filter_map(Output::path) {

@@ -111,9 +111,11 @@ impl Recording {
         self.stream.set_time_sequence(timeline, n);
     }
 
-    /// Logs the terrain as a static mesh coloured by height.
+    /// Logs the terrain as a static mesh coloured by height, drawn with at most
+    /// [`TERRAIN_MESH_SAMPLES`] of its samples (every n-th each way).
     pub fn log_terrain(&self, entity: &str, grid: &HeightGrid) -> Result<()> {
-        let (vertices, triangles) = mesh(grid);
+        let decimated = decimated(grid, TERRAIN_MESH_SAMPLES)?;
+        let (vertices, triangles) = mesh(decimated.as_ref().unwrap_or(grid));
         let (lo, hi) = grid.height_bounds();
         let span = (hi - lo).max(1e-9);
         let colors: Vec<[u8; 3]> = vertices
@@ -161,12 +163,71 @@ impl Recording {
     }
 
     /// Completes the file (writes its footer) and moves it to its final name.
+    /// A write that failed (a full disk) is an error naming the file, and the truncated file
+    /// keeps its temporary name.
     pub fn finish(self) -> Result<PathBuf> {
-        self.stream.flush_blocking().ok();
+        let flushed = self.stream.flush_blocking();
         drop(self.stream);
+        let failed = |why: String| {
+            anyhow::anyhow!(
+                "cannot write the recording {}: {why}; the file is incomplete",
+                self.path.display()
+            )
+        };
+        flushed.map_err(|e| failed(e.to_string()))?;
+        let partial = partial_path(&self.path);
+        if std::fs::metadata(&partial).is_ok_and(|m| m.is_file()) && !has_footer(&partial) {
+            // the writer thread only logs a failure to write the footer
+            return Err(failed(
+                "its footer was not written (is the disk full?)".into(),
+            ));
+        }
         commit(&self.path)?;
         Ok(self.path)
     }
+}
+
+/// True if the file ends with an RRD stream footer (`RRF2` … `FOOT` in its last 32 bytes), as
+/// a recording finished whole does.
+fn has_footer(path: &Path) -> bool {
+    use std::io::{Read, Seek, SeekFrom};
+    let tail = std::fs::File::open(path).and_then(|mut file| {
+        let length = file.metadata()?.len();
+        file.seek(SeekFrom::Start(length.saturating_sub(32)))?;
+        let mut tail = Vec::new();
+        file.read_to_end(&mut tail)?;
+        Ok(tail)
+    });
+    tail.is_ok_and(|tail| {
+        let has = |word: &[u8]| tail.windows(4).any(|w| w == word);
+        has(b"RRF2") && has(b"FOOT")
+    })
+}
+
+/// The most samples of a terrain the recording draws (1024²: some 60 MB of mesh). A larger grid
+/// (up to [`crate::terrain::MAX_SAMPLES`], 8192²) is drawn with every n-th sample each way: its
+/// whole mesh took 3 GB more memory while the recording was written, for a viewer that shows no
+/// more detail than this.
+pub const TERRAIN_MESH_SAMPLES: usize = 1 << 20;
+
+/// `grid` with every n-th sample each way, the least n that leaves at most `most` samples;
+/// None if it has no more than that already.
+fn decimated(grid: &HeightGrid, most: usize) -> Result<Option<HeightGrid>> {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    let stride = ((rows * cols) as f64 / most as f64).sqrt().ceil() as usize;
+    if stride <= 1 {
+        return Ok(None);
+    }
+    let (kept_rows, kept_cols) = ((rows - 1) / stride + 1, (cols - 1) / stride + 1);
+    let heights = (0..kept_rows)
+        .flat_map(|i| (0..kept_cols).map(move |j| (i * stride, j * stride)))
+        .map(|(i, j)| grid.sample(i, j))
+        .collect();
+    let x_range = [grid.x_at(0), grid.x_at((kept_cols - 1) * stride)];
+    let y_range = [grid.y_at(0), grid.y_at((kept_rows - 1) * stride)];
+    Ok(Some(HeightGrid::new(
+        kept_rows, kept_cols, x_range, y_range, heights,
+    )?))
 }
 
 /// The `rerun` viewer binary on PATH, if installed.
@@ -298,4 +359,21 @@ pub fn read_back(path: &Path) -> Result<Contents> {
         }
     }
     Ok(contents)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_large_terrain_is_drawn_with_every_nth_sample() {
+        let grid =
+            HeightGrid::from_fn(101, 201, [0.0, 2.0], [0.0, 1.0], |x, y| x + 10.0 * y).unwrap();
+        assert!(decimated(&grid, 101 * 201).unwrap().is_none());
+        let drawn = decimated(&grid, 2000).unwrap().unwrap();
+        assert!(drawn.rows() * drawn.cols() <= 2000);
+        assert_eq!((drawn.rows(), drawn.cols()), (26, 51), "every 4th sample");
+        assert_eq!(drawn.x_range(), [0.0, 2.0]);
+        assert_eq!(drawn.sample(25, 50), grid.sample(100, 200));
+    }
 }

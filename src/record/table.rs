@@ -31,7 +31,9 @@ impl CsvTable {
             .writer
             .as_mut()
             .ok_or_else(|| anyhow!("{} is already finished", self.path.display()))?;
-        writer.write_record(values.iter().map(|v| v.to_string()))?;
+        writer
+            .write_record(values.iter().map(|v| v.to_string()))
+            .with_context(|| format!("cannot write the trajectory {}", self.path.display()))?;
         Ok(())
     }
 
@@ -40,7 +42,9 @@ impl CsvTable {
         let Some(mut writer) = self.writer.take() else {
             return Ok(None);
         };
-        writer.flush()?;
+        writer
+            .flush()
+            .with_context(|| format!("cannot write the trajectory {}", self.path.display()))?;
         drop(writer);
         commit(&self.path)?;
         Ok(Some(self.path.clone()))

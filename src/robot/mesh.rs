@@ -78,6 +78,36 @@ pub fn drawable(path: &Path) -> bool {
         .is_some_and(|e| DRAWABLE.contains(&e.to_ascii_lowercase().as_str()))
 }
 
+/// Why a mesh file found cannot be drawn, by a check that reads no more than its first bytes: it
+/// is empty, or an STL whose length is neither text nor its binary triangle count's.
+pub fn unreadable(path: &Path) -> Option<String> {
+    use std::io::Read;
+    let length = std::fs::metadata(path).ok()?.len();
+    if length == 0 {
+        return Some("it is empty (0 bytes)".into());
+    }
+    let is_stl = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+    if !is_stl {
+        return None;
+    }
+    let mut head = [0u8; 84];
+    let read = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .ok()?;
+    if head[..read].trim_ascii_start().starts_with(b"solid") {
+        return None;
+    }
+    let triangles = u32::from_le_bytes([head[80], head[81], head[82], head[83]]) as u64;
+    (read < 84 || length != 84 + 50 * triangles).then(|| {
+        format!(
+            "not an STL mesh: {length} bytes, neither text nor a binary STL (whose header says {triangles} triangles, {} bytes)",
+            84 + 50 * triangles
+        )
+    })
+}
+
 /// The vertices of a mesh file (in its own units; COLLADA's node transforms and `<unit>` applied
 /// by mesh-loader — to the vertices, not to node translations: a node's −10 cm was read as
 /// −10 m, so only a mesh placed by nodes in a unit other than metres comes out misplaced)
@@ -85,6 +115,11 @@ pub fn drawable(path: &Path) -> bool {
 /// None if it cannot be read (the caller falls back to what it knows without the mesh).
 pub fn mesh_vertices(path: &Path) -> Option<Vec<glam::DVec3>> {
     let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+    // a mesh is read whole: a device or a file past the data limit is not one
+    let meta = std::fs::metadata(path).ok()?;
+    if !meta.is_file() || meta.len() > crate::limits::DATA_FILE_BYTES {
+        return None;
+    }
     match extension.as_str() {
         "stl" => {
             let mut file = std::fs::File::open(path).ok()?;

@@ -84,10 +84,13 @@ fn forward_yaw(value: &toml::Value) -> Result<f64, String> {
 
 /// Loads and validates a URDF robot, with the robot file beside it if there is one.
 pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
-    let text = std::fs::read_to_string(path).map_err(|e| RobotError {
-        file: path.to_path_buf(),
-        message: format!("cannot read the URDF: {e}"),
-    })?;
+    let text =
+        crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(|e| {
+            RobotError {
+                file: path.to_path_buf(),
+                message: format!("cannot read the URDF: {e}"),
+            }
+        })?;
     refuse_xacro(&text, path).map_err(|message| RobotError {
         file: path.to_path_buf(),
         message,
@@ -95,10 +98,12 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
     let robot_file = path.with_extension("toml");
     let robot_text = if robot_file.is_file() {
         Some(
-            std::fs::read_to_string(&robot_file).map_err(|e| RobotError {
-                file: robot_file.clone(),
-                message: format!("cannot read the robot file: {e}"),
-            })?,
+            crate::limits::read_to_string(&robot_file, crate::limits::TEXT_FILE_BYTES).map_err(
+                |e| RobotError {
+                    file: robot_file.clone(),
+                    message: format!("cannot read the robot file: {e}"),
+                },
+            )?,
         )
     } else {
         None
@@ -216,6 +221,13 @@ pub fn from_str_with(
         file: origin.to_path_buf(),
         message,
     };
+    // a recursive parser: its nesting is checked first, or a deep one overflows the stack
+    crate::limits::xml_depth(text, crate::limits::XML_DEPTH).map_err(|(depth, line)| {
+        fail(format!(
+            "not a valid URDF: line {line}: elements nested {depth} deep, deeper than the {} hexsim reads (a URDF's are 4 or 5)",
+            crate::limits::XML_DEPTH
+        ))
+    })?;
     let mut robot =
         urdf_rs::read_from_string(text).map_err(|e| fail(format!("not a valid URDF: {e}")))?;
     let dropped = drop_marker_frames(&mut robot);
@@ -294,6 +306,27 @@ fn tree(robot: &urdf_rs::Robot) -> Result<Tree<'_>, String> {
     for (k, link) in robot.links.iter().enumerate() {
         if index.insert(link.name.as_str(), k).is_some() {
             return Err(format!("link `{}` is defined twice", link.name));
+        }
+    }
+    let mut joint_names = std::collections::HashSet::new();
+    for joint in &robot.joints {
+        if !joint_names.insert(joint.name.as_str()) {
+            return Err(format!(
+                "joint `{}` is defined twice (joint names must be unique: they name the trajectory's columns)",
+                joint.name
+            ));
+        }
+        let origin = &joint.origin;
+        if origin
+            .xyz
+            .iter()
+            .chain(origin.rpy.iter())
+            .any(|v| !v.is_finite())
+        {
+            return Err(format!(
+                "joint `{}`: <origin xyz rpy> must be finite numbers, got xyz = {:?}, rpy = {:?}",
+                joint.name, *origin.xyz, *origin.rpy
+            ));
         }
     }
     let mut parent = vec![None; robot.links.len()];
@@ -490,6 +523,18 @@ fn shape(
                 .as_ref()
                 .map_or(DVec3::ONE, |s| DVec3::from_array(s.0));
             match mesh::resolve(filename, base) {
+                Ok(path) if let Some(why) = mesh::unreadable(&path) => {
+                    problems.missing.push(format!(
+                        "link `{link}`: visual mesh {filename} ({}) cannot be read: {why}; drawn as {}",
+                        path.display(),
+                        if has_fallback {
+                            "its collision shape"
+                        } else {
+                            "a small sphere"
+                        }
+                    ));
+                    return None;
+                }
                 Ok(path) if mesh::drawable(&path) => Shape::Mesh { path, scale },
                 Ok(path) => {
                     problems.undrawable.push((link.to_string(), path));

@@ -6,14 +6,7 @@ pub mod step_loop;
 pub mod walk;
 pub mod watchdog;
 
-use std::sync::atomic::{AtomicBool, Ordering};
-
-/// Set by a signal handler to stop a run early; the run then writes what it has, marked incomplete.
-pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::Relaxed)
-}
+pub use crate::interrupt::{INTERRUPTED, interrupted};
 
 pub use crate::record::{Output, Outputs};
 

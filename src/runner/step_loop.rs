@@ -145,7 +145,8 @@ impl<S> Looping<S> {
         let mut written = Vec::new();
         let mut finish_error = None;
         for observer in observers.iter_mut() {
-            match observer.finish(complete) {
+            // once a file failed (a full disk), what follows (the metrics) says incomplete
+            match observer.finish(complete && finish_error.is_none()) {
                 Ok(file) => written.extend(file),
                 Err(e) => {
                     finish_error.get_or_insert(e);

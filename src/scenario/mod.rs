@@ -136,7 +136,7 @@ impl Report {
 /// Returns the scenario's path (its relative paths resolve against it) and its table.
 pub fn read_table(spec: &Path, file: &Path) -> Result<(PathBuf, toml::Table), String> {
     let path = spec.parent().unwrap_or(Path::new("")).join(file);
-    let text = std::fs::read_to_string(&path)
+    let text = crate::limits::read_to_string(&path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| format!("scenario: cannot read {}: {e}", path.display()))?;
     let table = text.parse().map_err(|e: toml::de::Error| {
         format!("scenario {}: {}", path.display(), e.to_string().trim_end())
@@ -182,7 +182,7 @@ pub fn load_file(path: &Path) -> Result<Vec<Scenario>, ScenarioError> {
         file: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path)
+    let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES)
         .map_err(|e| fail(format!("cannot read the scenario file: {e}")))?;
     let table: toml::Table = text
         .parse()
@@ -356,9 +356,41 @@ impl Scenario {
         Scenario::resolve(spec, self.name.clone(), &self.file)
     }
 
+    /// The files this scenario reads, each with what it is: the scenario file, the robot (and
+    /// its robot file), the gait, the terrain and its height data. No output may be one of them.
+    pub fn inputs(&self) -> Vec<(&'static str, PathBuf)> {
+        let base = self.file.parent().unwrap_or(Path::new(""));
+        let mut inputs = Vec::new();
+        if !self.file.as_os_str().is_empty() {
+            inputs.push(("scenario file", self.file.clone()));
+        }
+        if let Some(robot) = &self.spec.robot {
+            inputs.push(("robot", base.join(robot)));
+            inputs.push(("robot file", base.join(robot).with_extension("toml")));
+        }
+        if let Some(FileOr::File(gait)) = &self.spec.gait {
+            inputs.push(("gait file", base.join(gait)));
+        }
+        if self.spec.terrain.is_some() {
+            if matches!(self.spec.terrain, Some(FileOr::File(_))) {
+                inputs.push(("terrain file", self.terrain.origin.clone()));
+            }
+            if let Some(data) = self.terrain.spec.source.get().data_file() {
+                let folder = self.terrain.origin.parent().unwrap_or(Path::new(""));
+                inputs.push(("terrain's height file", folder.join(data)));
+            }
+        }
+        inputs
+    }
+
     /// Runs the scenario and checks its expectations. An error is an input or output problem; a
     /// run that diverged is a [`Report`] with `failure` set.
     pub fn run(&self, outputs: Outputs) -> anyhow::Result<Report> {
+        let inputs = self.inputs();
+        crate::record::output::check_distinct(
+            outputs.named(),
+            inputs.iter().map(|(what, path)| (*what, path.as_path())),
+        )?;
         let grid = Arc::new(self.build_terrain()?);
         let spec = &self.spec;
         let started = std::time::Instant::now();

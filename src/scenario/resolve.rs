@@ -8,6 +8,7 @@ use super::spec::{
 use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
 use crate::contact::{ContactModel, NormalLaw};
 use crate::gait::{CommandChange, CommandSchedule, Gait, GaitSpec, VelocityCommand};
+use crate::limits::num;
 use crate::robot::RobotModel;
 use crate::robot::statics::foot_load;
 use crate::sim::{
@@ -18,8 +19,22 @@ use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-fn read_bytes(path: &Path) -> Vec<u8> {
-    std::fs::read(path).unwrap_or_default()
+/// Hashes the file at `path` as it streams, within `limit` bytes ([`crate::limits`]); a missing
+/// file hashes as empty (its loader then names it), one too large is refused here.
+fn hash_file(hasher: &mut Sha256, path: &Path, limit: u64) -> Result<(), String> {
+    let Ok(file) = std::fs::File::open(path) else {
+        return Ok(());
+    };
+    let mut reader = crate::limits::Bounded::new(file, limit, limit);
+    let mut buffer = vec![0u8; 1 << 16];
+    loop {
+        match std::io::Read::read(&mut reader, &mut buffer) {
+            Ok(0) => return Ok(()),
+            Ok(n) => hasher.update(&buffer[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(format!("{}: cannot read: {e}", path.display())),
+        }
+    }
 }
 
 impl Scenario {
@@ -58,6 +73,11 @@ impl Scenario {
             // the step the walk chose (smaller than the default for a robot with light legs)
             spec.dt = Some(w.settings.dt);
         }
+        let settle = match &setup {
+            Setup::Walk(w) => w.settle,
+            Setup::Ball(_) => 0.0,
+        };
+        check_steps(spec.duration, settle, spec.dt()).map_err(fail)?;
         let hash: String = hasher.finalize()[..8]
             .iter()
             .map(|b| format!("{b:02x}"))
@@ -117,7 +137,18 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
         ));
     }
     spec.expect.validate(spec.kind)?;
+    // a tolerance is of a metric compared with the baseline (one with a noise floor), or default
+    let compared: Vec<&str> = match spec.kind {
+        Kind::Walk => compared_metrics(crate::metrics::walk::TABLE),
+        Kind::Ball => compared_metrics(crate::metrics::ball::TABLE),
+    };
     for (field, tolerance) in &spec.tolerance {
+        if field != "default" && !compared.contains(&field.as_str()) {
+            return Err(format!(
+                "tolerance.{field}: unknown field `{field}`, expected `default` or a metric compared with a baseline: {}",
+                compared.join(", ")
+            ));
+        }
         for v in [tolerance.rel, tolerance.abs].into_iter().flatten() {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("tolerance.{field}: expected numbers ≥ 0, got {v}"));
@@ -132,6 +163,45 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The names of the metrics a baseline compares (those with a noise floor).
+fn compared_metrics<M>(table: &[crate::metrics::Metric<M>]) -> Vec<&'static str> {
+    table
+        .iter()
+        .filter(|m| m.noise.is_some())
+        .map(|m| m.name)
+        .collect()
+}
+
+/// Refuses a run of more than [`crate::limits::MAX_STEPS`] steps, with its count and an estimate
+/// of its time.
+fn check_steps(duration: f64, settle: f64, dt: f64) -> Result<(), String> {
+    let steps = (duration + settle) / dt;
+    if steps <= crate::limits::MAX_STEPS {
+        return Ok(());
+    }
+    // a hex18 walk runs some 20,000 steps a second on one core
+    let seconds = steps / 2e4;
+    let time = match seconds {
+        s if s < 3600.0 * 48.0 => format!("{:.0} hours", s / 3600.0),
+        s if s < 3.156e7 * 2.0 => format!("{:.0} days", s / 86400.0),
+        s => format!("{} years", num((s / 3.156e7).round())),
+    };
+    let settled = if settle > 0.0 {
+        format!(" and settle = {} s", num(settle))
+    } else {
+        String::new()
+    };
+    Err(format!(
+        "duration: {} s{settled} at dt = {} s is {} steps (about {time} at \
+         20,000 steps/s), more than the {} steps hexsim runs; shorten the duration or the \
+         settle, or enlarge dt",
+        num(duration),
+        num(dt),
+        num(steps),
+        num(crate::limits::MAX_STEPS)
+    ))
 }
 
 /// The terrain: the built-in natural terrain of the kind's scale, a file, or an inline table;
@@ -173,7 +243,11 @@ fn resolve_terrain(
     hasher.update(serde_json::to_vec(&terrain.spec).expect("a spec is plain data"));
     let data_base = terrain.origin.parent().unwrap_or(Path::new(""));
     if let Some(path) = terrain.spec.source.get().data_file() {
-        hasher.update(read_bytes(&data_base.join(path)));
+        hash_file(
+            hasher,
+            &data_base.join(path),
+            crate::limits::DATA_FILE_BYTES,
+        )?;
     }
     Ok(terrain)
 }
@@ -261,6 +335,7 @@ fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfi
     if let Err((field, expected)) = config.validate() {
         return Err(format!("ball.{field}: {expected}"));
     }
+    check_ball_scale(&b)?;
     check_stable_dt(
         spec,
         contact,
@@ -269,6 +344,59 @@ fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfi
         &format!("a {} kg ball", b.mass),
     )?;
     Ok(config)
+}
+
+/// The ball's numbers held to a physical scale, as the robot's start is: a ball of 10³⁰⁸ kg, at
+/// 10⁶ m, or thrown at 10³⁰⁰ m/s is a typo, and would run as nonsense rather than fail.
+fn check_ball_scale(b: &super::spec::BallSpec) -> Result<(), String> {
+    // the length, scaled so that 1e300 does not overflow to inf
+    let speed = |v: [f64; 3]| {
+        let most = v.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+        if most == 0.0 {
+            0.0
+        } else {
+            most * v.iter().map(|c| (c / most).powi(2)).sum::<f64>().sqrt()
+        }
+    };
+    let far = crate::terrain::FARTHEST;
+    let checks: [(&str, f64, f64, &str); 6] = [
+        ("radius", b.radius, 10.0, "m"),
+        ("mass", b.mass, 1e6, "kg"),
+        (
+            "drop_height",
+            b.drop_height.abs(),
+            1000.0,
+            "m (|drop_height|)",
+        ),
+        ("velocity", speed(b.velocity), 1000.0, "m/s (its length)"),
+        (
+            "angular_velocity",
+            speed(b.angular_velocity),
+            1e4,
+            "rad/s (its length)",
+        ),
+        (
+            "at",
+            b.at[0].abs().max(b.at[1].abs()),
+            far,
+            "m from the origin",
+        ),
+    ];
+    for (field, value, most, unit) in checks {
+        if value > most {
+            let why = if field == "at" {
+                ", where the physics' f32 positions resolve too coarsely for the contact; place the terrain and the ball near the origin"
+            } else {
+                ""
+            };
+            return Err(format!(
+                "ball.{field}: expected at most {} {unit}, got {}{why}",
+                num(most),
+                num(value)
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A walk's robot, gait, commands and settings.
@@ -321,7 +449,15 @@ fn resolve_walk(
     }
     let mut contact_step = ContactStep {
         limit: CONTACT_STEP_LIMIT / (contact.normal.stiffness() / foot_mass).sqrt(),
-        what: format!("the contact spring on {what} needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}"),
+        what: format!(
+            "the contact spring (k = {} N/m{}) on {what} needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}",
+            num(contact.normal.stiffness()),
+            if spec.contact.stiffness.is_some() {
+                String::new()
+            } else {
+                format!(", fitted to the robot's {} kg", num(robot.total_mass()))
+            }
+        ),
     };
     if let Some(damper) = explicit_damper_step(contact, foot_mass)
         && 0.5 * damper < contact_step.limit
@@ -344,11 +480,18 @@ fn resolve_walk(
             "settle: expected a finite number ≥ 0 s, got {settle}"
         ));
     }
-    if spec.solver_iterations == Some(0) {
-        return Err("solver_iterations: expected at least 1".into());
-    }
-    if spec.pgs_iterations == Some(0) {
-        return Err("pgs_iterations: expected at least 1".into());
+    let most = crate::limits::MAX_ITERATIONS;
+    for (field, value) in [
+        ("solver_iterations", spec.solver_iterations),
+        ("pgs_iterations", spec.pgs_iterations),
+    ] {
+        if let Some(n) = value
+            && !(1..=most).contains(&n)
+        {
+            return Err(format!(
+                "{field}: expected 1 to {most} iterations a step, got {n}"
+            ));
+        }
     }
     let load = foot_load(&robot, STANDARD_GRAVITY, support);
     let gains = resolve_servo(
@@ -528,6 +671,17 @@ fn rounded_down(limit: f64) -> String {
     format!("{shown:.2e}")
 }
 
+/// `x` with `decimals` decimals where that shows it (0.76), else as short as it reads (1.9e8,
+/// 8.2e-297): a number in a message that may be out of scale.
+fn fixed(x: f64, decimals: usize) -> String {
+    let shown = 10f64.powi(-(decimals as i32));
+    if x == 0.0 || (shown..1e6).contains(&x.abs()) {
+        format!("{x:.decimals$}")
+    } else {
+        num(x)
+    }
+}
+
 /// `x` to four decimals, as short as they allow (20, 61.8926): a fitted value in a message.
 fn four_digits(x: f64) -> f64 {
     (x * 1e4).round() / 1e4
@@ -561,12 +715,15 @@ fn touchdown_step(
     Some(ContactStep {
         limit: TOUCHDOWN_STEP_LIMIT * sink / speed,
         what: format!(
-            "the feet land at {speed:.2} m/s (the gait's {} swing, {:.3} m high), so their load \
-             must rise by at most {TOUCHDOWN_STEP_LIMIT} of its standing share ({standing:.1} N, a \
-             {:.2} mm sink) a step: v·dt ≤ {TOUCHDOWN_STEP_LIMIT}·δ",
+            "the feet land at {} m/s (the gait's {} swing, {} m high, period {} s, duty factor \
+             {}), so their load must rise by at most {TOUCHDOWN_STEP_LIMIT} of its standing \
+             share ({standing:.1} N, a {} mm sink) a step: v·dt ≤ {TOUCHDOWN_STEP_LIMIT}·δ",
+            fixed(speed, 2),
             format!("{:?}", gait.swing).to_lowercase(),
-            gait.step_height,
-            sink * 1e3
+            fixed(gait.step_height, 3),
+            num(gait.period),
+            gait.duty_factor,
+            fixed(sink * 1e3, 2)
         ),
     })
 }
@@ -614,13 +771,19 @@ fn walk_time_step(
         return Ok(spec.dt());
     };
     let (k, d) = (gains.stiffness, gains.damping);
+    let fitted = if spec.servo.and_then(|s| s.stiffness).is_some() {
+        ""
+    } else {
+        ", fitted to the robot's weight and the gait's step height"
+    };
     let omega = (k / inertia).sqrt();
     let name = &robot.joints[joint].name;
     let mut limit = SERVO_STEP_LIMIT / omega;
     let mut why = format!(
-        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {} N·m/rad: ω = {omega:.0} rad/s) \
+        "the servo on `{name}` ({inertia:.2e} kg·m² outboard, {} N·m/rad{fitted}: ω = {} rad/s) \
          needs ω·dt ≤ {SERVO_STEP_LIMIT}",
-        four_digits(k)
+        num(k),
+        num(omega.round())
     );
     if spec.articulation.unwrap_or_default() == crate::sim::Articulation::Impulse {
         // the root of k·dt² + d·dt = limit·I
@@ -631,8 +794,8 @@ fn walk_time_step(
                 "the impulse joints' explicit servo on `{name}` ({inertia:.2e} kg·m² outboard, \
                  {} N·m/rad, {} N·m·s/rad) needs (k·dt + d)·dt/I ≤ {EXPLICIT_SERVO_LIMIT} \
                  (the multibody articulation's implicit servo allows a larger step)",
-                four_digits(k),
-                four_digits(d)
+                num(k),
+                num(d)
             );
         }
     }
@@ -640,6 +803,15 @@ fn walk_time_step(
     if contact.limit < limit {
         limit = contact.limit;
         why = contact.what;
+    }
+    if spec.dt.is_none() && (limit.is_nan() || limit < crate::limits::MIN_CHOSEN_DT) {
+        return Err(format!(
+            "dt: the step hexsim would choose is {} s, below the {} s it accepts: {why}; a \
+             number behind it is out of scale (the robot's masses and inertias, the gait's \
+             period, duty factor and step height, the contact's or servo's stiffness)",
+            num(limit),
+            num(crate::limits::MIN_CHOSEN_DT)
+        ));
     }
     // the step hexsim chooses: the default, or 1 ms / n with the least n the bounds allow
     let chosen = DEFAULT_DT / (DEFAULT_DT / limit).ceil().max(1.0);
@@ -720,8 +892,10 @@ fn resolve_robot(
         }
         Some(file) => {
             let path = base.join(file);
-            hasher.update(read_bytes(&path));
-            hasher.update(read_bytes(&path.with_extension("toml")));
+            let limit = crate::limits::TEXT_FILE_BYTES;
+            hash_file(hasher, &path, limit).map_err(|e| format!("robot: {e}"))?;
+            hash_file(hasher, &path.with_extension("toml"), limit)
+                .map_err(|e| format!("robot: {e}"))?;
             crate::robot::load(&path)
         }
     }

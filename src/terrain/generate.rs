@@ -49,25 +49,26 @@ pub fn natural(
 ) -> Result<HeightGrid, GridError> {
     check_samples(n, n)?;
     let mut rng = MatlabRand::new(seed);
-    let mut phase = vec![0.0; n * n];
-    // column-major fill: MATLAB's rand(n) draws down each column first.
-    for j in 0..n {
-        for i in 0..n {
-            phase[i * n + j] = rng.next_f64();
-        }
-    }
     let half = (n / 2) as f64;
-    let mut spectrum: Vec<Complex<f64>> = (0..n * n)
-        .map(|k| {
-            let (i, j) = (k / n, k % n);
+    // column-major fill: MATLAB's rand(n) draws down each column first. The phases go straight
+    // into the spectrum, and each buffer is dropped once used: at 8192² samples the peak memory
+    // is the spectrum and the heights (1.6 GB), not also the phases and a rescaled copy.
+    let mut spectrum = vec![Complex::default(); n * n];
+    for j in 0..n {
+        if crate::interrupt::interrupted() {
+            return Err(GridError::Interrupted);
+        }
+        for i in 0..n {
             let (x, y) = (j as f64 - half, i as f64 - half);
             let amplitude = (x.hypot(y) + 0.1).powf(-1.7);
-            Complex::from_polar(amplitude, 2.0 * std::f64::consts::PI * phase[k])
-        })
-        .collect();
-    inverse_fft_2d(&mut spectrum, n);
-    let magnitude: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
-    let heights = rescale(&magnitude, peak_to_peak);
+            spectrum[i * n + j] =
+                Complex::from_polar(amplitude, 2.0 * std::f64::consts::PI * rng.next_f64());
+        }
+    }
+    inverse_fft_2d(&mut spectrum, n)?;
+    let mut heights: Vec<f64> = spectrum.iter().map(|c| c.norm()).collect();
+    drop(spectrum);
+    rescale_in_place(&mut heights, peak_to_peak);
     HeightGrid::new(
         n,
         n,
@@ -106,14 +107,24 @@ pub fn tiled(tile: HeightGrid, tiles: [usize; 2]) -> Result<HeightGrid, GridErro
     )
 }
 
-/// In-place 2-D inverse DFT of a row-major n×n array (unnormalised; the caller rescales).
-fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) {
+/// In-place 2-D inverse DFT of a row-major n×n array (unnormalised; the caller rescales). Ctrl-C
+/// ends it between rows and columns (at 8192² it takes some seconds).
+fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) -> Result<(), GridError> {
+    let interrupted = || {
+        if crate::interrupt::interrupted() {
+            Err(GridError::Interrupted)
+        } else {
+            Ok(())
+        }
+    };
     let fft = FftPlanner::new().plan_fft_inverse(n);
     for row in data.chunks_exact_mut(n) {
+        interrupted()?;
         fft.process(row);
     }
     let mut column = vec![Complex::default(); n];
     for j in 0..n {
+        interrupted()?;
         for i in 0..n {
             column[i] = data[i * n + j];
         }
@@ -121,6 +132,24 @@ fn inverse_fft_2d(data: &mut [Complex<f64>], n: usize) {
         for i in 0..n {
             data[i * n + j] = column[i];
         }
+    }
+    Ok(())
+}
+
+/// [`rescale`] without a copy.
+fn rescale_in_place(values: &mut [f64], peak_to_peak: f64) {
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let range = hi - lo;
+    for v in values {
+        *v = if range > 0.0 {
+            (*v - lo) / range * peak_to_peak
+        } else {
+            0.0
+        };
     }
 }
 

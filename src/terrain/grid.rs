@@ -70,6 +70,8 @@ pub struct HeightGrid {
 /// Why a grid could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum GridError {
+    #[error("{}", crate::interrupt::MESSAGE)]
+    Interrupted,
     #[error("a height grid needs at least 2×2 samples, got {rows}×{cols}")]
     TooSmall { rows: usize, cols: usize },
     #[error("expected {expected} heights for {rows}×{cols} samples, got {got}")]
@@ -172,10 +174,14 @@ impl HeightGrid {
         }
         let x_at = |j: usize| x_range[0] + (x_range[1] - x_range[0]) * j as f64 / (cols - 1) as f64;
         let y_at = |i: usize| y_range[0] + (y_range[1] - y_range[0]) * i as f64 / (rows - 1) as f64;
-        let heights = (0..rows)
-            .flat_map(|i| (0..cols).map(move |j| (i, j)))
-            .map(|(i, j)| f(x_at(j), y_at(i)))
-            .collect();
+        let mut heights = Vec::with_capacity(rows * cols);
+        for i in 0..rows {
+            // a large grid takes a while: Ctrl-C ends it between rows
+            if crate::interrupt::interrupted() {
+                return Err(GridError::Interrupted);
+            }
+            heights.extend((0..cols).map(|j| f(x_at(j), y_at(i))));
+        }
         Self::new(rows, cols, x_range, y_range, heights)
     }
 

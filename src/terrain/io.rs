@@ -66,8 +66,11 @@ pub fn read_csv(path: &Path) -> Result<(usize, usize, Vec<f64>), HeightFileError
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .flexible(true)
-        .from_path(path)
-        .map_err(|e| csv_error(e, 0))?;
+        .from_reader(crate::limits::Bounded::new(
+            std::fs::File::open(path)?,
+            crate::limits::DATA_FILE_BYTES,
+            crate::limits::CSV_LINE_BYTES,
+        ));
     let mut heights = Vec::new();
     let mut cols = 0;
     let mut rows = 0;
@@ -273,8 +276,9 @@ pub fn write_stl(grid: &HeightGrid, path: &Path) -> Result<(), HeightFileError> 
 /// point takes the highest triangle above it. The mesh must cover its xy bounding box (a height
 /// field: every grid point under some triangle).
 pub fn read_stl(path: &Path, cell: f64) -> Result<HeightGrid, HeightFileError> {
-    let mut file = std::fs::File::open(path)?;
-    let mesh = stl_io::read_stl(&mut file).map_err(|e| HeightFileError::Stl(e.to_string()))?;
+    let data = crate::limits::read(path, crate::limits::DATA_FILE_BYTES)?;
+    let mesh = stl_io::read_stl(&mut std::io::Cursor::new(data))
+        .map_err(|e| HeightFileError::Stl(e.to_string()))?;
     if mesh.faces.is_empty() {
         return Err(HeightFileError::EmptyMesh);
     }

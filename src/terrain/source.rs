@@ -125,6 +125,21 @@ fn positive(field: &'static str, v: f64) -> Result<(), FieldError> {
         Err((field, format!("expected a finite number > 0, got {v}")))
     }
 }
+/// The cell (a positive length) no larger than the size: the grid holds at least 2×2 samples
+/// with the cell given (rather than silently 2×2 of a larger one).
+fn cell_fits(size: [f64; 2], cell: f64) -> Result<(), FieldError> {
+    positive("cell", cell)?;
+    let least = size[0].min(size[1]);
+    if cell > least {
+        return Err((
+            "cell",
+            format!(
+                "expected at most the terrain's smaller size ({least} m), so the grid has at least 2×2 samples, got {cell}"
+            ),
+        ));
+    }
+    Ok(())
+}
 fn finite(field: &'static str, v: f64) -> Result<(), FieldError> {
     if v.is_finite() {
         Ok(())
@@ -426,7 +441,7 @@ impl HeightSource for Steps {
         finite("first_step", self.first_step)?;
         size2("size", self.size)?;
         finite2("center", self.center)?;
-        positive("cell", self.cell)
+        cell_fits(self.size, self.cell)
     }
 
     fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
@@ -739,7 +754,24 @@ impl HeightSource for Rough {
         }
         size2("size", self.size)?;
         finite2("center", self.center)?;
-        positive("cell", self.cell)
+        cell_fits(self.size, self.cell)?;
+        // each sample sums every wave: bound the work before it starts
+        let samples = self.size.map(|s| (s / self.cell).round() + 1.0);
+        let work = self.waves as f64 * samples[0] * samples[1];
+        if work > crate::limits::TERRAIN_WORK {
+            return Err((
+                "waves",
+                format!(
+                    "{} waves on {}×{} samples are {} wave-samples to sum, more than the {} hexsim generates (about a minute); use fewer waves or a larger cell",
+                    self.waves,
+                    samples[1],
+                    samples[0],
+                    crate::limits::num(work),
+                    crate::limits::num(crate::limits::TERRAIN_WORK)
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {
@@ -784,7 +816,7 @@ impl HeightSource for Sine {
         positive("wavelength", self.wavelength)?;
         size2("size", self.size)?;
         finite2("center", self.center)?;
-        positive("cell", self.cell)
+        cell_fits(self.size, self.cell)
     }
 
     fn build(&self, _: &Path) -> Result<HeightGrid, BuildError> {

@@ -58,10 +58,12 @@ pub enum TerrainError {
 impl TerrainSpec {
     /// Reads and parses a terrain file (without building the grid).
     pub fn from_file(path: &Path) -> Result<Self, TerrainError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| TerrainError::Read {
-            file: path.to_path_buf(),
-            cause,
-        })?;
+        let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(
+            |cause| TerrainError::Read {
+                file: path.to_path_buf(),
+                cause,
+            },
+        )?;
         Self::from_toml(&text, path)
     }
 
@@ -109,10 +111,16 @@ impl TerrainSpec {
                 cause,
             },
         })?;
-        check_near_origin(&grid).map_err(|expected| TerrainError::Field {
-            file: origin.to_path_buf(),
-            field: "center",
-            expected,
+        check_near_origin(&grid).map_err(|(field, expected)| match field {
+            Some(field) => TerrainError::Field {
+                file: origin.to_path_buf(),
+                field,
+                expected,
+            },
+            None => TerrainError::Parse {
+                file: origin.to_path_buf(),
+                message: expected,
+            },
         })?;
         Ok(grid.with_interpolation(self.interpolation))
     }
@@ -124,20 +132,48 @@ impl TerrainSpec {
 pub const FARTHEST: f64 = 100.0;
 
 /// Refuses a grid reaching farther than [`FARTHEST`] from the origin, saying why and what to do.
-fn check_near_origin(grid: &crate::terrain::HeightGrid) -> Result<(), String> {
+/// The field to blame is `center` when the grid's extent is far, none (the heights themselves:
+/// a height file's values, a generator's height) when only its heights are.
+fn check_near_origin(
+    grid: &crate::terrain::HeightGrid,
+) -> Result<(), (Option<&'static str>, String)> {
+    use crate::limits::num;
     let [x0, x1] = grid.x_range();
     let [y0, y1] = grid.y_range();
     let (low, high) = grid.height_bounds();
-    let reach = [x0, x1, y0, y1, low, high]
-        .iter()
-        .fold(0.0f64, |m, v| m.max(v.abs()));
-    if reach > FARTHEST {
-        return Err(format!(
-            "the terrain reaches {reach:.0} m from the origin (x {x0:.1}..{x1:.1}, y {y0:.1}..{y1:.1}, heights {low:.1}..{high:.1} m); the physics computes positions in f32, which at {reach:.0} m resolves {:.1e} m against a foot's sub-millimetre sink: place the terrain within {FARTHEST} m of the origin (its `center`, and heights relative to a datum near it)",
-            reach * f64::powi(2.0, -23)
-        ));
+    let farthest = |values: &[f64]| values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (extent, heights) = (farthest(&[x0, x1, y0, y1]), farthest(&[low, high]));
+    let reach = extent.max(heights);
+    if reach <= FARTHEST {
+        return Ok(());
     }
-    Ok(())
+    let why = format!(
+        "the physics computes positions in f32, which at {} m resolves {:.1e} m against a foot's sub-millimetre sink",
+        num(reach.round()),
+        reach * f64::powi(2.0, -23)
+    );
+    Err(if extent > FARTHEST {
+        (
+            Some("center"),
+            format!(
+                "the terrain reaches {} m from the origin (x {}..{}, y {}..{} m); {why}: place the terrain within {FARTHEST} m of the origin (its `center`)",
+                num(extent.round()),
+                num(x0),
+                num(x1),
+                num(y0),
+                num(y1)
+            ),
+        )
+    } else {
+        (
+            None,
+            format!(
+                "the terrain's heights reach {}..{} m; {why}: give heights within {FARTHEST} m of the origin (relative to a datum near the terrain: a height file's values, its `height_offset`, a generator's height)",
+                num(low),
+                num(high)
+            ),
+        )
+    })
 }
 
 #[cfg(test)]
