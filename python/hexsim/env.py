@@ -113,7 +113,7 @@ class HexapodEnv(gym.Env):
         state = self.sim.state()
         self.standing = state["joint_targets"].copy()
         self._x = float(state["body_position"][0])
-        self._energy = self.sim.metrics()["servo_energy"]
+        self._energy = self.sim.servo_energy
         return self._observe(state), {"terrain_seed": self._terrain_seed}
 
     def _act(self, action) -> None:
@@ -128,7 +128,7 @@ class HexapodEnv(gym.Env):
 
     def _outcome(self):
         diverged = self.sim.failure
-        energy = self.sim.metrics()["servo_energy"]
+        energy = self.sim.servo_energy
         work, self._energy = energy - self._energy, energy
         state = self.sim.state()
         x = float(state["body_position"][0])
