@@ -820,3 +820,28 @@ fn a_walk_on_skating_feet_is_flagged_and_fails_its_expectation() {
     assert_eq!(out.status.code(), Some(1), "{stdout}");
     assert!(stdout.contains("slip_share_max: 0.10"), "{stdout}");
 }
+
+/// Built-in gaits, terrains and hex18 by name from any folder (`--gait wave --terrain flat`);
+/// a name that is none of them says which are; a file of that name in the folder wins.
+#[test]
+fn built_in_files_by_name_from_any_folder() {
+    let dir = scratch("named");
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_hexsim"))
+            .current_dir(&dir)
+            .args(["run", "--duration", "0.3", "--no-record"])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--robot", "hex18", "--gait", "wave", "--terrain", "flat"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = run(&["--gait", "wavy"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("built-in gaits, by name: tripod, ripple, wave"), "{stderr}");
+    // a file called `flat` here is the user's, and this one is not a terrain
+    std::fs::write(dir.join("flat"), "not = \"a terrain\"\n").unwrap();
+    let out = run(&["--terrain", "flat"]);
+    assert_eq!(out.status.code(), Some(2));
+}

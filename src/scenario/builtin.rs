@@ -42,3 +42,62 @@ pub const NATURAL_BALL: Builtin = Builtin {
     path: "terrains/natural_ball.toml",
     text: include_str!("../../terrains/natural_ball.toml"),
 };
+
+macro_rules! builtin {
+    ($dir:literal, $name:literal) => {
+        (
+            $name,
+            Builtin {
+                path: concat!($dir, "/", $name, ".toml"),
+                text: include_str!(concat!("../../", $dir, "/", $name, ".toml")),
+            },
+        )
+    };
+}
+
+/// The gaits of `gaits/`, by name: `--gait wave` works from any folder.
+pub const GAITS: &[(&str, Builtin)] = &[
+    builtin!("gaits", "tripod"),
+    builtin!("gaits", "ripple"),
+    builtin!("gaits", "wave"),
+];
+
+/// The terrains of `terrains/` that need no other file, by name: `--terrain flat` works from any
+/// folder (`natural_matlab` reads its CSV beside it, so it is not among them).
+pub const TERRAINS: &[(&str, Builtin)] = &[
+    builtin!("terrains", "bell"),
+    builtin!("terrains", "discrete_obstacles"),
+    builtin!("terrains", "flat"),
+    builtin!("terrains", "gaps"),
+    builtin!("terrains", "natural"),
+    builtin!("terrains", "natural_ball"),
+    builtin!("terrains", "natural_long"),
+    builtin!("terrains", "pyramid_stairs"),
+    builtin!("terrains", "rough"),
+    builtin!("terrains", "sine"),
+    builtin!("terrains", "slope15"),
+    builtin!("terrains", "stairs"),
+    builtin!("terrains", "stepping_stones"),
+    builtin!("terrains", "steps"),
+    builtin!("terrains", "steps_down"),
+];
+
+/// The built-in file a scenario's `gait = "NAME"` or `terrain = "NAME"` names, when `file` is a
+/// bare name (no folder, no extension) and `path` (where it resolves) is not a file: a file the
+/// user has of that name always wins.
+pub fn named(
+    list: &[(&str, Builtin)],
+    file: &std::path::Path,
+    path: &std::path::Path,
+) -> Option<Builtin> {
+    if path.exists() || file.components().count() != 1 || file.extension().is_some() {
+        return None;
+    }
+    let name = file.to_str()?;
+    list.iter().find(|(n, _)| *n == name).map(|(_, b)| *b)
+}
+
+/// The names in `list`, for a message.
+pub fn names(list: &[(&str, Builtin)]) -> String {
+    list.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+}

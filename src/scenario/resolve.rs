@@ -225,10 +225,20 @@ fn resolve_terrain(
         },
         Some(FileOr::File(file)) => {
             let path = origin.parent().unwrap_or(Path::new("")).join(file);
-            TerrainSource {
-                spec: TerrainSpec::from_file(&path).map_err(|e| e.to_string())?,
-                name: file.display().to_string(),
-                origin: path,
+            match builtin::named(builtin::TERRAINS, file, &path) {
+                Some(b) => TerrainSource {
+                    spec: TerrainSpec::from_toml(b.text, Path::new(b.path))
+                        .map_err(|e| e.to_string())?,
+                    origin: PathBuf::from(b.path),
+                    name: format!("{} (built in)", b.path),
+                },
+                None => TerrainSource {
+                    spec: TerrainSpec::from_file(&path).map_err(|e| {
+                        not_found_hint(e.to_string(), &path, "terrains", builtin::TERRAINS)
+                    })?,
+                    name: file.display().to_string(),
+                    origin: path,
+                },
             }
         }
         Some(FileOr::Inline(inline)) => TerrainSource {
@@ -880,7 +890,11 @@ fn resolve_robot(
     base: &Path,
     hasher: &mut Sha256,
 ) -> Result<RobotModel, String> {
-    match &spec.robot {
+    // `robot = "hex18"` (or `--robot hex18`) from a folder without such a file: the built-in one
+    let file = spec.robot.as_ref().filter(|file| {
+        builtin::named(&[("hex18", builtin::HEX18)], file, &base.join(file)).is_none()
+    });
+    match file {
         None => {
             hasher.update(builtin::HEX18.text);
             hasher.update(builtin::HEX18_FILE.text);
@@ -902,6 +916,24 @@ fn resolve_robot(
     .map_err(|e| format!("robot: {e}"))
 }
 
+/// `message` for a file that could not be read, with the built-in names of its kind when the
+/// file does not exist (a name mistyped, or a repository's file named from elsewhere).
+fn not_found_hint(
+    message: String,
+    path: &Path,
+    kind: &str,
+    list: &[(&str, builtin::Builtin)],
+) -> String {
+    if path.exists() {
+        message
+    } else {
+        format!(
+            "{message} (built-in {kind}, by name: {})",
+            builtin::names(list)
+        )
+    }
+}
+
 /// The gait (the built-in tripod, a file, or an inline table) and its name for messages.
 fn resolve_gait(spec: &ScenarioSpec, base: &Path) -> Result<(GaitSpec, String), String> {
     Ok(match &spec.gait {
@@ -910,10 +942,23 @@ fn resolve_gait(spec: &ScenarioSpec, base: &Path) -> Result<(GaitSpec, String), 
                 .map_err(|e| e.to_string())?,
             format!("gait {} (built in)", builtin::TRIPOD.path),
         ),
-        Some(FileOr::File(file)) => (
-            GaitSpec::from_file(&base.join(file)).map_err(|e| format!("gait: {e}"))?,
-            format!("gait {}", base.join(file).display()),
-        ),
+        Some(FileOr::File(file)) => match builtin::named(builtin::GAITS, file, &base.join(file)) {
+            Some(b) => (
+                GaitSpec::from_toml(b.text, Path::new(b.path)).map_err(|e| e.to_string())?,
+                format!("gait {} (built in)", b.path),
+            ),
+            None => (
+                GaitSpec::from_file(&base.join(file)).map_err(|e| {
+                    not_found_hint(
+                        format!("gait: {e}"),
+                        &base.join(file),
+                        "gaits",
+                        builtin::GAITS,
+                    )
+                })?,
+                format!("gait {}", base.join(file).display()),
+            ),
+        },
         Some(FileOr::Inline(gait)) => {
             gait.validate().map_err(|e| format!("gait: {e}"))?;
             (gait.clone(), "gait (inline)".to_string())
