@@ -835,11 +835,18 @@ fn built_in_files_by_name_from_any_folder() {
             .unwrap()
     };
     let out = run(&["--robot", "hex18", "--gait", "wave", "--terrain", "flat"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = run(&["--gait", "wavy"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("built-in gaits, by name: tripod, ripple, wave"), "{stderr}");
+    assert!(
+        stderr.contains("built-in gaits, by name: tripod, ripple, wave"),
+        "{stderr}"
+    );
     // a file called `flat` here is the user's, and this one is not a terrain
     std::fs::write(dir.join("flat"), "not = \"a terrain\"\n").unwrap();
     let out = run(&["--terrain", "flat"]);
