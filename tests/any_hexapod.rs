@@ -4,7 +4,7 @@
 //! to, and each walks 10 s on flat ground with the built-in tripod and no robot file.
 
 mod common;
-use common::{hexsim, scratch};
+use common::{hexsim, metrics_of, scratch};
 use std::path::Path;
 
 /// `hexsim robot`'s report on `robot`.
@@ -22,21 +22,13 @@ fn report(robot: &str) -> String {
 /// Walks `robot` 10 s on flat ground and returns its metrics.
 fn walk(robot: &Path, dir: &Path, name: &str) -> serde_json::Value {
     let json = dir.join(format!("{name}.json"));
-    let out = hexsim()
-        .args(["run", "--robot"])
+    let mut cmd = hexsim();
+    cmd.args(["run", "--robot"])
         .arg(robot)
         .args(["--terrain", "terrains/flat.toml", "--duration", "10"])
         .args(["--no-record", "--metrics"])
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{name}: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+        .arg(&json);
+    metrics_of(cmd, &json, name)
 }
 
 /// The forward distance and the tripod's nominal distance over 10 s (duty 0.5, period 1 s).

@@ -2,33 +2,25 @@
 //! their users would bring them, and walked with the built-in tripod where it fits them.
 
 mod common;
-use common::{hexsim, scratch};
+use common::{hexsim, metrics_of, scratch};
 
 /// Walks `robot` for 10 s with the built-in tripod on `terrain` and returns its metrics.
 fn walk(robot: &str, terrain: &str, name: &str) -> serde_json::Value {
     let dir = scratch("third_party");
     let json = dir.join(format!("{name}.json"));
-    let out = hexsim()
-        .args([
-            "run",
-            "--robot",
-            robot,
-            "--terrain",
-            terrain,
-            "--duration",
-            "10",
-        ])
-        .args(["--no-record", "--metrics"])
-        .arg(&json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{robot} on {terrain}: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+    let mut cmd = hexsim();
+    cmd.args([
+        "run",
+        "--robot",
+        robot,
+        "--terrain",
+        terrain,
+        "--duration",
+        "10",
+    ])
+    .args(["--no-record", "--metrics"])
+    .arg(&json);
+    metrics_of(cmd, &json, &format!("{robot} on {terrain}"))
 }
 
 /// Each foot's slip (m) in a walk's metrics.

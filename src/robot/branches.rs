@@ -12,7 +12,7 @@
 //! they cover), the others held at their zero. A leg of fewer than three cannot place its foot
 //! in space, and is refused saying so.
 
-use super::legs::{choose_forward, split};
+use super::legs::{chain_to, choose_forward, is_leaf, split};
 use super::model::{HeldJoint, Joint, Link};
 use glam::{DAffine3, DVec2, DVec3};
 
@@ -37,22 +37,11 @@ pub(super) fn held_joints(
     unfound: &[(String, String)],
     forward: Option<f64>,
 ) -> Result<Vec<HeldJoint>, String> {
-    let chain_of = |k: usize| {
-        let mut chain = Vec::new();
-        let mut at = k;
-        while let Some(j) = links[at].parent_joint {
-            chain.push(j);
-            at = joints[j].parent;
-        }
-        chain.reverse();
-        chain
-    };
-    let is_leaf = |k: usize| k != 0 && !joints.iter().any(|j| j.parent == k);
     let mut candidates: Vec<Candidate> = (0..links.len())
-        .filter(|&k| is_leaf(k))
+        .filter(|&k| is_leaf(joints, k))
         .filter_map(|k| {
             let foot = links[k].foot?;
-            let chain = chain_of(k);
+            let chain = chain_to(links, joints, k);
             let lowest = lowest_reach(joints, &chain, foot.center);
             Some(Candidate {
                 leaf: k,

@@ -255,15 +255,31 @@ pub(super) fn footless_leg(link: &str, why: Option<&String>) -> String {
 /// each must hang from it by exactly three joints of its own (`branches` has held any others
 /// still). A foot on the body or on a link that is not a leaf is contact geometry, not a leg's
 /// end. `unfound`: (link, why) for each leaf whose foot could not be found from its geometry.
+/// Whether link `k` ends a chain: not the root, and no joint hangs from it.
+pub(super) fn is_leaf(joints: &[Joint], k: usize) -> bool {
+    k != 0 && !joints.iter().any(|j| j.parent == k)
+}
+
+/// The joints from the body out to link `k`.
+pub(super) fn chain_to(links: &[Link], joints: &[Joint], k: usize) -> Vec<usize> {
+    let mut chain = Vec::new();
+    let mut at = k;
+    while let Some(j) = links[at].parent_joint {
+        chain.push(j);
+        at = joints[j].parent;
+    }
+    chain.reverse();
+    chain
+}
+
 fn chains(
     links: &[Link],
     joints: &[Joint],
     unfound: &[(String, String)],
 ) -> Result<Vec<Chain>, String> {
-    let is_leaf = |k: usize| k != 0 && !joints.iter().any(|j| j.parent == k);
     let mut found = Vec::new();
     for (k, link) in links.iter().enumerate() {
-        if !is_leaf(k) {
+        if !is_leaf(joints, k) {
             continue;
         }
         let Some(foot) = link.foot else {
@@ -273,13 +289,7 @@ fn chains(
                 .map(|(_, w)| w);
             return Err(footless_leg(&link.name, why));
         };
-        let mut chain = Vec::new();
-        let mut at = k;
-        while let Some(j) = links[at].parent_joint {
-            chain.push(j);
-            at = joints[j].parent;
-        }
-        chain.reverse();
+        let chain = chain_to(links, joints, k);
         let [a, b, c] = chain[..] else {
             return Err(format!(
                 "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",

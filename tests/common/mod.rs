@@ -17,6 +17,19 @@ pub fn hexsim() -> std::process::Command {
     cmd
 }
 
+/// Runs `cmd`, which writes its metrics to `json`: fails the test naming `what` with the
+/// command's output if it did not succeed, and returns the metrics.
+pub fn metrics_of(mut cmd: std::process::Command, json: &Path, what: &str) -> serde_json::Value {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{what}: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
 /// A fresh folder for one test's files, removed when the test ends, passing or failing.
 pub fn scratch(name: &str) -> Scratch {
     Scratch::new(&format!("hexsim-test-{name}-"))
