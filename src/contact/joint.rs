@@ -10,9 +10,14 @@
 //!
 //!   F_S = F_prev,S − T_SS⁻¹·(u_S + T_SK·(F_K − F_prev,K)),
 //!
-//! which brings every sticking contact to rest at the end of the step under last step's load. A
-//! contact whose stopping force leaves its friction cone slides, joins K, and the rest are solved
-//! again (at most once per contact). A lone contact gets exactly [`ContactModel::respond`]'s force.
+//! which brings every sticking contact to rest at the end of the step under last step's load. Of
+//! the contacts whose stopping forces leave their friction cones, the one furthest outside (the
+//! ratio of its stopping force to the friction it can give) slides and joins K, and the rest are
+//! solved again — one at a time, as an active-set method releases constraints: two faces of one
+//! foot in a corner are nearly the same column of T_SS, their stopping forces a large internal
+//! pair that cancels, and released together each kept its half (a foot pushed along its own slip
+//! by 90 N, `ladder/gaps.toml` at 4 cm). A lone contact gets exactly [`ContactModel::respond`]'s
+//! force.
 
 use super::{ContactForce, ContactModel, ContactState, PendingContact, SphereGeometry};
 use glam::{DMat3, DVec2, DVec3};
@@ -249,19 +254,24 @@ impl JointSolver {
                 }
                 break;
             }
-            let mut changed = false;
+            // the contact whose stopping force lies furthest outside its friction cone slides;
+            // the others are solved again without it
+            let mut worst: Option<(usize, f64, DVec2)> = None;
             for (a, &s) in sticking.iter().enumerate() {
                 let pc = p(touching[s]);
                 let stop = pc.previous_friction - solution[a];
                 stops[s] = stop;
                 let outcome = pc.friction(&model.friction, stop);
                 if !outcome.sticking {
-                    fixed[s] = Some(outcome.force);
-                    changed = true;
+                    let excess = stop.length() / outcome.force.length().max(f64::MIN_POSITIVE);
+                    if worst.is_none_or(|(_, e, _)| excess > e) {
+                        worst = Some((s, excess, outcome.force));
+                    }
                 }
             }
-            if !changed {
-                break;
+            match worst {
+                Some((s, _, force)) => fixed[s] = Some(force),
+                None => break,
             }
         }
         out[..n].fill(None);
@@ -593,5 +603,131 @@ mod tests {
                 [forces[0].friction, forces[1].friction]
             );
         }
+    }
+
+    /// A foot at the bottom of a 4 cm trench (`ladder/gaps.toml` at 0.04, perceptive), sliding
+    /// along it at 1.8 m/s: pressed 3.5 mm into the floor and grazing the wall, two faces of one
+    /// sphere a centimetre apart whose tangents share the sliding direction (W₂₂, W₂₃, W₃₃
+    /// along it: 31.7, 29.6, 27.6 /kg — nearly equal columns), with two other feet standing.
+    /// Solved together the two faces pull against each other with large internal forces; both
+    /// leaving their cones at once, each kept its share, and the floor's pushed the foot along
+    /// its slip (90 N along 1.8 m/s; the next steps 103, 125 N, the foot 6 m/s and 6.5 mm deep).
+    /// Released one at a time, the worst first, the friction on the foot opposes its slip.
+    /// The state as recorded in that run, step 11703.
+    #[test]
+    fn the_faces_of_one_sphere_never_push_it_along_its_slip() {
+        // W_ij, column by column (t₁, t₂, n of contact j, in contact i's axes), as recorded
+        #[rustfmt::skip]
+        const W: [[f64; 9]; 16] = [
+            [13.879, 4.19563, 1.26304, 4.19563, 49.9444, 10.5644, 1.26304, 10.5644, 13.0669],
+            [-0.188831, -0.212682, 0.0852528, 0.265814, -0.195101, 0.0562346, 0.0129103, -0.00849655, 0.00243171],
+            [0.110407, 0.219019, -0.0858394, -0.426702, 0.00913882, -0.00359338, -0.51471, 0.239997, -0.10614],
+            [-0.485217, 0.263166, -0.114014, -0.443982, -0.0107504, 0.00149234, -0.0910047, -0.203776, 0.0806594],
+            [-0.188831, 0.265814, 0.0129105, -0.212682, -0.195101, -0.00849652, 0.0852527, 0.0562346, 0.00243172],
+            [32.8866, -12.2798, 13.8437, -12.2798, 27.3749, -10.7969, 13.8437, -10.7969, 19.0894],
+            [-0.375034, -0.0660098, 0.00818244, -0.00319344, -0.37182, -0.0244451, -0.425319, -0.55873, -0.0390174],
+            [-0.467772, -0.560074, -0.0409794, 0.0483066, -0.338299, -0.0115053, 0.347105, 0.0651254, -0.00947344],
+            [0.110407, -0.426702, -0.51471, 0.219019, 0.0091389, 0.239997, -0.0858392, -0.00359342, -0.10614],
+            [-0.375034, -0.00319363, -0.425319, -0.06601, -0.37182, -0.55873, 0.00818251, -0.024445, -0.0390174],
+            [28.7937, 12.7703, -10.4734, 12.7703, 31.6681, -11.9367, -10.4734, -11.9367, 8.22923],
+            [-8.9114, -10.2762, 7.35691, 12.6378, 29.5533, -11.2724, -27.7661, -11.6779, 9.89948],
+            [-0.485217, -0.443982, -0.0910046, 0.263166, -0.0107504, -0.203776, -0.114014, 0.0014923, 0.0806591],
+            [-0.467772, 0.0483066, 0.347105, -0.560074, -0.338299, 0.0651255, -0.0409795, -0.0115052, -0.00947333],
+            [-8.9114, 12.6378, -27.7661, -10.2762, 29.5533, -11.6779, 7.35691, -11.2724, 9.89948],
+            [6.64136, -9.7251, 8.44065, -9.7251, 27.6358, -11.6198, 8.44064, -11.6198, 26.8063],
+        ];
+        let mobility = |i: usize, j: usize| DMat3::from_cols_array(&W[4 * i + j]);
+        let floor = GroundFrame::from_normal(DVec3::Z);
+        let wall = GroundFrame::from_normal(-DVec3::X);
+        let contact = |penetration, point, frame, velocity, sharing| JointContact {
+            geometry: SphereGeometry {
+                penetration,
+                point,
+                frame,
+            },
+            velocity,
+            sharing,
+        };
+        let contacts = [
+            contact(
+                7.4265e-4,
+                DVec3::new(0.75626, 0.233, 0.0),
+                floor,
+                DVec3::new(-0.075419, 0.0111528, -0.066954),
+                1,
+            ),
+            contact(
+                3.9467e-4,
+                DVec3::new(0.99163, -0.1697, 0.0),
+                floor,
+                DVec3::new(0.0652881, 0.00116988, -0.0152451),
+                1,
+            ),
+            contact(
+                3.54548e-3,
+                DVec3::new(0.525189, -0.138559, -0.1),
+                floor,
+                DVec3::new(-0.0388154, 1.78579, -0.758251),
+                2,
+            ),
+            contact(
+                1.89025e-4,
+                DVec3::new(0.535, -0.138559, -0.0935455),
+                wall,
+                DVec3::new(-0.0804004, 1.65782, -0.695041),
+                2,
+            ),
+        ];
+        let state = |friction: DVec3, slip: DVec3, drift: DVec3, normal_force| ContactState {
+            previous: Some((friction, slip)),
+            drift,
+            normal_force,
+            rolling: None,
+        };
+        let mut states = [
+            state(
+                DVec3::new(4.79432, -7.54403, 0.0),
+                DVec3::new(-0.0704037, 0.0174882, 0.0),
+                DVec3::new(1.05383e-4, 1.48907e-5, 0.0),
+                17.3148,
+            ),
+            state(
+                DVec3::new(3.76128, 4.9577, 0.0),
+                DVec3::new(0.0702582, 0.0287343, 0.0),
+                DVec3::ZERO,
+                7.77877,
+            ),
+            state(
+                DVec3::new(10.536, 56.8375, 0.0),
+                DVec3::new(-0.123813, 1.11438, 0.0),
+                DVec3::ZERO,
+                95.4976,
+            ),
+            state(
+                DVec3::new(0.0, -1.85724, 1.25981),
+                DVec3::new(0.0, 1.02933, -0.698224),
+                DVec3::ZERO,
+                2.80526,
+            ),
+        ];
+        let mut out = [None; 4];
+        respond_jointly(
+            &ContactModel::default(),
+            &contacts,
+            mobility,
+            DT,
+            &mut states,
+            &mut out,
+        );
+        let [floor_face, wall_face] = [out[2].unwrap(), out[3].unwrap()];
+        let slip = floor_face.slip;
+        assert!(slip.length() > 1.7, "{slip}");
+        let on_foot = floor_face.friction + wall_face.friction;
+        assert!(
+            on_foot.dot(slip) < 0.0 && floor_face.friction.dot(slip) < 0.0,
+            "friction {} on the floor, {} on the wall, along the slip {slip}",
+            floor_face.friction,
+            wall_face.friction
+        );
     }
 }
