@@ -8,6 +8,7 @@ mod fold;
 mod inertials;
 mod joint_limits;
 mod parse;
+mod places;
 mod quirks;
 mod robot_file;
 mod visuals;
@@ -30,12 +31,21 @@ use robot_file::RobotFileSettings;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// A URDF that hexsim cannot use.
+/// A URDF that hexsim cannot use: `FILE: message`, or `FILE:LINE: message` where the line is known.
 #[derive(Debug, thiserror::Error)]
-#[error("{file}: {message}")]
 pub struct RobotError {
     pub file: PathBuf,
+    pub line: Option<u32>,
     pub message: String,
+}
+
+impl std::fmt::Display for RobotError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.line {
+            Some(line) => write!(f, "{}:{line}: {}", self.file.display(), self.message),
+            None => write!(f, "{}: {}", self.file.display(), self.message),
+        }
+    }
 }
 
 pub(super) fn pose(p: &urdf_rs::Pose) -> DAffine3 {
@@ -49,11 +59,13 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
         crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(|e| {
             RobotError {
                 file: path.to_path_buf(),
+                line: None,
                 message: format!("cannot read the URDF: {e}"),
             }
         })?;
     parse::refuse_xacro(&text, path).map_err(|message| RobotError {
         file: path.to_path_buf(),
+        line: None,
         message,
     })?;
     let robot_file = path.with_extension("toml");
@@ -62,6 +74,7 @@ pub fn load(path: &Path) -> Result<RobotModel, RobotError> {
             crate::limits::read_to_string(&robot_file, crate::limits::TEXT_FILE_BYTES).map_err(
                 |e| RobotError {
                     file: robot_file.clone(),
+                    line: None,
                     message: format!("cannot read the robot file: {e}"),
                 },
             )?,
@@ -81,20 +94,27 @@ pub fn from_str_with(
 ) -> Result<RobotModel, RobotError> {
     let fail = |message: String| RobotError {
         file: origin.to_path_buf(),
+        line: None,
         message,
     };
-    let mut robot = parse::read(text).map_err(fail)?;
+    let mut robot = parse::read(text).map_err(|(line, message)| RobotError {
+        file: origin.to_path_buf(),
+        line,
+        message,
+    })?;
     let quirk_warnings = quirks::apply(&mut robot);
     let settings = match robot_file {
         None => RobotFileSettings::default(),
         Some(file) => robot_file::read(file, &robot, origin).map_err(|message| RobotError {
             file: origin.with_extension("toml"),
+            line: None,
             message,
         })?,
     };
     let mut model =
         build(&robot, origin.parent().unwrap_or(Path::new(".")), settings).map_err(fail)?;
     model.warnings.extend(quirk_warnings);
+    model.warnings.extend(places::unknown_elements(text));
     Ok(model)
 }
 

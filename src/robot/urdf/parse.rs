@@ -5,15 +5,25 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Parses URDF text with urdf-rs, its nesting checked first (urdf-rs's parser is recursive: a
-/// deep nesting would overflow the stack).
-pub(super) fn read(text: &str) -> Result<urdf_rs::Robot, String> {
+/// deep nesting would overflow the stack). An error comes with its line where one is found
+/// (`places`).
+pub(super) fn read(text: &str) -> Result<urdf_rs::Robot, (Option<u32>, String)> {
     crate::limits::xml_depth(text, crate::limits::XML_DEPTH).map_err(|(depth, line)| {
-        format!(
-            "not a valid URDF: line {line}: elements nested {depth} deep, deeper than the {} hexsim reads (a URDF's are 4 or 5)",
-            crate::limits::XML_DEPTH
+        (
+            None,
+            format!(
+                "not a valid URDF: line {line}: elements nested {depth} deep, deeper than the {} hexsim reads (a URDF's are 4 or 5)",
+                crate::limits::XML_DEPTH
+            ),
         )
     })?;
-    urdf_rs::read_from_string(text).map_err(|e| format!("not a valid URDF: {e}"))
+    urdf_rs::read_from_string(text).map_err(|e| match super::places::syntax_error(text) {
+        Some(place) => (
+            Some(place.line),
+            format!("not a valid URDF: {}", place.message),
+        ),
+        None => (None, format!("not a valid URDF: {e}")),
+    })
 }
 
 /// A xacro file is a URDF template, which only xacro (ROS) expands. xacro's own output keeps the
