@@ -78,8 +78,8 @@ const JOINT_CHILDREN: [&str; 9] = [
     "safety_controller",
 ];
 
-/// The links and joints of a URDF's text, or None if roxmltree cannot read it (a DTD, which it
-/// refuses by default, or text that is not XML).
+/// A URDF's text as roxmltree reads it, with positions, or None if it cannot (a DTD, which it
+/// refuses by default, or text that is not XML: urdf-rs has said so already).
 fn document(text: &str) -> Option<roxmltree::Document<'_>> {
     roxmltree::Document::parse(text).ok()
 }
