@@ -383,7 +383,13 @@ fn run_one(
                 .checks
                 .iter()
                 .filter(|c| !c.passed)
-                .map(describe_check)
+                .map(|c| match &report.metrics {
+                    // the flags say what was wrong with the walk
+                    crate::metrics::Metrics::Walk(w) if c.expectation == "walk_as_commanded" => {
+                        format!("walk_as_commanded: it {}", w.walk_flags.join("; it "))
+                    }
+                    _ => describe_check(c),
+                })
                 .collect();
             record.status = if report.failure.is_some() && s.spec.expect.no_divergence {
                 Status::Diverged

@@ -53,7 +53,7 @@ pub struct BatchArgs {
 pub fn batch(args: BatchArgs) -> Result<ExitCode> {
     use hexsim::batch::{self, Progress, results};
     let files = batch::scenario_files(&args.scenarios)?;
-    let scenarios = match batch::load(&files) {
+    let mut scenarios = match batch::load(&files) {
         Ok(s) => s,
         Err(errors) => {
             for e in &errors {
@@ -66,6 +66,12 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
             );
         }
     };
+    // every walk is judged against its command unless its file says `walk_as_commanded = false`
+    for scenario in &mut scenarios {
+        if scenario.spec.kind == hexsim::scenario::Kind::Walk {
+            scenario.spec.expect.walk_as_commanded.get_or_insert(true);
+        }
+    }
     // the results file (and the baseline it is compared with) must not be a file the batch reads
     let inputs: Vec<(&'static str, std::path::PathBuf)> = scenarios
         .iter()

@@ -40,7 +40,8 @@ pub struct Cli {
 
 #[derive(Subcommand)]
 pub enum Command {
-    /// Walk the hexapod on a terrain with a gait and record it (the main job).
+    /// Walk the hexapod on a terrain with a gait and record it (the main job). Exit 1 if it
+    /// diverged or its walk is not the one commanded (skated, drifted, turned: --allow-flags).
     Run(Box<run::RunArgs>),
     /// Drop a ball on a terrain (the paper's experiment) and record it.
     Ball(Box<ball::BallArgs>),
@@ -71,7 +72,8 @@ pub enum Command {
 
 impl Cli {
     /// Runs the command (without one, `hexsim run` on its defaults). Exit codes: 0 done, 1 the
-    /// run failed (diverged, expectations not met), 2 a usage or input error, 130 interrupted.
+    /// run failed (diverged, expectations not met, a walk not as commanded), 2 a usage or input
+    /// error, 130 interrupted.
     pub fn execute(self) -> Result<ExitCode> {
         match self.command {
             None => run::run(*self.run),
@@ -149,7 +151,8 @@ pub(crate) fn progress_bar(steps: u64, what: String) -> Option<indicatif::Progre
 pub(crate) const COMMAND_LINE: &str = "";
 
 /// Lists the files written. Exit code: 0 done, 1 diverged (the message says when, where and why),
-/// 130 interrupted (Ctrl-C, SIGTERM); the files hold the run so far either way.
+/// 130 interrupted (Ctrl-C, SIGTERM); the files hold the run so far either way. (`hexsim run`
+/// also exits 1 for a walk not as commanded, unless `--allow-flags`.)
 pub(crate) fn conclude(report: &Report) -> ExitCode {
     for path in &report.written {
         println!("  wrote {}", path.display());

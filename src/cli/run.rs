@@ -56,6 +56,10 @@ pub struct RunArgs {
     /// Start position x, y of the body (m). Default: 0.75 m inside the terrain's −x edge, centred in y.
     #[arg(long, num_args = 2, value_names = ["X", "Y"], allow_negative_numbers = true)]
     start: Option<Vec<f64>>,
+    /// Accept a walk that is not the one commanded (skated, went backwards, drifted sideways or
+    /// turned: the metrics' `walk_flags`): exit 0 with the warnings instead of 1.
+    #[arg(long)]
+    allow_flags: bool,
     /// Start heading (deg).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     heading: f64,
@@ -304,7 +308,23 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     println!("  {:.0} steps/s", report.steps_per_second);
-    let code = conclude(&report);
+    let mut code = conclude(&report);
+    let judged = report.failure.is_none() && m.complete && !args.allow_flags;
+    if judged && !m.walk_flags.is_empty() {
+        eprintln!(
+            "error: not the walk commanded ({}); --allow-flags accepts it",
+            m.walk_flags
+                .iter()
+                .map(|f| match f.split([' ', ':']).next().unwrap_or_default() {
+                    "went" => "went backwards",
+                    "drifted" => "drifted sideways",
+                    first => first,
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        code = ExitCode::from(1);
+    }
     if args.spawn && !args.no_record {
         hexsim::record::rerun::spawn_viewer(&args.record)?;
     }

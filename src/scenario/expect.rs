@@ -51,7 +51,7 @@ impl Expectations {
                     Kind::Walk => keys::<metrics::HexapodMetrics>().collect(),
                     Kind::Ball => keys::<metrics::BallMetrics>().collect(),
                 };
-                known.extend(["no_divergence", "no_clamped_ik"]);
+                known.extend(["no_divergence", "no_clamped_ik", "walk_as_commanded"]);
                 return Err(format!(
                     "expect: unknown field `{key}`, expected one of {}",
                     known.join(", ")
@@ -65,6 +65,9 @@ impl Expectations {
         }
         if self.no_clamped_ik && kind != Kind::Walk {
             return Err("expect.no_clamped_ik: applies to Walk scenarios only".into());
+        }
+        if self.walk_as_commanded.is_some() && kind != Kind::Walk {
+            return Err("expect.walk_as_commanded: applies to Walk scenarios only".into());
         }
         Ok(())
     }
@@ -91,6 +94,17 @@ impl Expectations {
                 side: None,
                 value: Some(w.clamped_ik_steps as f64),
                 passed: w.clamped_ik_steps == 0,
+            });
+        }
+        if self.walk_as_commanded == Some(true)
+            && let Metrics::Walk(w) = metrics
+        {
+            checks.push(Check {
+                expectation: "walk_as_commanded".into(),
+                limit: None,
+                side: None,
+                value: Some(w.walk_flags.len() as f64),
+                passed: w.walk_flags.is_empty(),
             });
         }
         match metrics {

@@ -471,7 +471,8 @@ pub struct RecordSpec {
     pub log_rate: Option<f64>,
 }
 
-/// What the run must achieve: `no_divergence` (default true), `no_clamped_ik`, and bounds on the
+/// What the run must achieve: `no_divergence` (default true), `no_clamped_ik`,
+/// `walk_as_commanded` (default true in `hexsim batch`), and bounds on the
 /// metrics, `KEY = limit`, with the keys of the metrics tables (`crate::metrics::walk::TABLE`,
 /// `crate::metrics::ball::TABLE`: e.g. `distance_min`, `max_tilt_deg`, `apex_max`). Unset
 /// expectations are not checked; keys are checked against the tables when the scenario resolves.
@@ -481,6 +482,11 @@ pub struct Expectations {
     pub no_divergence: bool,
     /// No leg target out of reach.
     pub no_clamped_ik: bool,
+    /// The walk is the one commanded: none of the metrics' `walk_flags` (skated, went
+    /// backwards, drifted sideways, turned). Unset in a file, `hexsim batch` sets it for every
+    /// walk; `false` accepts a flagged walk.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub walk_as_commanded: Option<bool>,
     /// Each bound's limit, by its key.
     #[serde(flatten)]
     pub bounds: BTreeMap<String, f64>,
@@ -495,7 +501,10 @@ impl<'de> Deserialize<'de> for Expectations {
             match (key.as_str(), value) {
                 ("no_divergence", toml::Value::Boolean(b)) => expect.no_divergence = b,
                 ("no_clamped_ik", toml::Value::Boolean(b)) => expect.no_clamped_ik = b,
-                ("no_divergence" | "no_clamped_ik", other) => {
+                ("walk_as_commanded", toml::Value::Boolean(b)) => {
+                    expect.walk_as_commanded = Some(b)
+                }
+                ("no_divergence" | "no_clamped_ik" | "walk_as_commanded", other) => {
                     return Err(D::Error::custom(format!(
                         "expect.{key}: expected true or false, got {other}"
                     )));
@@ -522,6 +531,7 @@ impl Default for Expectations {
         Expectations {
             no_divergence: true,
             no_clamped_ik: false,
+            walk_as_commanded: None,
             bounds: BTreeMap::new(),
         }
     }
