@@ -65,6 +65,10 @@ pub struct HeightGrid {
     /// Where neighbouring samples jump like a stair's riser, read as walls (`cliff.rs`); None on
     /// a grid without any, whose surface is then the interpolation alone.
     cliffs: Option<Box<Cliffs>>,
+    /// Per cell, on a bicubic grid without cliffs, the largest second difference of the samples
+    /// its patch blends (log-encoded, see [`encode_bend`]), for [`Self::curvature_near`]; empty
+    /// on other grids.
+    bends: Vec<u8>,
 }
 
 /// Why a grid could not be built.
@@ -156,8 +160,10 @@ impl HeightGrid {
             interpolation: Interpolation::default(),
             ceilings: Vec::new(),
             cliffs,
+            bends: Vec::new(),
         };
         grid.ceilings = grid.cell_ceilings();
+        grid.bends = grid.cell_bends();
         Ok(grid)
     }
 
@@ -188,6 +194,7 @@ impl HeightGrid {
     pub fn with_interpolation(mut self, interpolation: Interpolation) -> Self {
         self.interpolation = interpolation;
         self.ceilings = self.cell_ceilings();
+        self.bends = self.cell_bends();
         self
     }
 
@@ -207,6 +214,70 @@ impl HeightGrid {
             }
         }
         ceiling
+    }
+
+    /// An upper bound of the surface's curvature |∂²z/∂u²| along any horizontal direction u
+    /// over the square of half-width `r` around (x, y) (1/m), or None where it is not bounded
+    /// so (a bilinear grid's patches meet at creases; a grid with cliffs has walls). The surface
+    /// rises above a tangent plane at most K·L²/2 at a distance L from its point: where that
+    /// cannot reach into a sphere, no second face of a crease need be looked for.
+    ///
+    /// A Catmull–Rom patch's ∂²z/∂x² at any point is (2D₁ − D₂) + 3t(D₂ − D₁) of a row's second
+    /// differences D, at most 3·max|D| per dx², blended across rows by weights whose magnitudes
+    /// sum to at most 1.25; its ∂²z/∂x∂y blends the mixed differences by derivative weights
+    /// whose partial sums' magnitudes sum to at most 1.5 per axis. So |∂²z/∂u²| ≤
+    /// |z_xx| + |z_xy| + |z_yy| over the mixed term's share ≤ (3.75 + 2.25)·B/h² with B the
+    /// largest second difference of the 16 samples and h the shorter cell side.
+    pub fn curvature_near(&self, x: f64, y: f64, r: f64) -> Option<f64> {
+        if self.bends.is_empty() {
+            return None;
+        }
+        let (j0, _, _) = locate(x - r, self.x0, self.dx, self.nx);
+        let (j1, _, _) = locate(x + r, self.x0, self.dx, self.nx);
+        let (i0, _, _) = locate(y - r, self.y0, self.dy, self.ny);
+        let (i1, _, _) = locate(y + r, self.y0, self.dy, self.ny);
+        let cells = self.nx - 1;
+        let mut bend = 0u8;
+        for i in i0..=i1 {
+            for &b in &self.bends[i * cells + j0..=i * cells + j1] {
+                bend = bend.max(b);
+            }
+        }
+        let h = self.dx.min(self.dy);
+        Some(6.0 * decode_bend(bend) / (h * h))
+    }
+
+    /// Each cell's largest second difference for [`Self::curvature_near`] (bicubic grids
+    /// without cliffs only): along x, along y and mixed, over the 16 samples its patch blends.
+    fn cell_bends(&self) -> Vec<u8> {
+        if self.interpolation != Interpolation::Bicubic || self.cliffs.is_some() {
+            return Vec::new();
+        }
+        let mut bends = Vec::with_capacity((self.ny - 1) * (self.nx - 1));
+        let z = |i: isize, j: isize| self.ghost_sample(i, j);
+        for i in 0..self.ny as isize - 1 {
+            for j in 0..self.nx as isize - 1 {
+                let mut b = 0.0f64;
+                // each row's and column's second differences centred on the cell's corners, and
+                // the mixed differences of every pair of the 4 × 4
+                for k in -1..3 {
+                    for m in 0..2 {
+                        let (p, q) = (i + k, j + m);
+                        b = b.max((z(p, q - 1) - 2.0 * z(p, q) + z(p, q + 1)).abs());
+                        let (p, q) = (i + m, j + k);
+                        b = b.max((z(p - 1, q) - 2.0 * z(p, q) + z(p + 1, q)).abs());
+                    }
+                }
+                for a in -1..2 {
+                    for c in -1..2 {
+                        let (p, q) = (i + a, j + c);
+                        b = b.max((z(p + 1, q + 1) - z(p + 1, q) - z(p, q + 1) + z(p, q)).abs());
+                    }
+                }
+                bends.push(encode_bend(b));
+            }
+        }
+        bends
     }
 
     /// Each cell's bound for [`Self::ceiling_near`]. Bilinear: the highest corner (the weights
@@ -519,6 +590,25 @@ fn catmull_rom(t: f64) -> ([f64; 4], [f64; 4]) {
             0.5 * (3.0 * t2 - 2.0 * t),
         ],
     )
+}
+
+/// A second difference (m) as a byte, rounded up: 2^(k/4) nm for k ≥ 1 (0: none), so that
+/// [`decode_bend`] never gives less than was encoded (at most 19 % more); a grid's bends take one
+/// byte a cell where an f64 took eight.
+fn encode_bend(b: f64) -> u8 {
+    // NaN cannot reach here: a grid's samples are finite
+    if b <= 1e-9 {
+        return 0;
+    }
+    (4.0 * (b / 1e-9).log2()).ceil().clamp(1.0, 255.0) as u8
+}
+
+fn decode_bend(k: u8) -> f64 {
+    if k == 0 {
+        0.0
+    } else {
+        1e-9 * (k as f64 / 4.0).exp2()
+    }
 }
 
 #[cfg(test)]
