@@ -746,4 +746,56 @@ mod tests {
             Err(GridError::BadExtent { .. })
         ));
     }
+
+    /// The curvature bound holds: along random directions at random points of a rough bicubic
+    /// grid, the interpolated surface's second derivative (central differences of `height`)
+    /// never exceeds [`HeightGrid::curvature_near`] there; and it is not wildly loose (within
+    /// 20× of the largest found), nor offered where it does not hold (bilinear, cliffs).
+    #[test]
+    fn the_curvature_bound_bounds_the_surface() {
+        let rough = |x: f64, y: f64| {
+            0.02 * (7.0 * x).sin() * (5.0 * y).cos() + 0.005 * (23.0 * x + 17.0 * y).sin()
+        };
+        let grid = HeightGrid::from_fn(41, 41, [0.0, 1.0], [0.0, 1.0], rough).unwrap();
+        let mut largest: f64 = 0.0;
+        for k in 0..2000 {
+            let f = k as f64;
+            let (x, y) = (
+                0.1 + 0.8 * (f * 0.6180339).fract(),
+                0.1 + 0.8 * (f * 0.4142135).fract(),
+            );
+            let angle = f * 2.399963;
+            let (u, v) = (angle.cos(), angle.sin());
+            let e = 1e-4;
+            let second = (grid.height(x + e * u, y + e * v) - 2.0 * grid.height(x, y)
+                + grid.height(x - e * u, y - e * v))
+                / (e * e);
+            let bound = grid.curvature_near(x, y, 2.0 * e).unwrap();
+            assert!(
+                second.abs() <= bound,
+                "at ({x}, {y}) along {angle}: {second} > {bound}"
+            );
+            largest = largest.max(second.abs() / bound);
+        }
+        assert!(
+            largest > 0.05,
+            "the bound is {} × the curvature at most",
+            1.0 / largest
+        );
+        assert!(
+            HeightGrid::from_fn(5, 5, [0.0, 1.0], [0.0, 1.0], rough)
+                .unwrap()
+                .with_interpolation(Interpolation::Bilinear)
+                .curvature_near(0.5, 0.5, 0.1)
+                .is_none()
+        );
+        let stair = |x: f64, _: f64| if x > 0.5 { 0.1 } else { 0.0 };
+        let stairs = HeightGrid::from_fn(11, 101, [0.0, 1.0], [0.0, 1.0], stair).unwrap();
+        assert!(stairs.has_cliffs() && stairs.curvature_near(0.2, 0.5, 0.1).is_none());
+        assert_eq!(decode_bend(encode_bend(0.0)), 0.0);
+        for b in [2e-9, 1e-6, 3.3e-3, 0.5] {
+            let back = decode_bend(encode_bend(b));
+            assert!(back >= b && back < 1.19 * b, "{b} -> {back}");
+        }
+    }
 }
