@@ -93,6 +93,10 @@ pub struct Optimization {
     pub file: PathBuf,
     /// Every file the search reads, with what it is: no output may be one of them.
     pub inputs: Vec<(&'static str, PathBuf)>,
+    /// The digest of every file its walks read, by what it is and its name
+    /// ([`crate::scenario::inputs`]): part of
+    /// the fingerprint a resumed or sharded search is checked against.
+    pub read: BTreeMap<String, String>,
     pub description: Option<String>,
     /// The scenario's table, with the duration, articulation and constraints applied and its
     /// gait inline; candidates change its parameters.
@@ -270,7 +274,9 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     // the start: the scenario's own values (resolved, so fitted lengths count), in the bounds
     let reference = resolve(&base, &scenario_path, "start", spec.seeds[0])
         .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
-    let cases = cases(&spec, path, &base, &scenario_path, &reference).map_err(fail)?;
+    let mut read = BTreeMap::new();
+    reference.read.named_into(&mut read);
+    let cases = cases(&spec, path, &base, &scenario_path, &reference, &mut read).map_err(fail)?;
     let start = start_point(&parameters, &base, &reference);
     inputs.extend(
         reference
@@ -285,6 +291,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     );
     Ok(Optimization {
         inputs,
+        read,
         file: path.to_path_buf(),
         description: spec.description,
         base,
@@ -343,6 +350,7 @@ fn cases(
     base: &toml::Table,
     scenario_path: &Path,
     reference: &Scenario,
+    read: &mut BTreeMap<String, String>,
 ) -> Result<Vec<Case>, String> {
     let terrains: Vec<(Option<PathBuf>, String, bool)> = match &spec.terrains {
         None => vec![(
@@ -363,6 +371,7 @@ fn cases(
                 );
                 let scenario = resolve(&table, scenario_path, "start", spec.seeds[0])
                     .map_err(|e| format!("terrains: {}: {}", file.display(), e.message))?;
+                scenario.read.named_into(read);
                 Ok((
                     Some(absolute),
                     stem(scenario.terrain_name()),

@@ -4,6 +4,7 @@
 
 pub mod builtin;
 pub mod expect;
+pub mod inputs;
 mod resolve;
 pub mod spec;
 pub mod sweep;
@@ -50,8 +51,11 @@ pub struct Scenario {
     pub name: String,
     /// The file it came from.
     pub file: PathBuf,
-    /// Identifies the scenario's content: its fields and the robot, gait and terrain it uses.
+    /// The scenario's fingerprint: hexsim's version, its fields and the content of every file
+    /// it read ([`inputs`]). What `batch --resume` compares.
     pub hash: String,
+    /// The files it read, each with its digest.
+    pub read: inputs::Inputs,
     pub spec: ScenarioSpec,
     /// The terrain generator's seed, if it has one.
     pub seed: Option<u32>,
@@ -356,28 +360,20 @@ impl Scenario {
         Scenario::resolve(spec, self.name.clone(), &self.file)
     }
 
-    /// The files this scenario reads, each with what it is: the scenario file, the robot (and
-    /// its robot file), the gait, the terrain and its height data. No output may be one of them.
+    /// The files this scenario reads, each with what it is: the scenario file, the robot (its
+    /// robot file, its meshes), the gait, the terrain and its height data. No output may be one
+    /// of them.
     pub fn inputs(&self) -> Vec<(&'static str, PathBuf)> {
-        let base = self.file.parent().unwrap_or(Path::new(""));
         let mut inputs = Vec::new();
         if !self.file.as_os_str().is_empty() {
             inputs.push(("scenario file", self.file.clone()));
         }
-        if let Some(robot) = &self.spec.robot {
-            inputs.push(("robot", base.join(robot)));
-            inputs.push(("robot file", base.join(robot).with_extension("toml")));
-        }
-        if let Some(FileOr::File(gait)) = &self.spec.gait {
-            inputs.push(("gait file", base.join(gait)));
-        }
-        if self.spec.terrain.is_some() {
-            if matches!(self.spec.terrain, Some(FileOr::File(_))) {
-                inputs.push(("terrain file", self.terrain.origin.clone()));
-            }
-            if let Some(data) = self.terrain.spec.source.get().data_file() {
-                let folder = self.terrain.origin.parent().unwrap_or(Path::new(""));
-                inputs.push(("terrain's height file", folder.join(data)));
+        for input in self.read.iter().filter(|i| !i.builtin) {
+            inputs.push((input.what, input.path.clone()));
+            // a robot file written beside the URDF would be read by the next run
+            let robot_file = input.path.with_extension("toml");
+            if input.what == "robot" && !self.read.iter().any(|i| i.path == robot_file) {
+                inputs.push(("robot file", robot_file));
             }
         }
         inputs

@@ -2,6 +2,7 @@
 //! every default applied, once — what [`Scenario::run`] gets is fully typed. The scenario's hash
 //! covers its fields and the content of every file it uses.
 
+use super::inputs::Inputs;
 use super::spec::{
     BALL_LOG_RATE, DEFAULT_DT, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, ServoSpec, WALK_LOG_RATE,
 };
@@ -19,24 +20,6 @@ use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Hashes the file at `path` as it streams, within `limit` bytes ([`crate::limits`]); a missing
-/// file hashes as empty (its loader then names it), one too large is refused here.
-fn hash_file(hasher: &mut Sha256, path: &Path, limit: u64) -> Result<(), String> {
-    let Ok(file) = std::fs::File::open(path) else {
-        return Ok(());
-    };
-    let mut reader = crate::limits::Bounded::new(file, limit, limit);
-    let mut buffer = vec![0u8; 1 << 16];
-    loop {
-        match std::io::Read::read(&mut reader, &mut buffer) {
-            Ok(0) => return Ok(()),
-            Ok(n) => hasher.update(&buffer[..n]),
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(format!("{}: cannot read: {e}", path.display())),
-        }
-    }
-}
-
 impl Scenario {
     /// Checks the spec and loads what it refers to. `origin` is the scenario's file: relative paths
     /// resolve against its folder, and errors name it.
@@ -52,20 +35,19 @@ impl Scenario {
         let base = origin.parent().unwrap_or(Path::new(""));
         check_common(&spec, &name).map_err(fail)?;
         let mut contact = spec.contact.model();
-        let mut hasher = Sha256::new();
         // hashed with its step, so a default step and the same step given hash alike
         let hashed = ScenarioSpec {
             dt: Some(spec.dt()),
             ..spec.clone()
         };
-        hasher.update(serde_json::to_vec(&hashed).expect("a spec is plain data"));
-        let terrain = resolve_terrain(&spec, &name, origin, &mut hasher).map_err(fail)?;
+        let mut inputs = Inputs::default();
+        let terrain = resolve_terrain(&spec, &name, origin, &mut inputs).map_err(fail)?;
         let seed = terrain.spec.seed();
         let mut warnings = Vec::new();
         let setup = match spec.kind {
             Kind::Ball => Setup::Ball(resolve_ball(&spec, &contact).map_err(fail)?),
             Kind::Walk => Setup::Walk(Box::new(
-                resolve_walk(&spec, &mut contact, base, &mut hasher, &mut warnings)
+                resolve_walk(&spec, &mut contact, base, &mut inputs, &mut warnings)
                     .map_err(fail)?,
             )),
         };
@@ -78,10 +60,11 @@ impl Scenario {
             Setup::Ball(_) => 0.0,
         };
         check_steps(spec.duration, settle, spec.dt()).map_err(fail)?;
-        let hash: String = hasher.finalize()[..8]
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect();
+        let mut hasher = Sha256::new();
+        hasher.update(env!("CARGO_PKG_VERSION"));
+        hasher.update(serde_json::to_vec(&hashed).expect("a spec is plain data"));
+        inputs.hash_into(&mut hasher);
+        let hash = super::inputs::short(&hasher.finalize());
         let log_rate = spec.record.log_rate.unwrap_or(match spec.kind {
             Kind::Walk => WALK_LOG_RATE,
             Kind::Ball => BALL_LOG_RATE,
@@ -90,6 +73,7 @@ impl Scenario {
             name,
             file: origin.to_path_buf(),
             hash,
+            read: inputs,
             spec,
             seed,
             warnings,
@@ -210,28 +194,34 @@ fn resolve_terrain(
     spec: &ScenarioSpec,
     name: &str,
     origin: &Path,
-    hasher: &mut Sha256,
+    inputs: &mut Inputs,
 ) -> Result<TerrainSource, String> {
     let default_terrain = match spec.kind {
         Kind::Walk => builtin::NATURAL,
         Kind::Ball => builtin::NATURAL_BALL,
     };
     let mut terrain = match &spec.terrain {
-        None => TerrainSource {
-            spec: TerrainSpec::from_toml(default_terrain.text, Path::new(default_terrain.path))
-                .map_err(|e| e.to_string())?,
-            origin: PathBuf::from(default_terrain.path),
-            name: format!("{} (built in)", default_terrain.path),
-        },
+        None => {
+            inputs.builtin("terrain file", default_terrain.path, default_terrain.text);
+            TerrainSource {
+                spec: TerrainSpec::from_toml(default_terrain.text, Path::new(default_terrain.path))
+                    .map_err(|e| e.to_string())?,
+                origin: PathBuf::from(default_terrain.path),
+                name: format!("{} (built in)", default_terrain.path),
+            }
+        }
         Some(FileOr::File(file)) => {
             let path = origin.parent().unwrap_or(Path::new("")).join(file);
             match builtin::named(builtin::TERRAINS, file, &path) {
-                Some(b) => TerrainSource {
-                    spec: TerrainSpec::from_toml(b.text, Path::new(b.path))
-                        .map_err(|e| e.to_string())?,
-                    origin: PathBuf::from(b.path),
-                    name: format!("{} (built in)", b.path),
-                },
+                Some(b) => {
+                    inputs.builtin("terrain file", b.path, b.text);
+                    TerrainSource {
+                        spec: TerrainSpec::from_toml(b.text, Path::new(b.path))
+                            .map_err(|e| e.to_string())?,
+                        origin: PathBuf::from(b.path),
+                        name: format!("{} (built in)", b.path),
+                    }
+                }
                 None => TerrainSource {
                     spec: TerrainSpec::from_file(&path).map_err(|e| {
                         not_found_hint(e.to_string(), &path, "terrains", builtin::TERRAINS)
@@ -250,11 +240,17 @@ fn resolve_terrain(
     if let Some(seed) = spec.seed {
         terrain.spec = terrain.spec.clone().with_seed(seed);
     }
-    hasher.update(serde_json::to_vec(&terrain.spec).expect("a spec is plain data"));
+    if matches!(spec.terrain, Some(FileOr::File(_))) && !terrain.name.ends_with("(built in)") {
+        inputs.file(
+            "terrain file",
+            &terrain.origin,
+            crate::limits::TEXT_FILE_BYTES,
+        )?;
+    }
     let data_base = terrain.origin.parent().unwrap_or(Path::new(""));
     if let Some(path) = terrain.spec.source.get().data_file() {
-        hash_file(
-            hasher,
+        inputs.file(
+            "terrain's height file",
             &data_base.join(path),
             crate::limits::DATA_FILE_BYTES,
         )?;
@@ -414,15 +410,14 @@ fn resolve_walk(
     spec: &ScenarioSpec,
     contact: &mut ContactModel,
     base: &Path,
-    hasher: &mut Sha256,
+    inputs: &mut Inputs,
     warnings: &mut Vec<String>,
 ) -> Result<WalkSetup, String> {
     if spec.ball.is_some() {
         return Err("ball: applies to ball scenarios; set kind = \"ball\"".into());
     }
-    let robot = resolve_robot(spec, base, hasher)?;
-    let (gait, gait_name) = resolve_gait(spec, base)?;
-    hasher.update(serde_json::to_vec(&gait).expect("a spec is plain data"));
+    let robot = resolve_robot(spec, base, inputs)?;
+    let (gait, gait_name) = resolve_gait(spec, base, inputs)?;
     let support = crate::gait::minimum_support(&gait.offsets(), gait.duty_factor);
     // a robot that does not fit may say why in its warnings (masses in grams): name them too
     let gait = crate::gait::fit(&robot, &gait).map_err(|e| {
@@ -888,7 +883,7 @@ fn resolve_servo(
 fn resolve_robot(
     spec: &ScenarioSpec,
     base: &Path,
-    hasher: &mut Sha256,
+    inputs: &mut Inputs,
 ) -> Result<RobotModel, String> {
     // `robot = "hex18"` (or `--robot hex18`) from a folder without such a file: the built-in one
     let file = spec.robot.as_ref().filter(|file| {
@@ -896,8 +891,12 @@ fn resolve_robot(
     });
     match file {
         None => {
-            hasher.update(builtin::HEX18.text);
-            hasher.update(builtin::HEX18_FILE.text);
+            inputs.builtin("robot", builtin::HEX18.path, builtin::HEX18.text);
+            inputs.builtin(
+                "robot file",
+                builtin::HEX18_FILE.path,
+                builtin::HEX18_FILE.text,
+            );
             crate::robot::urdf::from_str_with(
                 builtin::HEX18.text,
                 Some(builtin::HEX18_FILE.text),
@@ -906,10 +905,7 @@ fn resolve_robot(
         }
         Some(file) => {
             let path = base.join(file);
-            let limit = crate::limits::TEXT_FILE_BYTES;
-            hash_file(hasher, &path, limit).map_err(|e| format!("robot: {e}"))?;
-            hash_file(hasher, &path.with_extension("toml"), limit)
-                .map_err(|e| format!("robot: {e}"))?;
+            inputs.robot(&path).map_err(|e| format!("robot: {e}"))?;
             crate::robot::load(&path)
         }
     }
@@ -935,29 +931,31 @@ fn not_found_hint(
 }
 
 /// The gait (the built-in tripod, a file, or an inline table) and its name for messages.
-fn resolve_gait(spec: &ScenarioSpec, base: &Path) -> Result<(GaitSpec, String), String> {
+fn resolve_gait(
+    spec: &ScenarioSpec,
+    base: &Path,
+    inputs: &mut Inputs,
+) -> Result<(GaitSpec, String), String> {
+    let built_in = |inputs: &mut Inputs, b: &builtin::Builtin| {
+        inputs.builtin("gait file", b.path, b.text);
+        Ok::<_, String>((
+            GaitSpec::from_toml(b.text, Path::new(b.path)).map_err(|e| e.to_string())?,
+            format!("gait {} (built in)", b.path),
+        ))
+    };
     Ok(match &spec.gait {
-        None => (
-            GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))
-                .map_err(|e| e.to_string())?,
-            format!("gait {} (built in)", builtin::TRIPOD.path),
-        ),
+        None => built_in(inputs, &builtin::TRIPOD)?,
         Some(FileOr::File(file)) => match builtin::named(builtin::GAITS, file, &base.join(file)) {
-            Some(b) => (
-                GaitSpec::from_toml(b.text, Path::new(b.path)).map_err(|e| e.to_string())?,
-                format!("gait {} (built in)", b.path),
-            ),
-            None => (
-                GaitSpec::from_file(&base.join(file)).map_err(|e| {
-                    not_found_hint(
-                        format!("gait: {e}"),
-                        &base.join(file),
-                        "gaits",
-                        builtin::GAITS,
-                    )
-                })?,
-                format!("gait {}", base.join(file).display()),
-            ),
+            Some(b) => built_in(inputs, &b)?,
+            None => {
+                let path = base.join(file);
+                let gait = GaitSpec::from_file(&path).map_err(|e| {
+                    not_found_hint(format!("gait: {e}"), &path, "gaits", builtin::GAITS)
+                })?;
+                // digested once read: the loader says what is wrong with a file it cannot use
+                inputs.file("gait file", &path, crate::limits::TEXT_FILE_BYTES)?;
+                (gait, format!("gait {}", path.display()))
+            }
         },
         Some(FileOr::Inline(gait)) => {
             gait.validate().map_err(|e| format!("gait: {e}"))?;
