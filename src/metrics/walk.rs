@@ -110,7 +110,7 @@ pub struct HexapodMetrics {
     acc: Accumulators,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
     #[serde(skip)]
-    output: Option<PathBuf>,
+    output: Option<super::metadata::MetricsFile>,
 }
 
 /// The stance the robot walked in (see `gait::fit`), as the metrics JSON's `stance` object.
@@ -287,7 +287,12 @@ pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
 impl HexapodMetrics {
     /// Metrics of a walk at step `dt` of a robot of `mass` whose joints have `limits` (lower,
     /// upper, rad); written to `output` at the end.
-    pub fn new(dt: f64, mass: f64, limits: Vec<(f64, f64)>, output: Option<PathBuf>) -> Self {
+    pub fn new(
+        dt: f64,
+        mass: f64,
+        limits: Vec<(f64, f64)>,
+        output: Option<super::metadata::MetricsFile>,
+    ) -> Self {
         HexapodMetrics {
             acc: Accumulators {
                 dt,
@@ -355,7 +360,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
         self.judge();
-        crate::record::output::write_json(self.output.as_deref(), self)
+        super::metadata::write(self.output.as_ref(), self)
     }
 
     fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {

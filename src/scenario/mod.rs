@@ -348,7 +348,8 @@ impl Scenario {
             );
         };
         let grid = Arc::new(self.build_terrain()?);
-        self.walk_run(w, grid, outputs).start()
+        self.walk_run(w, grid, outputs.described(self.metadata()))
+            .start()
     }
 
     /// The same scenario with the terrain generator's seed replaced (as `seed = …` in the file).
@@ -379,6 +380,34 @@ impl Scenario {
         inputs
     }
 
+    /// Where a run of it comes from, for the end of its metrics file.
+    pub fn metadata(&self) -> crate::metrics::metadata::Metadata {
+        let read = |what: &str| {
+            self.read
+                .iter()
+                .find(|i| i.what == what)
+                .map(|i| i.path.display().to_string())
+        };
+        let walk = match &self.setup {
+            Setup::Walk(w) => Some(w),
+            Setup::Ball(_) => None,
+        };
+        crate::metrics::metadata::Metadata {
+            hexsim_version: env!("CARGO_PKG_VERSION").to_string(),
+            scenario: self.name.clone(),
+            scenario_file: (!self.file.as_os_str().is_empty())
+                .then(|| self.file.display().to_string()),
+            robot: walk.and(read("robot")),
+            terrain: self.terrain.name.clone(),
+            gait: walk.map(|_| read("gait file").unwrap_or_else(|| "inline".into())),
+            fingerprint: self.hash.clone(),
+            inputs: self.read.digests(),
+            seed: self.seed,
+            dt: self.spec.dt(),
+            articulation: walk.map(|w| w.settings.articulation.name().to_string()),
+        }
+    }
+
     /// Runs the scenario and checks its expectations. An error is an input or output problem; a
     /// run that diverged is a [`Report`] with `failure` set.
     pub fn run(&self, outputs: Outputs) -> anyhow::Result<Report> {
@@ -388,6 +417,7 @@ impl Scenario {
             inputs.iter().map(|(what, path)| (*what, path.as_path())),
         )?;
         let grid = Arc::new(self.build_terrain()?);
+        let outputs = outputs.described(self.metadata());
         let spec = &self.spec;
         let started = std::time::Instant::now();
         let (metrics, steps_per_second, physics_seconds, failure, written) = match &self.setup {
