@@ -167,7 +167,7 @@ impl StanceMetrics {
 
 /// The ground a walk ran on, as the metrics JSON's `ground` object: the contact's stiffness and
 /// damping, "given" by the scenario or "fitted" to the robot's weight (the reference contact
-/// scaled by `mass_ratio`, the robot's mass over hex18's; see `scenario::resolve`).
+/// scaled by `mass_ratio`, the robot's mass over hex18's; see `setup::ground`).
 #[derive(Debug, Clone, Serialize, Deserialize, Default, PartialEq)]
 #[serde(default)]
 pub struct GroundMetrics {

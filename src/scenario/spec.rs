@@ -153,7 +153,7 @@ pub struct ScenarioSpec {
 
 /// The defaults of unset fields, in one place (the command line's options take theirs from here).
 /// Time step (s).
-pub const DEFAULT_DT: f64 = 1e-3;
+pub const DEFAULT_DT: f64 = crate::setup::time_step::DEFAULT_DT;
 
 impl ScenarioSpec {
     /// The time step: as given, else the default (a walk's resolved scenario holds the step it
