@@ -191,12 +191,9 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
             )));
         }
     }
-    if let Some(d) = spec.duration
-        && !(d.is_finite() && d > 0.0)
-    {
-        return Err(fail(format!(
-            "duration: expected a finite number > 0 s, got {d}"
-        )));
+    if let Some(d) = spec.duration {
+        crate::limits::check_number(d, crate::limits::Range::Positive, "s")
+            .map_err(|e| fail(format!("duration: {e}")))?;
     }
     let (scenario_path, mut base) = match &spec.scenario {
         toml::Value::String(file) => scenario::read_table(path, Path::new(file)).map_err(fail)?,

@@ -7,7 +7,7 @@ use super::spec::{BALL_LOG_RATE, DEFAULT_SETTLE, FileOr, Kind, ScenarioSpec, WAL
 use super::{Scenario, ScenarioError, Setup, TerrainSource, WalkSetup, builtin};
 use crate::contact::ContactModel;
 use crate::gait::{CommandChange, CommandSchedule, Gait, GaitSpec, VelocityCommand};
-use crate::limits::num;
+use crate::limits::{Range, check_number, num};
 use crate::robot::RobotModel;
 use crate::setup::{ground, time_step};
 use crate::sim::{BallConfig, DEFAULT_SOLVER_ITERATIONS, HexapodSettings, STANDARD_GRAVITY};
@@ -93,12 +93,7 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
     if !(dt.is_finite() && dt > 0.0 && dt <= 0.01) {
         return Err(format!("dt: expected a time step in (0, 0.01] s, got {dt}"));
     }
-    if !(spec.duration.is_finite() && spec.duration >= 0.0) {
-        return Err(format!(
-            "duration: expected a finite number ≥ 0 s, got {}",
-            spec.duration
-        ));
-    }
+    check_number(spec.duration, Range::NonNegative, "s").map_err(|e| format!("duration: {e}"))?;
     if let Err((field, expected)) = spec.contact.model().validate() {
         return Err(format!("contact.{field}: {expected}"));
     }
@@ -409,11 +404,7 @@ fn resolve_walk(
         given.stiffness,
     )?;
     let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
-    if !(settle.is_finite() && settle >= 0.0) {
-        return Err(format!(
-            "settle: expected a finite number ≥ 0 s, got {settle}"
-        ));
-    }
+    check_number(settle, Range::NonNegative, "s").map_err(|e| format!("settle: {e}"))?;
     let most = crate::limits::MAX_ITERATIONS;
     for (field, value) in [
         ("solver_iterations", spec.solver_iterations),
