@@ -112,7 +112,7 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
         if let Some(d) = spec.duration {
             table.insert("duration".into(), toml::Value::Float(d));
         }
-        scenario::overlay(&mut table, "contact", setting.contact.clone())
+        scenario::overlay::set_all(&mut table, "contact", setting.contact.clone())
             .map_err(|e| fail(format!("scenario {}: {e}", scenario_path.display())))?;
         let resolved = scenario::from_table(table, setting.name.clone(), &scenario_path)
             .map_err(|e| fail(format!("setting {:?}: {e}", setting.name)))?;

@@ -35,7 +35,7 @@ pub mod results;
 pub mod search;
 
 pub use parameters::{Domain, Parameter, searchable};
-use parameters::{Range, parameter, set, start_point};
+use parameters::{Range, parameter, start_point};
 
 use crate::metrics::{HexapodMetrics, Metrics, walk};
 use crate::runner::Outputs;
@@ -268,6 +268,12 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
                 .into(),
         ));
     }
+    // each parameter's path laid over the scenario once, so a candidate's is never refused
+    for p in &parameters {
+        let mut table = base.clone();
+        scenario::overlay::set(&mut table, &p.name, p.value(0.5))
+            .map_err(|e| fail(format!("parameters.{}: {e}", p.name)))?;
+    }
     // the start: the scenario's own values (resolved, so fitted lengths count), in the bounds
     let reference = resolve(&base, &scenario_path, "start", spec.seeds[0])
         .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
@@ -432,13 +438,15 @@ impl Optimization {
         stem(&self.file.to_string_lossy())
     }
 
-    /// The scenario table of a candidate: its parameters laid over the base.
-    pub fn candidate_table(&self, x: &[f64]) -> toml::Table {
+    /// The scenario table of a candidate: its parameters laid over the base (each checked
+    /// when the search was loaded, so none is refused here).
+    pub fn candidate_table(&self, x: &[f64]) -> Result<toml::Table, String> {
         let mut table = self.base.clone();
         for (p, &value) in self.parameters.iter().zip(x) {
-            set(&mut table, &p.name, p.value(value));
+            scenario::overlay::set(&mut table, &p.name, p.value(value))
+                .map_err(|e| format!("parameters.{}: {e}", p.name))?;
         }
-        table
+        Ok(table)
     }
 
     /// The candidate's parameters by name, as the scenario gets them (a choice by its name).
@@ -459,7 +467,7 @@ impl Optimization {
     /// The best candidate's gait, as a gait file's text; the searched values that are not the
     /// gait's (servo gains, the commanded speed) head it as comments saying where they go.
     pub fn gait_file(&self, x: &[f64]) -> String {
-        let table = self.candidate_table(x);
+        let table = self.candidate_table(x).unwrap_or_default();
         let mut text = String::new();
         for (p, &v) in self.parameters.iter().zip(x) {
             let value = p.value(v);
@@ -554,7 +562,10 @@ impl Optimization {
         articulation: Option<crate::sim::Articulation>,
         name: &str,
     ) -> Result<Scenario, ScenarioError> {
-        let mut table = self.candidate_table(x);
+        let mut table = self.candidate_table(x).map_err(|message| ScenarioError {
+            file: self.file.clone(),
+            message,
+        })?;
         if let Some(a) = articulation {
             table.insert("articulation".into(), toml::Value::String(a.name().into()));
         }

@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod expect;
 pub mod inputs;
+pub mod overlay;
 mod resolve;
 pub mod spec;
 pub mod sweep;
@@ -146,22 +147,6 @@ pub fn read_table(spec: &Path, file: &Path) -> Result<(PathBuf, toml::Table), St
         format!("scenario {}: {}", path.display(), e.to_string().trim_end())
     })?;
     Ok((path, table))
-}
-
-/// Lays `fields` over the table `section` of a scenario's `table` (made if it has none).
-pub fn overlay(
-    table: &mut toml::Table,
-    section: &str,
-    fields: impl IntoIterator<Item = (String, toml::Value)>,
-) -> Result<(), String> {
-    let entry = table
-        .entry(section)
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    let Some(target) = entry.as_table_mut() else {
-        return Err(format!("[{section}] is not a table"));
-    };
-    target.extend(fields);
-    Ok(())
 }
 
 /// Resolves a scenario given as a TOML table (e.g. a scenario file's with some fields changed);
