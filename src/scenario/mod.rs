@@ -88,13 +88,7 @@ struct WalkSetup {
     commands: CommandSchedule,
     settings: HexapodSettings,
     settle: f64,
-    follow_terrain: bool,
-    /// Feet targets moved with their spheres' rolling (see `gait::controller`).
-    rolling_feet: bool,
-    /// The reactive gait (see `gait::reactive`).
-    reactive_gait: bool,
-    /// Servo targets held against the load (see `sim::Walker::load_feedforward`).
-    feedforward: bool,
+    switches: crate::runner::walk::WalkSwitches,
     start: spec::StartSpec,
     /// The contact's stiffness and damping and where they came from.
     ground: crate::metrics::GroundMetrics,
@@ -265,7 +259,7 @@ impl Scenario {
         };
         let controller = GaitController::new(&w.robot, w.gait.gait.clone());
         Some(controller.map(|c| {
-            let mut controller = c.with_rolling_feet(w.rolling_feet);
+            let mut controller = c.with_rolling_feet(w.switches.rolling_feet);
             reach::planned(
                 &mut controller,
                 reach::Stepping {
@@ -273,7 +267,7 @@ impl Scenario {
                     settle: w.settle,
                     duration: self.spec.duration,
                     commands: &w.commands,
-                    stands_by_controller: w.feedforward && !w.follow_terrain,
+                    stands_by_controller: w.switches.feedforward && !w.switches.follow_terrain,
                 },
             )
         }))
@@ -311,10 +305,7 @@ impl Scenario {
             ground: w.ground.clone(),
             settings: w.settings,
             settle_time: w.settle,
-            terrain_following: w.follow_terrain,
-            rolling_feet: w.rolling_feet,
-            reactive_gait: w.reactive_gait,
-            load_feedforward: w.feedforward,
+            switches: w.switches,
             duration: self.spec.duration,
             log_rate: self.log_rate,
             outputs,

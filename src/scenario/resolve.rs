@@ -249,28 +249,10 @@ fn resolve_terrain(
     Ok(terrain)
 }
 
-/// A walk's fields that a ball scenario must not set.
-fn walk_fields(spec: &ScenarioSpec) -> [(&'static str, bool); 12] {
-    [
-        ("robot", spec.robot.is_some()),
-        ("gait", spec.gait.is_some()),
-        ("settle", spec.settle.is_some()),
-        ("follow_terrain", spec.follow_terrain.is_some()),
-        ("rolling_feet", spec.rolling_feet.is_some()),
-        ("reactive_gait", spec.reactive_gait.is_some()),
-        ("articulation", spec.articulation.is_some()),
-        ("solver_iterations", spec.solver_iterations.is_some()),
-        ("pgs_iterations", spec.pgs_iterations.is_some()),
-        ("servo", spec.servo.is_some()),
-        ("start", spec.start.is_some()),
-        ("command", spec.command.is_some()),
-    ]
-}
-
 /// A ball scenario's ball, its lowest point `drop_height` above the ground (the ground's height is
 /// added when the terrain is built).
 fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfig, String> {
-    if let Some((field, _)) = walk_fields(spec).iter().find(|(_, set)| *set) {
+    if let Some((field, _)) = spec.walk_fields().iter().find(|(_, set)| *set) {
         return Err(format!(
             "{field}: applies to walk scenarios, but kind = \"ball\""
         ));
@@ -470,10 +452,7 @@ fn resolve_walk(
             gains,
         },
         settle,
-        follow_terrain: spec.follow_terrain.unwrap_or(false),
-        rolling_feet: spec.rolling_feet.unwrap_or(true),
-        reactive_gait: spec.reactive_gait.unwrap_or(false),
-        feedforward: spec.servo.and_then(|s| s.feedforward).unwrap_or(true),
+        switches: spec.switches(),
         start: spec.start.unwrap_or_default(),
         ground,
     })
