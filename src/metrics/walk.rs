@@ -1,6 +1,7 @@
 //! A walk's metrics: accumulated step by step over the walk (settling excluded), written as JSON,
 //! and their table.
 
+use super::metadata::MetricsFile;
 use super::{Better, Bound, Metric, Table, Value};
 use crate::contact::ContactForce;
 use crate::record::Observer;
@@ -110,7 +111,7 @@ pub struct HexapodMetrics {
     acc: Accumulators,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
     #[serde(skip)]
-    output: Option<super::metadata::MetricsFile>,
+    output: Option<MetricsFile>,
 }
 
 /// The stance the robot walked in (see `gait::fit`), as the metrics JSON's `stance` object.
@@ -287,12 +288,7 @@ pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
 impl HexapodMetrics {
     /// Metrics of a walk at step `dt` of a robot of `mass` whose joints have `limits` (lower,
     /// upper, rad); written to `output` at the end.
-    pub fn new(
-        dt: f64,
-        mass: f64,
-        limits: Vec<(f64, f64)>,
-        output: Option<super::metadata::MetricsFile>,
-    ) -> Self {
+    pub fn new(dt: f64, mass: f64, limits: Vec<(f64, f64)>, output: Option<MetricsFile>) -> Self {
         HexapodMetrics {
             acc: Accumulators {
                 dt,
