@@ -15,5 +15,6 @@ pub mod record;
 pub mod robot;
 pub mod runner;
 pub mod scenario;
+pub mod setup;
 pub mod sim;
 pub mod terrain;

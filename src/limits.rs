@@ -57,6 +57,35 @@ pub fn threads(text: &str) -> Result<usize, String> {
     }
 }
 
+/// Where a number read from a file must lie, besides being finite.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Range {
+    Any,
+    /// Above 0.
+    Positive,
+    /// At or above 0.
+    NonNegative,
+}
+
+/// `v` finite and in `range`, else the one message every such field gives: "expected a finite
+/// number > 0 s, got -1" (`unit` after the bound; empty for none).
+pub fn check_number(v: f64, range: Range, unit: &str) -> Result<(), String> {
+    let (ok, bound) = match range {
+        Range::Any => (v.is_finite(), ""),
+        Range::Positive => (v.is_finite() && v > 0.0, " > 0"),
+        Range::NonNegative => (v.is_finite() && v >= 0.0, " ≥ 0"),
+    };
+    if ok {
+        return Ok(());
+    }
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    Err(format!("expected a finite number{bound}{unit}, got {v}"))
+}
+
 /// A number for a message, as short as it reads: 0.25, 43.7, 1e300, 1.2e-12.
 pub fn num(x: f64) -> String {
     if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
@@ -234,6 +263,23 @@ pub fn xml_depth(text: &str, max: usize) -> Result<(), (usize, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_number_out_of_range_reads_alike_everywhere() {
+        assert_eq!(check_number(0.5, Range::Positive, "s"), Ok(()));
+        assert_eq!(
+            check_number(0.0, Range::Positive, "s"),
+            Err("expected a finite number > 0 s, got 0".into())
+        );
+        assert_eq!(
+            check_number(-1.0, Range::NonNegative, ""),
+            Err("expected a finite number ≥ 0, got -1".into())
+        );
+        assert_eq!(
+            check_number(f64::NAN, Range::Any, ""),
+            Err("expected a finite number, got NaN".into())
+        );
+    }
 
     #[test]
     fn numbers_read_short() {

@@ -347,3 +347,54 @@ fn a_broken_scenario_is_an_input_error_naming_file_and_field() {
     assert_eq!(none.status.code(), Some(2));
     assert!(text(&none).contains("no/such/folder: no such scenario file or folder"));
 }
+
+/// A robot's feet are read from its meshes: a mesh edited since a result makes `--resume` run
+/// that scenario again, saying which file changed, and keep the others.
+#[test]
+fn resume_reruns_a_scenario_whose_mesh_changed() {
+    let dir = scratch("resume-mesh");
+    let kraby = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/third_party/kraby");
+    std::fs::create_dir_all(dir.join("kraby/meshes")).unwrap();
+    for file in [
+        "hexapod.urdf",
+        "meshes/foot.stl",
+        "meshes/joint.stl",
+        "meshes/box.stl",
+    ] {
+        std::fs::copy(kraby.join(file), dir.join("kraby").join(file)).unwrap();
+    }
+    write(
+        &dir,
+        "kraby.toml",
+        &format!("robot = \"../kraby/hexapod.urdf\"\nduration = 0.1\nsettle = 0.1\n{FLAT}"),
+    );
+    write(
+        &dir,
+        "drop.toml",
+        &format!("kind = \"ball\"\nduration = 0.2\n{FLAT}"),
+    );
+    let out = hexsim(&["batch", "scenarios", "-o", "r.jsonl", "-q"], &dir);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    let first = records(&dir.join("r.jsonl"));
+    // re-exported: the binary STL's header differs
+    let foot = dir.join("kraby/meshes/foot.stl");
+    let mut bytes = std::fs::read(&foot).unwrap();
+    bytes[..8].copy_from_slice(b"Edited  ");
+    std::fs::write(&foot, bytes).unwrap();
+    let out = hexsim(
+        &["batch", "scenarios", "-o", "r.jsonl", "--resume", "-q"],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out));
+    assert!(
+        text(&out).contains("1 results kept")
+            && text(&out).contains("kraby: ")
+            && text(&out).contains("foot.stl changed"),
+        "{}",
+        text(&out)
+    );
+    let after = records(&dir.join("r.jsonl"));
+    let of = |list: &[Value], name: &str| list.iter().find(|r| r["name"] == name).unwrap().clone();
+    assert_eq!(of(&first, "drop"), of(&after, "drop"));
+    assert_ne!(of(&first, "kraby")["hash"], of(&after, "kraby")["hash"]);
+}

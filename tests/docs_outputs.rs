@@ -62,12 +62,13 @@ fn check_columns(section: &str, header: &str) {
     }
 }
 
-/// The keys of a metrics object, with those of its `stance` and `ground` objects as `stance.KEY`.
+/// The keys of a metrics object, with those of its `stance`, `ground` and `metadata` objects as
+/// `stance.KEY`.
 fn keys(metrics: &Value) -> BTreeSet<String> {
     let mut keys = BTreeSet::new();
     for (key, value) in metrics.as_object().unwrap() {
         keys.insert(key.clone());
-        if matches!(key.as_str(), "stance" | "ground") {
+        if matches!(key.as_str(), "stance" | "ground" | "metadata") {
             for inner in value.as_object().unwrap().keys() {
                 keys.insert(format!("{key}.{inner}"));
             }

@@ -539,3 +539,55 @@ fn a_changed_specification_does_not_replay_another_ones_log() {
         "{stderr}"
     );
 }
+
+/// The scenario names its robot by path: a search's log belongs to the robot's content too.
+/// With the body's mass doubled in the URDF, resuming is refused naming the URDF (it replayed
+/// the old log as the new robot's, whose best differs).
+#[test]
+fn a_changed_robot_does_not_replay_the_old_robots_log() {
+    let dir = scratch("optimize-robot");
+    for file in ["hex18.urdf", "hex18.toml"] {
+        std::fs::copy(
+            common::project_file(&format!("robots/{file}")),
+            dir.join(file),
+        )
+        .unwrap();
+    }
+    let file = dir.join("search.toml");
+    let text = spec(
+        "",
+        Some(("[scenario]\n", "[scenario]\nrobot = \"hex18.urdf\"\n")),
+    );
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join("out");
+    let run = |resume: bool| {
+        let mut cmd = hexsim();
+        cmd.arg("optimize")
+            .arg(&file)
+            .arg("--output")
+            .arg(&out)
+            .arg("--no-record");
+        if resume {
+            cmd.arg("--resume");
+        }
+        let o = cmd.output().unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (code, stderr) = run(false);
+    assert_eq!(code, Some(0), "{stderr}");
+    let urdf = dir.join("hex18.urdf");
+    let body = std::fs::read_to_string(&urdf).unwrap();
+    let doubled = body.replacen(r#"<mass value="1.5"/>"#, r#"<mass value="3.0"/>"#, 1);
+    assert_ne!(body, doubled);
+    std::fs::write(&urdf, doubled).unwrap();
+    let (code, stderr) = run(true);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("holds evaluations of another specification")
+            && stderr.contains("its robot hex18.urdf changed"),
+        "{stderr}"
+    );
+}

@@ -177,7 +177,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         );
         assert!(heading.abs() < 10.0, "{name} turned {heading:.1}°");
         // the stance feet hold: Kraby's light knees at hex18's 1 ms step made each foot slide
-        // 0.6–0.95 m in 8 s (see scenario::resolve::SERVO_STEP_LIMIT)
+        // 0.6–0.95 m in 8 s (see setup::time_step::SERVO_STEP_LIMIT)
         let slip = foot_slip(&flat);
         assert!(
             slip.iter().all(|&s| s < 0.1),

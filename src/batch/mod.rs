@@ -167,6 +167,9 @@ pub struct Outcome {
     pub records: Vec<Record>,
     /// Results kept from an earlier run (`--resume`).
     pub resumed: usize,
+    /// Scenarios run again under `--resume` because they changed since their result, each
+    /// with what changed (`NAME: robots/x/foot.stl changed`).
+    pub changed: Vec<String>,
     /// Scenarios not run because the batch was interrupted.
     pub not_run: usize,
     pub interrupted: bool,
@@ -192,6 +195,7 @@ pub fn run(scenarios: &[Scenario], options: &Options) -> Result<Outcome> {
         .collect();
     // keep what an earlier run finished (same name and content); a cut-off last line is dropped
     let mut kept = Vec::new();
+    let mut changed = Vec::new();
     if options.resume && options.output.exists() {
         let (old, _cut) = results::read(&options.output, true)?;
         let wanted: HashMap<(&str, &str), usize> = mine
@@ -209,6 +213,13 @@ pub fn run(scenarios: &[Scenario], options: &Options) -> Result<Outcome> {
                 r.total = total;
                 r.shard = [options.shard.index, options.shard.count];
                 kept.push(r);
+            } else if let Some((_, s)) = mine.iter().find(|(_, s)| s.name == r.name)
+                && s.hash != r.hash
+                && !changed
+                    .iter()
+                    .any(|c: &String| c.starts_with(&format!("{}:", s.name)))
+            {
+                changed.push(rerun_because(s, &r));
             }
         }
     }
@@ -304,6 +315,7 @@ pub fn run(scenarios: &[Scenario], options: &Options) -> Result<Outcome> {
     Ok(Outcome {
         records,
         resumed,
+        changed,
         not_run,
         interrupted: crate::runner::interrupted(),
         wall_time,
@@ -356,6 +368,7 @@ fn run_one(
         name: s.name.clone(),
         file: s.file.display().to_string(),
         hash: s.hash.clone(),
+        inputs: s.read.digests(),
         kind: s.kind(),
         seed: s.seed,
         index,
@@ -410,6 +423,24 @@ fn run_one(
         }
     }
     Some(record)
+}
+
+/// Why `--resume` runs `s` again though `r` is its earlier result: the files whose content
+/// changed, else its fields or hexsim's version.
+fn rerun_because(s: &Scenario, r: &Record) -> String {
+    let files = crate::scenario::inputs::changed(&r.inputs, &s.read.digests());
+    if !files.is_empty() && !r.inputs.is_empty() {
+        format!("{}: {} changed", s.name, files.join(", "))
+    } else if r.hexsim_version != env!("CARGO_PKG_VERSION") {
+        format!(
+            "{}: run by hexsim {}, this is {}",
+            s.name,
+            r.hexsim_version,
+            env!("CARGO_PKG_VERSION")
+        )
+    } else {
+        format!("{}: its fields changed", s.name)
+    }
 }
 
 /// `distance_min: 0.412 < 2`.

@@ -32,6 +32,10 @@ pub struct Record {
     pub file: String,
     /// The scenario's content hash (see [`crate::scenario::Scenario::hash`]).
     pub hash: String,
+    /// Every file the scenario read, with the digest of its content (see
+    /// [`crate::scenario::inputs`]): what `--resume` names when a scenario changed.
+    #[serde(default)]
+    pub inputs: std::collections::BTreeMap<String, String>,
     pub kind: Kind,
     pub seed: Option<u32>,
     /// Position in the batch's expanded, name-sorted scenario list, and the list's length.

@@ -88,18 +88,6 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
         dt: Some(args.dt),
         contact: args.contact,
         allow_unstable_dt: args.allow_unstable_dt,
-        robot: None,
-        gait: None,
-        settle: None,
-        follow_terrain: None,
-        rolling_feet: None,
-        reactive_gait: None,
-        articulation: None,
-        solver_iterations: None,
-        pgs_iterations: None,
-        servo: None,
-        start: None,
-        command: None,
         ball: Some(BallSpec {
             radius: args.radius,
             mass: args.mass,
@@ -117,8 +105,8 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
             log_rate: Some(args.log_rate),
             ..Default::default()
         },
-        expect: Default::default(),
-        tolerance: Default::default(),
+        // the walk's fields unset (a ball refuses them), no expectations
+        ..ScenarioSpec::default()
     };
     let scenario = Scenario::resolve(spec, "ball".into(), Path::new(COMMAND_LINE))?;
     let terrain_name = scenario.terrain_name().to_string();

@@ -144,6 +144,9 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
             outcome.records.len() <= 60 || args.all
         )
     );
+    for change in &outcome.changed {
+        println!("run again (changed since its result): {change}");
+    }
     if outcome.resumed > 0 {
         println!(
             "{} results kept from the earlier run (--resume)",

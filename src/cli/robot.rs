@@ -112,9 +112,8 @@ fn standing(out: &mut String, model: &RobotModel, fitted: &Fitted) {
     let torques = statics::standing_torques(model, pose, STANDARD_GRAVITY, 6);
     let gait = &fitted.gait;
     let support = hexsim::gait::minimum_support(&gait.offsets, gait.duty_factor);
-    let load = statics::foot_load(model, STANDARD_GRAVITY, support);
-    let (stiffness, damping, reason) =
-        robot::servo::fitted_gains(model, pose, load, gait.step_height);
+    let (gains, reason) = hexsim::setup::servo::fitted(model, pose, support, gait.step_height);
+    let (stiffness, damping) = (gains.stiffness, gains.damping);
     let why = match reason {
         robot::servo::FittedFor::Reference => "hex18's".to_string(),
         robot::servo::FittedFor::Bandwidth => "the reference bandwidth on these legs".to_string(),
@@ -407,8 +406,14 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             );
         }
     }
-    let ratio = model.total_mass() / builtin::hex18().total_mass();
-    let ground = hexsim::contact::NormalLaw::default().scaled(ratio);
+    let (ground, fitted) = hexsim::setup::ground::fit(
+        hexsim::contact::NormalLaw::default(),
+        hexsim::setup::ground::Given::default(),
+        model,
+        0,
+    )
+    .expect("a fitted ground is never refused");
+    let ratio = fitted.mass_ratio;
     let _ = writeln!(
         out,
         "  ground for a scenario that leaves the contact out: k = {} N/m, c = {} N·s/m (the reference contact fitted to the robot's weight, {ratio:.2} × hex18's: its feet sink as hex18's)",

@@ -189,13 +189,12 @@ fn spec(args: &RunArgs) -> ScenarioSpec {
             turn_deg_s: args.turn,
             ramp: 0.0,
         }]),
-        ball: None,
         record: RecordSpec {
             log_rate: Some(args.log_rate),
             ..Default::default()
         },
-        expect: Default::default(),
-        tolerance: Default::default(),
+        // a field without a flag (a ball's, the expectations) as a scenario file leaves it
+        ..ScenarioSpec::default()
     }
 }
 

@@ -95,12 +95,9 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
             )));
         }
     }
-    if let Some(d) = spec.duration
-        && !(d.is_finite() && d > 0.0)
-    {
-        return Err(fail(format!(
-            "duration: expected a finite number > 0 s, got {d}"
-        )));
+    if let Some(d) = spec.duration {
+        crate::limits::check_number(d, crate::limits::Range::Positive, "s")
+            .map_err(|e| fail(format!("duration: {e}")))?;
     }
     let (scenario_path, table) = scenario::read_table(path, &spec.scenario).map_err(fail)?;
     if table.contains_key("sweep") {
@@ -115,7 +112,7 @@ pub fn load(path: &Path) -> Result<Comparison, ScenarioError> {
         if let Some(d) = spec.duration {
             table.insert("duration".into(), toml::Value::Float(d));
         }
-        scenario::overlay(&mut table, "contact", setting.contact.clone())
+        scenario::overlay::set_all(&mut table, "contact", setting.contact.clone())
             .map_err(|e| fail(format!("scenario {}: {e}", scenario_path.display())))?;
         let resolved = scenario::from_table(table, setting.name.clone(), &scenario_path)
             .map_err(|e| fail(format!("setting {:?}: {e}", setting.name)))?;

@@ -157,18 +157,12 @@ impl FrictionLaw {
     /// Checks the parameters, returning the name of the bad field and what was expected.
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         let nonneg = |name: &'static str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err((name, format!("expected a finite number ≥ 0, got {v}")))
-            }
+            crate::limits::check_number(v, crate::limits::Range::NonNegative, "")
+                .map_err(|e| (name, e))
         };
         let positive = |name: &'static str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err((name, format!("expected a finite number > 0, got {v}")))
-            }
+            crate::limits::check_number(v, crate::limits::Range::Positive, "")
+                .map_err(|e| (name, e))
         };
         match *self {
             FrictionLaw::None => Ok(()),

@@ -40,12 +40,16 @@ pub struct BallMetrics {
     radius: f64,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
     #[serde(skip)]
-    output: Option<PathBuf>,
+    output: Option<super::metadata::MetricsFile>,
 }
 
 impl BallMetrics {
     /// Metrics of a ball of `radius` starting at `initial`; written to `output` at the end.
-    pub fn new(initial: &BallSample, radius: f64, output: Option<PathBuf>) -> Self {
+    pub fn new(
+        initial: &BallSample,
+        radius: f64,
+        output: Option<super::metadata::MetricsFile>,
+    ) -> Self {
         BallMetrics {
             output,
             initial_energy: initial.total_energy(),
@@ -61,7 +65,7 @@ impl BallMetrics {
 impl<W: ?Sized> Observer<BallSample, W> for BallMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
-        crate::record::output::write_json(self.output.as_deref(), self)
+        super::metadata::write(self.output.as_ref(), self)
     }
 
     fn observe(&mut self, s: &BallSample, _: &W) -> Result<()> {

@@ -1,6 +1,7 @@
 //! A walk's metrics: accumulated step by step over the walk (settling excluded), written as JSON,
 //! and their table.
 
+use super::metadata::MetricsFile;
 use super::{Better, Bound, Metric, Table, Value};
 use crate::contact::ContactForce;
 use crate::record::Observer;
@@ -110,7 +111,7 @@ pub struct HexapodMetrics {
     acc: Accumulators,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
     #[serde(skip)]
-    output: Option<PathBuf>,
+    output: Option<MetricsFile>,
 }
 
 /// The stance the robot walked in (see `gait::fit`), as the metrics JSON's `stance` object.
@@ -167,7 +168,7 @@ impl StanceMetrics {
 
 /// The ground a walk ran on, as the metrics JSON's `ground` object: the contact's stiffness and
 /// damping, "given" by the scenario or "fitted" to the robot's weight (the reference contact
-/// scaled by `mass_ratio`, the robot's mass over hex18's; see `scenario::resolve`).
+/// scaled by `mass_ratio`, the robot's mass over hex18's; see `setup::ground`).
 #[derive(Debug, Clone, Serialize, Deserialize, Default, PartialEq)]
 #[serde(default)]
 pub struct GroundMetrics {
@@ -287,7 +288,7 @@ pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
 impl HexapodMetrics {
     /// Metrics of a walk at step `dt` of a robot of `mass` whose joints have `limits` (lower,
     /// upper, rad); written to `output` at the end.
-    pub fn new(dt: f64, mass: f64, limits: Vec<(f64, f64)>, output: Option<PathBuf>) -> Self {
+    pub fn new(dt: f64, mass: f64, limits: Vec<(f64, f64)>, output: Option<MetricsFile>) -> Self {
         HexapodMetrics {
             acc: Accumulators {
                 dt,
@@ -355,7 +356,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
         self.judge();
-        crate::record::output::write_json(self.output.as_deref(), self)
+        super::metadata::write(self.output.as_ref(), self)
     }
 
     fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {

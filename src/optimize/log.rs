@@ -26,7 +26,8 @@ pub fn specification_file(dir: &Path) -> PathBuf {
 /// robot, terrain, gait, contact and duration; the constraints and articulation), the searched
 /// terrains and seeds, the parameters and their bounds, the objective, CMA-ES's seed and
 /// population, and the start. A resumed search or a shard step replays logged evaluations only
-/// under the same parts. Left out: the number of generations (a search may be extended) and the
+/// under the same parts, and the same content of every file the walks read (each a part of its
+/// own, named by what it is and its file name) and hexsim's version. Left out: the number of generations (a search may be extended) and the
 /// check seeds (walked after the search, not logged).
 pub fn fingerprint(opt: &Optimization) -> BTreeMap<String, String> {
     let mut scenario = opt.base.clone();
@@ -53,10 +54,19 @@ pub fn fingerprint(opt: &Optimization) -> BTreeMap<String, String> {
         ),
         ("start", serde_json::json!(opt.start)),
     ];
-    parts
+    let mut parts: BTreeMap<String, String> = parts
         .into_iter()
         .map(|(name, value)| (name.to_string(), short_hash(&value.to_string())))
-        .collect()
+        .collect();
+    parts.insert(
+        "hexsim version".into(),
+        short_hash(env!("CARGO_PKG_VERSION")),
+    );
+    // every file the walks read, by its content: the robot, its meshes, the gait, the terrains
+    for (name, digest) in &opt.read {
+        parts.insert(name.clone(), digest.clone());
+    }
+    parts
 }
 
 fn short_hash(text: &str) -> String {

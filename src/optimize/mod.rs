@@ -35,7 +35,7 @@ pub mod results;
 pub mod search;
 
 pub use parameters::{Domain, Parameter, searchable};
-use parameters::{Range, parameter, set, start_point};
+use parameters::{Range, parameter, start_point};
 
 use crate::metrics::{HexapodMetrics, Metrics, walk};
 use crate::runner::Outputs;
@@ -93,6 +93,10 @@ pub struct Optimization {
     pub file: PathBuf,
     /// Every file the search reads, with what it is: no output may be one of them.
     pub inputs: Vec<(&'static str, PathBuf)>,
+    /// The digest of every file its walks read, by what it is and its name
+    /// ([`crate::scenario::inputs`]): part of
+    /// the fingerprint a resumed or sharded search is checked against.
+    pub read: BTreeMap<String, String>,
     pub description: Option<String>,
     /// The scenario's table, with the duration, articulation and constraints applied and its
     /// gait inline; candidates change its parameters.
@@ -187,12 +191,9 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
             )));
         }
     }
-    if let Some(d) = spec.duration
-        && !(d.is_finite() && d > 0.0)
-    {
-        return Err(fail(format!(
-            "duration: expected a finite number > 0 s, got {d}"
-        )));
+    if let Some(d) = spec.duration {
+        crate::limits::check_number(d, crate::limits::Range::Positive, "s")
+            .map_err(|e| fail(format!("duration: {e}")))?;
     }
     let (scenario_path, mut base) = match &spec.scenario {
         toml::Value::String(file) => scenario::read_table(path, Path::new(file)).map_err(fail)?,
@@ -267,10 +268,18 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
                 .into(),
         ));
     }
+    // each parameter's path laid over the scenario once, so a candidate's is never refused
+    for p in &parameters {
+        let mut table = base.clone();
+        scenario::overlay::set(&mut table, &p.name, p.value(0.5))
+            .map_err(|e| fail(format!("parameters.{}: {e}", p.name)))?;
+    }
     // the start: the scenario's own values (resolved, so fitted lengths count), in the bounds
     let reference = resolve(&base, &scenario_path, "start", spec.seeds[0])
         .map_err(|e| fail(format!("the scenario as a start: {e}")))?;
-    let cases = cases(&spec, path, &base, &scenario_path, &reference).map_err(fail)?;
+    let mut read = BTreeMap::new();
+    reference.read.named_into(&mut read);
+    let cases = cases(&spec, path, &base, &scenario_path, &reference, &mut read).map_err(fail)?;
     let start = start_point(&parameters, &base, &reference);
     inputs.extend(
         reference
@@ -285,6 +294,7 @@ pub fn load(path: &Path) -> Result<Optimization, ScenarioError> {
     );
     Ok(Optimization {
         inputs,
+        read,
         file: path.to_path_buf(),
         description: spec.description,
         base,
@@ -343,6 +353,7 @@ fn cases(
     base: &toml::Table,
     scenario_path: &Path,
     reference: &Scenario,
+    read: &mut BTreeMap<String, String>,
 ) -> Result<Vec<Case>, String> {
     let terrains: Vec<(Option<PathBuf>, String, bool)> = match &spec.terrains {
         None => vec![(
@@ -363,6 +374,7 @@ fn cases(
                 );
                 let scenario = resolve(&table, scenario_path, "start", spec.seeds[0])
                     .map_err(|e| format!("terrains: {}: {}", file.display(), e.message))?;
+                scenario.read.named_into(read);
                 Ok((
                     Some(absolute),
                     stem(scenario.terrain_name()),
@@ -426,13 +438,15 @@ impl Optimization {
         stem(&self.file.to_string_lossy())
     }
 
-    /// The scenario table of a candidate: its parameters laid over the base.
-    pub fn candidate_table(&self, x: &[f64]) -> toml::Table {
+    /// The scenario table of a candidate: its parameters laid over the base (each checked
+    /// when the search was loaded, so none is refused here).
+    pub fn candidate_table(&self, x: &[f64]) -> Result<toml::Table, String> {
         let mut table = self.base.clone();
         for (p, &value) in self.parameters.iter().zip(x) {
-            set(&mut table, &p.name, p.value(value));
+            scenario::overlay::set(&mut table, &p.name, p.value(value))
+                .map_err(|e| format!("parameters.{}: {e}", p.name))?;
         }
-        table
+        Ok(table)
     }
 
     /// The candidate's parameters by name, as the scenario gets them (a choice by its name).
@@ -453,7 +467,7 @@ impl Optimization {
     /// The best candidate's gait, as a gait file's text; the searched values that are not the
     /// gait's (servo gains, the commanded speed) head it as comments saying where they go.
     pub fn gait_file(&self, x: &[f64]) -> String {
-        let table = self.candidate_table(x);
+        let table = self.candidate_table(x).unwrap_or_default();
         let mut text = String::new();
         for (p, &v) in self.parameters.iter().zip(x) {
             let value = p.value(v);
@@ -548,7 +562,10 @@ impl Optimization {
         articulation: Option<crate::sim::Articulation>,
         name: &str,
     ) -> Result<Scenario, ScenarioError> {
-        let mut table = self.candidate_table(x);
+        let mut table = self.candidate_table(x).map_err(|message| ScenarioError {
+            file: self.file.clone(),
+            message,
+        })?;
         if let Some(a) = articulation {
             table.insert("articulation".into(), toml::Value::String(a.name().into()));
         }

@@ -220,12 +220,15 @@ pub(super) fn start_point(
         .iter()
         .map(|p| {
             let (low, high) = p.bounds();
-            let (tables, field) = p.name.rsplit_once('.').expect("parameters are dotted");
-            let table = tables
-                .split('.')
-                .try_fold(&values, |t, part| t.get(part)?.as_table());
-            table
-                .and_then(|t| t.get(field))
+            // a searchable parameter is a dotted path (see `searchable`)
+            p.name
+                .rsplit_once('.')
+                .and_then(|(tables, field)| {
+                    tables
+                        .split('.')
+                        .try_fold(&values, |t, part| t.get(part)?.as_table())?
+                        .get(field)
+                })
                 .and_then(|v| p.coordinate(v))
                 .unwrap_or(match p.domain {
                     Domain::Choice(_) => 0.5,
@@ -233,42 +236,4 @@ pub(super) fn start_point(
                 })
         })
         .collect()
-}
-
-/// Sets the field at dotted `path` of a scenario table; `command.FIELD` is the first (only)
-/// [[command]]'s, made when the scenario has none (at 0 s, no ramp: the default command's).
-pub(super) fn set(table: &mut toml::Table, path: &str, value: toml::Value) {
-    let (first, rest) = path.split_once('.').expect("parameters are dotted");
-    if first == "command" {
-        let list = table
-            .entry("command")
-            .or_insert_with(|| toml::Value::Array(Vec::new()));
-        if let Some(list) = list.as_array_mut() {
-            if list.is_empty() {
-                list.push(toml::Value::Table(toml::Table::from_iter([(
-                    "ramp".to_string(),
-                    toml::Value::Float(0.0),
-                )])));
-            }
-            if let Some(command) = list[0].as_table_mut() {
-                command.insert(rest.to_string(), value);
-            }
-        }
-        return;
-    }
-    let mut at = table;
-    let mut parts = path.split('.').peekable();
-    while let Some(part) = parts.next() {
-        if parts.peek().is_none() {
-            at.insert(part.to_string(), value);
-            return;
-        }
-        let next = at
-            .entry(part)
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        if !next.is_table() {
-            *next = toml::Value::Table(toml::Table::new());
-        }
-        at = next.as_table_mut().expect("made a table");
-    }
 }

@@ -19,6 +19,7 @@ pub mod rerun;
 pub mod standing;
 pub mod table;
 
+use crate::metrics::metadata::{Metadata, MetricsFile};
 use anyhow::Result;
 use std::path::{Path, PathBuf};
 use table::{RowOf, SharedTable, Sink, Tabulated};
@@ -87,7 +88,7 @@ impl Output {
 
 /// What a run is asked to write, in order (the files it wrote are named in this order).
 #[derive(Default)]
-pub struct Outputs(Vec<Output>);
+pub struct Outputs(Vec<Output>, Option<Box<Metadata>>);
 
 impl Outputs {
     pub fn new() -> Self {
@@ -106,6 +107,12 @@ impl Outputs {
             Some(output) => self.with(output),
             None => self,
         }
+    }
+
+    /// The list, its metrics file ending with `metadata` (where the run came from).
+    pub fn described(mut self, metadata: Metadata) -> Self {
+        self.1 = Some(Box::new(metadata));
+        self
     }
 
     /// The files of a run's command-line options: a recording, a trajectory CSV, a metrics
@@ -162,12 +169,15 @@ pub trait Scene {
 #[allow(clippy::type_complexity)]
 pub fn observers<S: Scene>(
     scene: &S,
-    outputs: Outputs,
-) -> Result<(Vec<Box<dyn Observer<S::Sample, S::World>>>, Option<PathBuf>)> {
+    mut outputs: Outputs,
+) -> Result<(
+    Vec<Box<dyn Observer<S::Sample, S::World>>>,
+    Option<MetricsFile>,
+)> {
     outputs.check_writable()?;
     let mut list: Vec<Box<dyn Observer<S::Sample, S::World>>> = Vec::new();
     let mut metrics = None;
-    for output in outputs.0 {
+    for output in std::mem::take(&mut outputs.0) {
         match output {
             Output::Recording(path) => list.push(scene.recorder(&path)?),
             Output::Trajectory(path) => {
@@ -185,7 +195,12 @@ pub fn observers<S: Scene>(
                 list.push(Box::new(Tabulated::new(sink, columns, scene.every(), row)));
             }
             Output::Progress(report) => list.push(Box::new(progress::Progress::new(report))),
-            Output::Metrics(path) => metrics = Some(path),
+            Output::Metrics(path) => {
+                metrics = Some(MetricsFile {
+                    path,
+                    metadata: outputs.1.clone(),
+                })
+            }
         }
     }
     Ok((list, metrics))

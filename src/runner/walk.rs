@@ -32,19 +32,28 @@ pub struct WalkRun {
     pub placement: Placement,
     /// Seconds standing before the gait starts.
     pub settle_time: f64,
-    /// Keep the body level by following the terrain under the feet.
-    pub terrain_following: bool,
-    /// Move the feet's targets with their spheres' rolling (see [`crate::gait::controller`]).
-    pub rolling_feet: bool,
-    /// The reactive gait (see [`crate::gait`]'s `reactive`).
-    pub reactive_gait: bool,
-    /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
-    pub load_feedforward: bool,
+    /// How the walker drives its legs, as the scenario's fields of the same names say.
+    pub switches: WalkSwitches,
     /// Seconds walked.
     pub duration: f64,
     /// Samples per second in the recording and trajectory.
     pub log_rate: f64,
     pub outputs: Outputs,
+}
+
+/// How a walk drives its legs: the scenario's fields of the same names, with their defaults
+/// ([`crate::scenario::ScenarioSpec::switches`]). A new one is a field here, read where it acts,
+/// and its field in the scenario's spec.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WalkSwitches {
+    /// Keep the body level by following the terrain under the feet.
+    pub follow_terrain: bool,
+    /// Move the feet's targets with their spheres' rolling (see [`crate::gait::controller`]).
+    pub rolling_feet: bool,
+    /// The reactive gait (see [`crate::gait`]'s `reactive`).
+    pub reactive_gait: bool,
+    /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
+    pub feedforward: bool,
 }
 
 /// What a run produced. A run that diverged still wrote its files; `failure` says what happened.
@@ -101,7 +110,7 @@ impl WalkRun {
     pub fn start(self) -> Result<WalkSession> {
         let controller = GaitController::new(&self.robot, self.gait.gait.clone())
             .map_err(|e| anyhow::anyhow!("gait {}: {e}", self.gait.gait.name))?
-            .with_rolling_feet(self.rolling_feet);
+            .with_rolling_feet(self.switches.rolling_feet);
         let pose = self.robot.pose_from_legs(&controller.standing_angles());
         let dt = self.settings.dt;
         let hexapod = Hexapod::new(
@@ -113,9 +122,9 @@ impl WalkRun {
             &pose,
         );
         let mut walker = Walker::new(hexapod, controller, self.commands.at(0.0), self.settle_time);
-        walker.terrain_following = self.terrain_following;
-        walker.load_feedforward = self.load_feedforward;
-        walker.reactive = self.reactive_gait;
+        walker.terrain_following = self.switches.follow_terrain;
+        walker.load_feedforward = self.switches.feedforward;
+        walker.reactive = self.switches.reactive_gait;
         let every = decimation(self.log_rate, dt);
 
         let name = match self.settings.articulation {

@@ -4,6 +4,8 @@
 
 pub mod builtin;
 pub mod expect;
+pub mod inputs;
+pub mod overlay;
 mod resolve;
 pub mod spec;
 pub mod sweep;
@@ -50,8 +52,11 @@ pub struct Scenario {
     pub name: String,
     /// The file it came from.
     pub file: PathBuf,
-    /// Identifies the scenario's content: its fields and the robot, gait and terrain it uses.
+    /// The scenario's fingerprint: hexsim's version, its fields and the content of every file
+    /// it read ([`inputs`]). What `batch --resume` compares.
     pub hash: String,
+    /// The files it read, each with its digest.
+    pub read: inputs::Inputs,
     pub spec: ScenarioSpec,
     /// The terrain generator's seed, if it has one.
     pub seed: Option<u32>,
@@ -83,13 +88,7 @@ struct WalkSetup {
     commands: CommandSchedule,
     settings: HexapodSettings,
     settle: f64,
-    follow_terrain: bool,
-    /// Feet targets moved with their spheres' rolling (see `gait::controller`).
-    rolling_feet: bool,
-    /// The reactive gait (see `gait::reactive`).
-    reactive_gait: bool,
-    /// Servo targets held against the load (see `sim::Walker::load_feedforward`).
-    feedforward: bool,
+    switches: crate::runner::walk::WalkSwitches,
     start: spec::StartSpec,
     /// The contact's stiffness and damping and where they came from.
     ground: crate::metrics::GroundMetrics,
@@ -142,22 +141,6 @@ pub fn read_table(spec: &Path, file: &Path) -> Result<(PathBuf, toml::Table), St
         format!("scenario {}: {}", path.display(), e.to_string().trim_end())
     })?;
     Ok((path, table))
-}
-
-/// Lays `fields` over the table `section` of a scenario's `table` (made if it has none).
-pub fn overlay(
-    table: &mut toml::Table,
-    section: &str,
-    fields: impl IntoIterator<Item = (String, toml::Value)>,
-) -> Result<(), String> {
-    let entry = table
-        .entry(section)
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    let Some(target) = entry.as_table_mut() else {
-        return Err(format!("[{section}] is not a table"));
-    };
-    target.extend(fields);
-    Ok(())
 }
 
 /// Resolves a scenario given as a TOML table (e.g. a scenario file's with some fields changed);
@@ -276,7 +259,7 @@ impl Scenario {
         };
         let controller = GaitController::new(&w.robot, w.gait.gait.clone());
         Some(controller.map(|c| {
-            let mut controller = c.with_rolling_feet(w.rolling_feet);
+            let mut controller = c.with_rolling_feet(w.switches.rolling_feet);
             reach::planned(
                 &mut controller,
                 reach::Stepping {
@@ -284,7 +267,7 @@ impl Scenario {
                     settle: w.settle,
                     duration: self.spec.duration,
                     commands: &w.commands,
-                    stands_by_controller: w.feedforward && !w.follow_terrain,
+                    stands_by_controller: w.switches.feedforward && !w.switches.follow_terrain,
                 },
             )
         }))
@@ -322,10 +305,7 @@ impl Scenario {
             ground: w.ground.clone(),
             settings: w.settings,
             settle_time: w.settle,
-            terrain_following: w.follow_terrain,
-            rolling_feet: w.rolling_feet,
-            reactive_gait: w.reactive_gait,
-            load_feedforward: w.feedforward,
+            switches: w.switches,
             duration: self.spec.duration,
             log_rate: self.log_rate,
             outputs,
@@ -344,7 +324,8 @@ impl Scenario {
             );
         };
         let grid = Arc::new(self.build_terrain()?);
-        self.walk_run(w, grid, outputs).start()
+        self.walk_run(w, grid, outputs.described(self.metadata()))
+            .start()
     }
 
     /// The same scenario with the terrain generator's seed replaced (as `seed = …` in the file).
@@ -356,31 +337,51 @@ impl Scenario {
         Scenario::resolve(spec, self.name.clone(), &self.file)
     }
 
-    /// The files this scenario reads, each with what it is: the scenario file, the robot (and
-    /// its robot file), the gait, the terrain and its height data. No output may be one of them.
+    /// The files this scenario reads, each with what it is: the scenario file, the robot (its
+    /// robot file, its meshes), the gait, the terrain and its height data. No output may be one
+    /// of them.
     pub fn inputs(&self) -> Vec<(&'static str, PathBuf)> {
-        let base = self.file.parent().unwrap_or(Path::new(""));
         let mut inputs = Vec::new();
         if !self.file.as_os_str().is_empty() {
             inputs.push(("scenario file", self.file.clone()));
         }
-        if let Some(robot) = &self.spec.robot {
-            inputs.push(("robot", base.join(robot)));
-            inputs.push(("robot file", base.join(robot).with_extension("toml")));
-        }
-        if let Some(FileOr::File(gait)) = &self.spec.gait {
-            inputs.push(("gait file", base.join(gait)));
-        }
-        if self.spec.terrain.is_some() {
-            if matches!(self.spec.terrain, Some(FileOr::File(_))) {
-                inputs.push(("terrain file", self.terrain.origin.clone()));
-            }
-            if let Some(data) = self.terrain.spec.source.get().data_file() {
-                let folder = self.terrain.origin.parent().unwrap_or(Path::new(""));
-                inputs.push(("terrain's height file", folder.join(data)));
+        for input in self.read.iter().filter(|i| !i.builtin) {
+            inputs.push((input.what, input.path.clone()));
+            // a robot file written beside the URDF would be read by the next run
+            let robot_file = input.path.with_extension("toml");
+            if input.what == "robot" && !self.read.iter().any(|i| i.path == robot_file) {
+                inputs.push(("robot file", robot_file));
             }
         }
         inputs
+    }
+
+    /// Where a run of it comes from, for the end of its metrics file.
+    pub fn metadata(&self) -> crate::metrics::metadata::Metadata {
+        let read = |what: &str| {
+            self.read
+                .iter()
+                .find(|i| i.what == what)
+                .map(|i| i.path.display().to_string())
+        };
+        let walk = match &self.setup {
+            Setup::Walk(w) => Some(w),
+            Setup::Ball(_) => None,
+        };
+        crate::metrics::metadata::Metadata {
+            hexsim_version: env!("CARGO_PKG_VERSION").to_string(),
+            scenario: self.name.clone(),
+            scenario_file: (!self.file.as_os_str().is_empty())
+                .then(|| self.file.display().to_string()),
+            robot: walk.and(read("robot")),
+            terrain: self.terrain.name.clone(),
+            gait: walk.map(|_| read("gait file").unwrap_or_else(|| "inline".into())),
+            fingerprint: self.hash.clone(),
+            inputs: self.read.digests(),
+            seed: self.seed,
+            dt: self.spec.dt(),
+            articulation: walk.map(|w| w.settings.articulation.name().to_string()),
+        }
     }
 
     /// Runs the scenario and checks its expectations. An error is an input or output problem; a
@@ -392,6 +393,7 @@ impl Scenario {
             inputs.iter().map(|(what, path)| (*what, path.as_path())),
         )?;
         let grid = Arc::new(self.build_terrain()?);
+        let outputs = outputs.described(self.metadata());
         let spec = &self.spec;
         let started = std::time::Instant::now();
         let (metrics, steps_per_second, physics_seconds, failure, written) = match &self.setup {

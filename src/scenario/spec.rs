@@ -72,7 +72,7 @@ impl<'de, T: DeserializeOwned> Deserialize<'de> for FileOr<T> {
     }
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioSpec {
     /// Default: the file's name without `.toml`.
@@ -153,9 +153,37 @@ pub struct ScenarioSpec {
 
 /// The defaults of unset fields, in one place (the command line's options take theirs from here).
 /// Time step (s).
-pub const DEFAULT_DT: f64 = 1e-3;
+pub const DEFAULT_DT: f64 = crate::setup::time_step::DEFAULT_DT;
 
 impl ScenarioSpec {
+    /// A walk's fields, each with whether it is set: a ball scenario must set none.
+    pub fn walk_fields(&self) -> [(&'static str, bool); 12] {
+        [
+            ("robot", self.robot.is_some()),
+            ("gait", self.gait.is_some()),
+            ("settle", self.settle.is_some()),
+            ("follow_terrain", self.follow_terrain.is_some()),
+            ("rolling_feet", self.rolling_feet.is_some()),
+            ("reactive_gait", self.reactive_gait.is_some()),
+            ("articulation", self.articulation.is_some()),
+            ("solver_iterations", self.solver_iterations.is_some()),
+            ("pgs_iterations", self.pgs_iterations.is_some()),
+            ("servo", self.servo.is_some()),
+            ("start", self.start.is_some()),
+            ("command", self.command.is_some()),
+        ]
+    }
+
+    /// How a walk of it drives its legs, each switch's default applied.
+    pub fn switches(&self) -> crate::runner::walk::WalkSwitches {
+        crate::runner::walk::WalkSwitches {
+            follow_terrain: self.follow_terrain.unwrap_or(false),
+            rolling_feet: self.rolling_feet.unwrap_or(true),
+            reactive_gait: self.reactive_gait.unwrap_or(false),
+            feedforward: self.servo.and_then(|s| s.feedforward).unwrap_or(true),
+        }
+    }
+
     /// The time step: as given, else the default (a walk's resolved scenario holds the step it
     /// chose, see `resolve`).
     pub fn dt(&self) -> f64 {

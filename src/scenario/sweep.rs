@@ -92,7 +92,8 @@ pub fn expand(mut table: Table) -> Result<Vec<Variant>, String> {
         }
         let mut t = table.clone();
         for (key, value) in &assignments {
-            set(&mut t, key, value.clone())?;
+            super::overlay::set(&mut t, key, value.clone())
+                .map_err(|e| format!("sweep.\"{key}\": {e}"))?;
         }
         variants.push(Variant {
             assignments,
@@ -190,32 +191,6 @@ fn values(key: &str, spec: &Value) -> Result<Vec<Value>, String> {
 /// scenario's name says so).
 fn round12(v: f64) -> f64 {
     format!("{v:.11e}").parse().unwrap_or(v)
-}
-
-/// Sets a dotted key, creating missing tables on the way.
-fn set(table: &mut Table, key: &str, value: Value) -> Result<(), String> {
-    let parts: Vec<&str> = key.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
-        return Err(format!("sweep.\"{key}\": not a dotted key"));
-    }
-    let mut at = table;
-    for (i, part) in parts[..parts.len() - 1].iter().enumerate() {
-        let entry = at
-            .entry(part.to_string())
-            .or_insert_with(|| Value::Table(Table::new()));
-        at = match entry {
-            Value::Table(t) => t,
-            other => {
-                return Err(format!(
-                    "sweep.\"{key}\": `{}` is a {}, not a table (write it as an inline table to sweep its fields)",
-                    parts[..=i].join("."),
-                    other.type_str()
-                ));
-            }
-        };
-    }
-    at.insert(parts[parts.len() - 1].to_string(), value);
-    Ok(())
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@ use super::engine::{Engine, STANDARD_GRAVITY};
 use crate::contact::{
     ContactForce, ContactModel, ContactState, EffectiveMass, RollingBody, Variant,
 };
+use crate::limits::{Range, check_number};
 use crate::terrain::HeightGrid;
 use glam::{DVec3, Vec3};
 use rapier3d::prelude::{MassProperties, RigidBodyBuilder, RigidBodyHandle};
@@ -48,16 +49,11 @@ impl BallConfig {
     /// Checks every field, naming the bad one.
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         for (name, v) in [("radius", self.radius), ("mass", self.mass)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err((name, format!("expected a finite number > 0, got {v}")));
+            if let Err(e) = check_number(v, Range::Positive, "") {
+                return Err((name, e));
             }
         }
-        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
-            return Err((
-                "gravity",
-                format!("expected a finite number ≥ 0, got {}", self.gravity),
-            ));
-        }
+        check_number(self.gravity, Range::NonNegative, "").map_err(|e| ("gravity", e))?;
         for (name, v) in [
             ("position", self.position),
             ("velocity", self.velocity),
