@@ -242,7 +242,7 @@ pub fn write_titled(
             Err(_) => None,
         });
     }
-    frame_every_path(&recording, &tracks, body.size)?;
+    let label_step = LABEL_STEP * frame_every_path(&recording, &tracks, body.size)?;
     let rows = tracks
         .iter()
         .flatten()
@@ -264,6 +264,7 @@ pub fn write_titled(
             let setting = Setting {
                 entity: entity_name(&outcomes[k].name),
                 index: k,
+                label_step,
                 tree: trees[k].as_ref(),
             };
             log_row(
@@ -327,8 +328,14 @@ fn log_setting(
     Ok(tree)
 }
 
-/// One camera for all, still, framing every setting's path (and the body's size).
-fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<()> {
+/// The height between two settings' labels, as a share of the size the camera frames: about
+/// 2.5 label lines in the view, whatever the scene's scale (the camera stands 2.6 sizes off with a
+/// 50° field of view, looking down 30°), so labels stand apart rather than under each other.
+const LABEL_STEP: f64 = 0.16;
+
+/// One camera for all, still, framing every setting's path (and the body's size); returns the
+/// size it frames.
+fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<f64> {
     let (low, high) = tracks
         .iter()
         .flatten()
@@ -342,12 +349,13 @@ fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) 
     } else {
         (DVec3::ZERO, 0.0)
     };
-    let mut camera = FollowCamera::new(size.max(spread), false);
+    let framed = size.max(spread);
+    let mut camera = FollowCamera::new(framed, false);
     let overview = camera.follow(centre, 0.0, 0.0);
     recording
         .stream()
-        .log_static("world/camera", &camera::transform(&overview))
-        .map_err(Into::into)
+        .log_static("world/camera", &camera::transform(&overview))?;
+    Ok(framed)
 }
 
 /// A setting as its rows are logged.
@@ -355,6 +363,8 @@ struct Setting<'a> {
     entity: String,
     /// Its place in the comparison: its colour, and its label's height above the others'.
     index: usize,
+    /// The height between two settings' labels (m).
+    label_step: f64,
     tree: Option<&'a LinkTree>,
 }
 
@@ -387,15 +397,15 @@ fn log_row(
                     model.link_poses(&q).into_iter().map(|f| pose * f).collect();
                 tree.log_frames(rec, model, &frames, false, false)?;
             }
-            // stacked above the body, one line per setting, as the robots overlap
-            position + DVec3::Z * (body.size * (0.6 + 0.12 * k))
+            // stacked above the body, a line apart in the view, as the robots overlap
+            position + DVec3::Z * (body.size * 0.6 + setting.label_step * k)
         }
         Kind::Ball { .. } => {
             rec.log(
                 format!("world/{name}/ball"),
                 &rerun::Transform3D::from_translation(point),
             )?;
-            position + DVec3::Z * (body.size * (0.3 + 0.06 * k))
+            position + DVec3::Z * (body.size * 0.3 + setting.label_step * k)
         }
     };
     rec.log(
