@@ -169,7 +169,8 @@ fn run_walks_and_writes_recording_trajectory_and_metrics() {
     let header = trajectory.lines().next().unwrap();
     assert!(
         header.starts_with("time,x,y,z,roll,pitch,yaw")
-            && header.contains("lf_coxa_joint_torque")
+            && header.contains(",lf_coxa_angle,")
+            && header.contains("rr_tibia_torque")
             && header.ends_with("rr_contact,rr_slip")
     );
     assert_eq!(

@@ -126,10 +126,9 @@ impl<'a> Track<'a> {
         let (attitude, joints) = match &body.kind {
             Kind::Robot(model) => (
                 Some([col("roll")?, col("pitch")?, col("yaw")?]),
-                model
-                    .joints
+                crate::record::joint_columns::joint_columns(model)
                     .iter()
-                    .map(|j| col(&format!("{}_angle", j.name)))
+                    .map(|j| col(&format!("{j}_angle")))
                     .collect::<Result<_>>()?,
             ),
             Kind::Ball { .. } => (None, Vec::new()),

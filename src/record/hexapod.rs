@@ -501,13 +501,10 @@ impl Scene for WalkScene {
         ]
         .map(String::from)
         .to_vec();
+        // named by leg and role, in the model's joint order
+        let joints = super::joint_columns::joint_columns(&self.robot);
         for suffix in ["angle", "target", "torque"] {
-            columns.extend(
-                self.robot
-                    .joints
-                    .iter()
-                    .map(|j| format!("{}_{suffix}", j.name)),
-            );
+            columns.extend(joints.iter().map(|j| format!("{j}_{suffix}")));
         }
         for leg in LEG_NAMES {
             columns.extend(

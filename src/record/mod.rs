@@ -12,6 +12,7 @@ pub mod ball;
 pub mod blueprint;
 pub mod camera;
 pub mod hexapod;
+pub mod joint_columns;
 pub mod links;
 pub mod output;
 pub mod progress;
