@@ -14,6 +14,7 @@ pub mod camera;
 pub mod hexapod;
 pub mod joint_columns;
 pub mod links;
+pub mod mesh;
 pub mod output;
 pub mod progress;
 pub mod rerun;
