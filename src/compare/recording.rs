@@ -241,7 +241,7 @@ pub fn write_titled(
             Err(_) => None,
         });
     }
-    let label_step = LABEL_STEP * frame_every_path(&recording, &tracks, body.size)?;
+    let eye = frame_every_path(&recording, &tracks, body.size)?;
     let rows = tracks
         .iter()
         .flatten()
@@ -263,7 +263,7 @@ pub fn write_titled(
             let setting = Setting {
                 entity: entity_name(&outcomes[k].name),
                 index: k,
-                label_step,
+                eye,
                 tree: trees[k].as_ref(),
             };
             log_row(
@@ -327,14 +327,14 @@ fn log_setting(
     Ok(tree)
 }
 
-/// The height between two settings' labels, as a share of the size the camera frames: about
-/// 2.5 label lines in the view, whatever the scene's scale (the camera stands 2.6 sizes off with a
-/// 50° field of view, looking down 30°), so labels stand apart rather than under each other.
-const LABEL_STEP: f64 = 0.16;
+/// The height between two settings' labels, as a share of the body's distance from the camera:
+/// about 1.5 label lines in the view (50° field of view, looking down 30°) wherever the body
+/// is, so labels stand apart rather than under each other, and no farther.
+const LABEL_STEP: f64 = 0.05;
 
-/// One camera for all, still, framing every setting's path (and the body's size); returns the
-/// size it frames.
-fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<f64> {
+/// One camera for all, still, framing every setting's path (and the body's size); returns where
+/// it stands.
+fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<DVec3> {
     let (low, high) = tracks
         .iter()
         .flatten()
@@ -354,7 +354,7 @@ fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) 
     recording
         .stream()
         .log_static("world/camera", &camera::transform(&overview))?;
-    Ok(framed)
+    Ok(overview.eye)
 }
 
 /// A setting as its rows are logged.
@@ -362,8 +362,8 @@ struct Setting<'a> {
     entity: String,
     /// Its place in the comparison: its colour, and its label's height above the others'.
     index: usize,
-    /// The height between two settings' labels (m).
-    label_step: f64,
+    /// Where the camera stands, for the labels' spacing.
+    eye: DVec3,
     tree: Option<&'a LinkTree>,
 }
 
@@ -388,7 +388,7 @@ fn log_row(
         )?;
     }
     *path_end = Some(point);
-    let k = setting.index as f64;
+    let label_step = LABEL_STEP * setting.index as f64 * position.distance(setting.eye);
     let label_at = match &body.kind {
         Kind::Robot(model) => {
             if let (Some(tree), Some((pose, q))) = (setting.tree, track.pose(values)) {
@@ -397,14 +397,14 @@ fn log_row(
                 tree.log_frames(rec, model, &frames, false, false)?;
             }
             // stacked above the body, a line apart in the view, as the robots overlap
-            position + DVec3::Z * (body.size * 0.6 + setting.label_step * k)
+            position + DVec3::Z * (body.size * 0.6 + label_step)
         }
         Kind::Ball { .. } => {
             rec.log(
                 format!("world/{name}/ball"),
                 &rerun::Transform3D::from_translation(point),
             )?;
-            position + DVec3::Z * (body.size * 0.3 + setting.label_step * k)
+            position + DVec3::Z * (body.size * 0.3 + label_step)
         }
     };
     rec.log(
