@@ -76,6 +76,22 @@ fn terrain_export_writes_stl_and_png_that_read_back() {
     let png = image::open(dir.join("n.png")).unwrap();
     assert_eq!(png.color(), image::ColorType::L16);
     assert_eq!((png.width(), png.height()), (100, 100));
+    // an STL given where a terrain file is expected is its `[source]` (kind "stl", 1 cm cells)
+    let out = hexsim()
+        .args(["terrain", "info"])
+        .arg(dir.join("n.stl"))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("401 × 401 samples, cell 0.0100") && text.contains("x ∈ [-2.0, 2.0]"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -156,7 +172,8 @@ fn run_walks_and_writes_recording_trajectory_and_metrics() {
     let header = trajectory.lines().next().unwrap();
     assert!(
         header.starts_with("time,x,y,z,roll,pitch,yaw")
-            && header.contains("lf_coxa_joint_torque")
+            && header.contains(",lf_coxa_angle,")
+            && header.contains("rr_tibia_torque")
             && header.ends_with("rr_contact,rr_slip")
     );
     assert_eq!(

@@ -373,6 +373,18 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
             foot.from.describe()
         );
     }
+    // where a tool finds the URDF joint behind each trajectory column
+    let columns = hexsim::record::joint_columns::joint_columns(model);
+    let pairs: Vec<String> = columns
+        .iter()
+        .zip(&model.joints)
+        .map(|(column, joint)| format!("{column} = {}", joint.name))
+        .collect();
+    let _ = writeln!(
+        out,
+        "  trajectory joint columns ({{name}}_angle, _target, _torque) and their URDF joints: {}",
+        pairs.join(", ")
+    );
     let _ = writeln!(out, "  {}", contact_spheres(model));
     match fit(model, gait) {
         Err(e) => {

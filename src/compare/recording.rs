@@ -126,10 +126,9 @@ impl<'a> Track<'a> {
         let (attitude, joints) = match &body.kind {
             Kind::Robot(model) => (
                 Some([col("roll")?, col("pitch")?, col("yaw")?]),
-                model
-                    .joints
+                crate::record::joint_columns::joint_columns(model)
                     .iter()
-                    .map(|j| col(&format!("{}_angle", j.name)))
+                    .map(|j| col(&format!("{j}_angle")))
                     .collect::<Result<_>>()?,
             ),
             Kind::Ball { .. } => (None, Vec::new()),
@@ -242,7 +241,7 @@ pub fn write_titled(
             Err(_) => None,
         });
     }
-    frame_every_path(&recording, &tracks, body.size)?;
+    let eye = frame_every_path(&recording, &tracks, body.size)?;
     let rows = tracks
         .iter()
         .flatten()
@@ -264,6 +263,7 @@ pub fn write_titled(
             let setting = Setting {
                 entity: entity_name(&outcomes[k].name),
                 index: k,
+                eye,
                 tree: trees[k].as_ref(),
             };
             log_row(
@@ -327,8 +327,14 @@ fn log_setting(
     Ok(tree)
 }
 
-/// One camera for all, still, framing every setting's path (and the body's size).
-fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<()> {
+/// The height between two settings' labels, as a share of the body's distance from the camera:
+/// about 1.5 label lines in the view (50° field of view, looking down 30°) wherever the body
+/// is, so labels stand apart rather than under each other, and no farther.
+const LABEL_STEP: f64 = 0.05;
+
+/// One camera for all, still, framing every setting's path (and the body's size); returns where
+/// it stands.
+fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) -> Result<DVec3> {
     let (low, high) = tracks
         .iter()
         .flatten()
@@ -342,12 +348,13 @@ fn frame_every_path(recording: &Recording, tracks: &[Option<Track>], size: f64) 
     } else {
         (DVec3::ZERO, 0.0)
     };
-    let mut camera = FollowCamera::new(size.max(spread), false);
+    let framed = size.max(spread);
+    let mut camera = FollowCamera::new(framed, false);
     let overview = camera.follow(centre, 0.0, 0.0);
     recording
         .stream()
-        .log_static("world/camera", &camera::transform(&overview))
-        .map_err(Into::into)
+        .log_static("world/camera", &camera::transform(&overview))?;
+    Ok(overview.eye)
 }
 
 /// A setting as its rows are logged.
@@ -355,6 +362,8 @@ struct Setting<'a> {
     entity: String,
     /// Its place in the comparison: its colour, and its label's height above the others'.
     index: usize,
+    /// Where the camera stands, for the labels' spacing.
+    eye: DVec3,
     tree: Option<&'a LinkTree>,
 }
 
@@ -379,7 +388,7 @@ fn log_row(
         )?;
     }
     *path_end = Some(point);
-    let k = setting.index as f64;
+    let label_step = LABEL_STEP * setting.index as f64 * position.distance(setting.eye);
     let label_at = match &body.kind {
         Kind::Robot(model) => {
             if let (Some(tree), Some((pose, q))) = (setting.tree, track.pose(values)) {
@@ -387,15 +396,15 @@ fn log_row(
                     model.link_poses(&q).into_iter().map(|f| pose * f).collect();
                 tree.log_frames(rec, model, &frames, false, false)?;
             }
-            // stacked above the body, one line per setting, as the robots overlap
-            position + DVec3::Z * (body.size * (0.6 + 0.12 * k))
+            // stacked above the body, a line apart in the view, as the robots overlap
+            position + DVec3::Z * (body.size * 0.6 + label_step)
         }
         Kind::Ball { .. } => {
             rec.log(
                 format!("world/{name}/ball"),
                 &rerun::Transform3D::from_translation(point),
             )?;
-            position + DVec3::Z * (body.size * (0.3 + 0.06 * k))
+            position + DVec3::Z * (body.size * 0.3 + label_step)
         }
     };
     rec.log(

@@ -35,8 +35,8 @@ pub struct HexapodRecorder {
     scene_every: u64,
     /// The body position last added to the path.
     path_end: Option<[f32; 3]>,
-    /// The footfall lanes' last logged states (actual contact, scheduled stance).
-    footfall: [Option<[bool; 2]>; 6],
+    /// The footfall lanes' last logged states.
+    footfall: [Option<&'static str>; 6],
 }
 
 /// Samples between points of the body's path (at the default 50 Hz: 10 points a second).
@@ -50,9 +50,29 @@ const SCENE_RATE: f64 = 25.0;
 /// Seconds of history shown for the feet's stance trails.
 const TRAIL_SECONDS: f64 = 3.0;
 
-/// The footfall diagram's states: per leg two lanes, whether the foot touches the ground (the
-/// contact model's answer) and whether the gait schedules it in stance; a swing is a gap.
-const FOOTFALL_STATES: [&str; 3] = ["contact", "scheduled", "swing"];
+/// The footfall diagram's states, one lane per leg (an entity `footfall/{leg}`, so the viewer
+/// heads its row with the leg's name; two lanes as a leg's instances were headed `footfall/lf[]`,
+/// and as entities of their own took twelve rows, more than the view holds): the foot on the
+/// ground as scheduled (white), in the air while scheduled down (blue: a late touchdown or an
+/// early lift-off), on the ground while scheduled to swing (orange: a late lift-off, a stumble),
+/// and in the air as scheduled (a gap).
+const FOOTFALL_STATES: [(&str, [u8; 3]); 4] = [
+    ("stance", [235, 235, 235]),
+    ("scheduled, in the air", [60, 130, 200]),
+    ("down, scheduled to swing", [240, 140, 40]),
+    ("swing", [0, 0, 0]),
+];
+
+/// The footfall state of a foot on the ground (`down`) or not, scheduled in stance or not.
+fn footfall_state(down: bool, scheduled: bool) -> &'static str {
+    let k = match (down, scheduled) {
+        (true, true) => 0,
+        (false, true) => 1,
+        (true, false) => 2,
+        (false, false) => 3,
+    };
+    FOOTFALL_STATES[k].0
+}
 
 /// The viewer's default layout for a walk: the robot in 3D above its footfall diagram, beside tabs
 /// of time series (body; feet; each leg's joints).
@@ -91,7 +111,7 @@ fn layout(model: &RobotModel) -> Layout {
             Layout::vertical(
                 vec![
                     View::state_timeline(
-                        "footfall: per leg, contact (white) above schedule (blue)",
+                        "footfall: stance (white), airborne in stance (blue), down in swing (orange)",
                         "footfall",
                     )
                     .into(),
@@ -137,16 +157,16 @@ impl HexapodRecorder {
             let refs: Vec<&str> = names.iter().map(String::as_str).collect();
             recording.name_series(&format!("plots/joints/{}/torque", leg.name), &refs)?;
             // a classic footfall (Hildebrand) diagram: a bar while the foot is down, a gap while
-            // it swings
+            // it swings, coloured where the foot is not where the gait schedules it
             rec.log_static(
                 format!("footfall/{}", leg.name),
                 &rerun::StateConfiguration::new()
-                    .with_values(FOOTFALL_STATES)
-                    // a blank label: the lanes are named once, in the view's title, not in
+                    .with_values(FOOTFALL_STATES.map(|(state, _)| state))
+                    // a blank label: the states are named once, in the view's title, not in
                     // every bar (an empty label shows the state's name, cut to fit the bar)
-                    .with_labels([" ", " ", " "])
-                    .with_colors([[235, 235, 235], [60, 130, 200], [0, 0, 0]])
-                    .with_visible([true, true, false]),
+                    .with_labels([" "; 4])
+                    .with_colors(FOOTFALL_STATES.map(|(_, color)| color))
+                    .with_visible([true, true, true, false]),
             )?;
         }
         rec.log_static("world/camera", &camera::pinhole(0.05f32))?;
@@ -294,16 +314,12 @@ impl HexapodRecorder {
             let contact = s.robot.foot_contacts[k];
             // while settling every foot is scheduled down
             let scheduled = s.gait.as_ref().is_none_or(|g| g.phases[k].is_stance());
-            let lanes = [contact.is_some(), scheduled];
-            if self.footfall[k] != Some(lanes) {
-                self.footfall[k] = Some(lanes);
-                let states = lanes
-                    .iter()
-                    .zip(FOOTFALL_STATES)
-                    .map(|(&down, state)| if down { state } else { FOOTFALL_STATES[2] });
+            let state = footfall_state(contact.is_some(), scheduled);
+            // logged when it changes
+            if self.footfall[k].replace(state) != Some(state) {
                 rec.log(
                     format!("footfall/{}", leg.name),
-                    &rerun::StateChange::new().with_state(states),
+                    &rerun::StateChange::new().with_state([state]),
                 )?;
             }
         }
@@ -485,13 +501,10 @@ impl Scene for WalkScene {
         ]
         .map(String::from)
         .to_vec();
+        // named by leg and role, in the model's joint order
+        let joints = super::joint_columns::joint_columns(&self.robot);
         for suffix in ["angle", "target", "torque"] {
-            columns.extend(
-                self.robot
-                    .joints
-                    .iter()
-                    .map(|j| format!("{}_{suffix}", j.name)),
-            );
+            columns.extend(joints.iter().map(|j| format!("{j}_{suffix}")));
         }
         for leg in LEG_NAMES {
             columns.extend(

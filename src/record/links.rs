@@ -153,9 +153,24 @@ fn log_visual(
                 .with_colors([color])
                 .with_fill_mode(rerun::FillMode::Solid),
         )?,
-        Shape::Mesh { path, scale } => match rerun::Asset3D::from_file_path(path) {
-            Ok(asset) => {
-                rec.log_static(entity, &asset.with_albedo_factor(color))?;
+        Shape::Mesh { path, scale } => {
+            // a CAD mesh too detailed to copy into every link's entity is drawn simplified
+            let drawn = match super::mesh::simplified_stl(path) {
+                Some(mesh) => {
+                    let mesh = rerun::Mesh3D::new(mesh.vertices)
+                        .with_vertex_normals(mesh.normals)
+                        .with_triangle_indices(mesh.triangles)
+                        .with_albedo_factor(color);
+                    rec.log_static(entity, &mesh).map(|()| true)
+                }
+                None => match rerun::Asset3D::from_file_path(path) {
+                    Ok(asset) => rec
+                        .log_static(entity, &asset.with_albedo_factor(color))
+                        .map(|()| true),
+                    Err(_) => Ok(false),
+                },
+            }?;
+            if drawn {
                 // the URDF's mesh scale (e.g. 0.001 for a mesh drawn in millimetres)
                 let transform = rerun::Transform3D::from_translation_rotation_scale(
                     origin.translation.as_vec3().to_array(),
@@ -165,11 +180,11 @@ fn log_visual(
                 rec.log_static(entity, &transform)?;
                 return Ok(());
             }
-            Err(_) => rec.log_static(
+            rec.log_static(
                 entity,
                 &rerun::Ellipsoids3D::from_radii([0.01f32]).with_colors([color]),
-            )?,
-        },
+            )?
+        }
     }
     log_pose(rec, entity, &origin, true)
 }

@@ -2,7 +2,7 @@
 
 use super::blueprint::{self, Layout};
 use super::output::{commit, partial_path};
-use crate::terrain::{HeightGrid, io::mesh};
+use crate::terrain::HeightGrid;
 use anyhow::{Context, Result};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -112,24 +112,32 @@ impl Recording {
     }
 
     /// Logs the terrain as a static mesh coloured by height, drawn with at most
-    /// [`TERRAIN_MESH_SAMPLES`] of its samples (every n-th each way).
+    /// [`TERRAIN_MESH_SAMPLES`] of its samples (every n-th each way), and the flat apron the
+    /// contact reads beyond its edges out to [`APRON`], dimmed: without it the view showed the
+    /// viewer's background past the edge, a maroon band, where the robot walks on level ground.
     pub fn log_terrain(&self, entity: &str, grid: &HeightGrid) -> Result<()> {
         let decimated = decimated(grid, TERRAIN_MESH_SAMPLES)?;
-        let (vertices, triangles) = mesh(decimated.as_ref().unwrap_or(grid));
+        let (vertices, triangles, apron) = mesh_with_apron(decimated.as_ref().unwrap_or(grid));
         let (lo, hi) = grid.height_bounds();
         let span = (hi - lo).max(1e-9);
         let colors: Vec<[u8; 3]> = vertices
             .iter()
-            .map(|v| {
+            .zip(&apron)
+            .map(|(v, &outside)| {
                 let t = ((v[2] as f64 - lo) / span).clamp(0.0, 1.0);
+                let shade = if outside { 0.7 } else { 1.0 };
                 // earthy ramp: dark olive (low) to sand (high)
-                let mix = |a: f64, b: f64| (a + (b - a) * t) as u8;
+                let mix = |a: f64, b: f64| ((a + (b - a) * t) * shade) as u8;
                 [mix(70.0, 214.0), mix(92.0, 196.0), mix(50.0, 150.0)]
             })
             .collect();
         let normals: Vec<[f32; 3]> = vertices
             .iter()
-            .map(|v| grid.normal(v[0] as f64, v[1] as f64).as_vec3().to_array())
+            .zip(&apron)
+            .map(|(v, &outside)| match outside {
+                true => [0.0, 0.0, 1.0],
+                false => grid.normal(v[0] as f64, v[1] as f64).as_vec3().to_array(),
+            })
             .collect();
         self.stream.log_static(
             entity,
@@ -210,6 +218,49 @@ fn has_footer(path: &Path) -> bool {
 /// more detail than this.
 pub const TERRAIN_MESH_SAMPLES: usize = 1 << 20;
 
+/// How far the drawn terrain continues past the grid's edges (m): far enough that the ground
+/// reaches the horizon seen from the follow camera (below it by under 1° at 50 m).
+pub const APRON: f32 = 50.0;
+
+/// The grid's mesh (as [`crate::terrain::io::mesh`] makes it) ringed by one more row and column of vertices each side, [`APRON`]
+/// beyond the edge at the height of the nearest edge sample (the contact's flat continuation);
+/// with, per vertex, whether it lies outside the grid.
+fn mesh_with_apron(grid: &HeightGrid) -> (Vec<[f32; 3]>, Vec<[u32; 3]>, Vec<bool>) {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    // ring index k (0..n+2) → the grid index it copies and the offset past the edge
+    let ring = |k: usize, n: usize| match k {
+        0 => (0, -APRON),
+        k if k == n + 1 => (n - 1, APRON),
+        k => (k - 1, 0.0),
+    };
+    let (mut vertices, mut apron) = (Vec::new(), Vec::new());
+    for i in 0..rows + 2 {
+        let (gi, dy) = ring(i, rows);
+        for j in 0..cols + 2 {
+            let (gj, dx) = ring(j, cols);
+            vertices.push([
+                grid.x_at(gj) as f32 + dx,
+                grid.y_at(gi) as f32 + dy,
+                grid.sample(gi, gj) as f32,
+            ]);
+            apron.push(dx != 0.0 || dy != 0.0);
+        }
+    }
+    // two triangles a cell, wound as `terrain::io::mesh` winds them (normals up)
+    let width = cols + 2;
+    let mut triangles = Vec::with_capacity(2 * (rows + 1) * (cols + 1));
+    for i in 0..rows + 1 {
+        for j in 0..cols + 1 {
+            let a = (i * width + j) as u32;
+            let (b, c) = (a + 1, a + width as u32);
+            let d = c + 1;
+            triangles.push([a, b, d]);
+            triangles.push([a, d, c]);
+        }
+    }
+    (vertices, triangles, apron)
+}
+
 /// `grid` with every n-th sample each way, the least n that leaves at most `most` samples;
 /// None if it has no more than that already.
 fn decimated(grid: &HeightGrid, most: usize) -> Result<Option<HeightGrid>> {
@@ -239,22 +290,52 @@ pub fn viewer_on_path() -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
-/// Opens `file` in the rerun viewer, or explains how to install it.
+/// How long a started viewer is watched: one that cannot open a window (no display, no GPU)
+/// exits within a fraction of this, and the command then fails saying so, rather than ending
+/// as if the recording were on screen.
+const VIEWER_START: std::time::Duration = std::time::Duration::from_millis(1500);
+
+/// Opens `file` in the rerun viewer; an error if it is not installed, there is no display to
+/// open it on, or it exits at once (its own message is printed above ours).
 pub fn spawn_viewer(file: &Path) -> Result<()> {
-    match viewer_on_path() {
-        Some(viewer) => {
-            std::process::Command::new(viewer)
-                .arg(file)
-                .spawn()
-                .context("cannot start the rerun viewer")?;
-            Ok(())
-        }
-        None => anyhow::bail!(
+    let Some(viewer) = viewer_on_path() else {
+        anyhow::bail!(
             "the rerun viewer is not installed; install it with `pip install rerun-sdk==0.36.3` \
              (or `cargo binstall rerun-cli@0.36.3`), then open the recording with `rerun {}`",
             file.display()
-        ),
+        )
+    };
+    let elsewhere = format!(
+        "the recording is written: open it with `rerun {0}` where there is a display, or serve \
+         it to a browser with `rerun --web-viewer {0}`",
+        file.display()
+    );
+    let no_display = ["DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"]
+        .iter()
+        .all(|v| std::env::var_os(v).is_none_or(|v| v.is_empty()));
+    if cfg!(all(unix, not(target_os = "macos"))) && no_display {
+        anyhow::bail!(
+            "--spawn: no display to open the viewer on (neither DISPLAY nor WAYLAND_DISPLAY is \
+             set); {elsewhere}"
+        );
     }
+    let mut child = std::process::Command::new(viewer)
+        .arg(file)
+        .spawn()
+        .context("cannot start the rerun viewer")?;
+    let started = std::time::Instant::now();
+    while started.elapsed() < VIEWER_START {
+        match child.try_wait()? {
+            // a viewer already open takes the file and exits
+            Some(status) if status.success() => return Ok(()),
+            Some(status) => anyhow::bail!(
+                "--spawn: the rerun viewer stopped at once ({status}; its message is above); \
+                 {elsewhere}"
+            ),
+            None => std::thread::sleep(std::time::Duration::from_millis(50)),
+        }
+    }
+    Ok(())
 }
 
 /// What a recording file holds, read back the way the viewer reads it: per store (the data, the

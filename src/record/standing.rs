@@ -15,8 +15,12 @@ use anyhow::Result;
 use glam::{DAffine3, DVec3};
 use std::path::{Path, PathBuf};
 
-/// Samples per joint of a leg's workspace: 16³ = 4096 points a leg, enough to see its shape.
-pub const WORKSPACE_SAMPLES: usize = 16;
+/// Samples per joint of a leg's workspace: 9³ = 729 points a leg, enough to see its shape; 16³
+/// buried a robot whose joints turn ±150° (PhantomX) under 24 576 points.
+pub const WORKSPACE_SAMPLES: usize = 9;
+
+/// A workspace point's radius (m) and opacity: small and faint, so the robot shows through.
+const WORKSPACE_POINT: (f32, u8) = (0.001, 110);
 
 /// A colour per leg (`lf lm lr rf rm rr`): warm on the left, cool on the right.
 const LEG_COLORS: [[u8; 3]; 6] = [
@@ -148,8 +152,8 @@ pub fn record(path: &Path, standing: &Standing) -> Result<PathBuf> {
                         .iter()
                         .map(|p| body.transform_point3(*p).as_vec3().to_array()),
                 )
-                .with_radii([0.0015f32])
-                .with_colors([color]),
+                .with_radii([WORKSPACE_POINT.0])
+                .with_colors([[color[0], color[1], color[2], WORKSPACE_POINT.1]]),
             )?;
         }
     }

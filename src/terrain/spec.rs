@@ -53,11 +53,25 @@ pub enum TerrainError {
     },
     #[error("{file}: {cause}")]
     Grid { file: PathBuf, cause: GridError },
+    #[error(
+        "{file}: a {kind} height file, not a terrain file (TOML): a {kind} file holds no extent, so write a terrain file beside it that gives one (docs/terrains.md) and name that, e.g. {stem}.toml:\n{example}"
+    )]
+    HeightFile {
+        file: PathBuf,
+        kind: &'static str,
+        stem: String,
+        example: String,
+    },
 }
 
 impl TerrainSpec {
-    /// Reads and parses a terrain file (without building the grid).
+    /// Reads and parses a terrain file (without building the grid). A height file given instead
+    /// is wrapped when its kind's other fields have defaults (STL), and explained, with the
+    /// terrain file to write, when it needs an extent only its author knows (CSV, PNG).
     pub fn from_file(path: &Path) -> Result<Self, TerrainError> {
+        if let Some(spec) = height_file(path)? {
+            return Ok(spec);
+        }
         let text = crate::limits::read_to_string(path, crate::limits::TEXT_FILE_BYTES).map_err(
             |cause| TerrainError::Read {
                 file: path.to_path_buf(),
@@ -124,6 +138,45 @@ impl TerrainSpec {
         })?;
         Ok(grid.with_interpolation(self.interpolation))
     }
+}
+
+/// The spec of a height file given where a terrain file is expected (by its extension), or why it
+/// needs one; `None` for any other file.
+fn height_file(path: &Path) -> Result<Option<TerrainSpec>, TerrainError> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let Some(name) = path.file_name().map(PathBuf::from) else {
+        return Ok(None);
+    };
+    let quoted = name
+        .display()
+        .to_string()
+        .replace('\\', "\\\\")
+        .replace('"', "\\\"");
+    let (kind, fields) = match extension.as_deref() {
+        // `cell` has its default; the mesh gives the extent
+        Some("stl") => {
+            let text = format!("[source]\nkind = \"stl\"\npath = \"{quoted}\"\n");
+            return TerrainSpec::from_toml(&text, path).map(Some);
+        }
+        Some("csv") => ("csv", ""),
+        Some("png") => ("png", "\nheight_scale = 0.1    # m at the brightest value"),
+        _ => return Ok(None),
+    };
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let example = format!(
+        "[source]\nkind = \"{kind}\"\npath = \"{quoted}\"\nx_range = [-2.0, 2.0]    # m, first to last column\ny_range = [-2.0, 2.0]    # m, first to last row{fields}"
+    );
+    Err(TerrainError::HeightFile {
+        file: path.to_path_buf(),
+        kind,
+        stem,
+        example,
+    })
 }
 
 /// How far from the world's origin a terrain may reach (m). rapier computes in f32, whose
