@@ -310,7 +310,9 @@ impl HexapodMetrics {
         let worst = self.foot_slip.iter().copied().fold(0.0, f64::max);
         self.slip_share = (self.distance >= 0.01).then(|| worst / self.distance);
         let mut flags = Vec::new();
-        if let Some(share) = self.slip_share.filter(|&s| s > SKATE_SHARE) {
+        // skating is judged against the distance commanded: marking time (or turning on the
+        // spot) travels none, and its feet's slip is no share of it
+        if let Some(share) = self.slip_share.filter(|&s| a.moving && s > SKATE_SHARE) {
             flags.push(format!(
                 "skated: its worst foot slid {worst:.3} m in contact, {:.1} % of the {:.3} m the body travelled (more than {:.0} %)",
                 share * 100.0,
@@ -827,5 +829,28 @@ mod tests {
         let (whole, loaded) = slid(&contact(0.0), 1e-3);
         assert!((whole - 2e-4).abs() < 1e-15);
         assert_eq!(loaded, 0.0);
+    }
+
+    /// Skating is a share of the distance commanded: a robot marking time (cluster/test's long
+    /// walks: 0.2 m of foot slip while the body wandered 0.06 m in 150 s) is not flagged, the
+    /// same slip on a walk commanded forward is.
+    #[test]
+    fn marking_time_is_not_skating() {
+        let judged = |moving: bool| {
+            let mut m = HexapodMetrics::new(1e-3, 2.5, Vec::new(), None);
+            m.foot_slip = [0.218, 0.1, 0.1, 0.1, 0.1, 0.1];
+            m.distance = 0.059;
+            m.forward_distance = 0.059;
+            m.command_progress = 0.059;
+            m.acc.moving = moving;
+            m.judge();
+            m.walk_flags
+        };
+        assert_eq!(judged(false), Vec::<String>::new());
+        let flags = judged(true);
+        assert!(
+            flags.len() == 1 && flags[0].starts_with("skated"),
+            "{flags:?}"
+        );
     }
 }
