@@ -914,3 +914,51 @@ fn built_in_files_by_name_from_any_folder() {
     let out = run(&["--terrain", "flat"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// `hexsim run SCENARIO.toml` runs and records the one walk a scenario file holds, with the
+/// output flags; a sweep, a ball scenario or a walk flag beside the file is refused, naming why.
+#[test]
+fn run_takes_a_scenario_file() {
+    let dir = scratch("run-scenario");
+    let file = dir.join("short.toml");
+    std::fs::write(
+        &file,
+        "duration = 0.3\nsettle = 0.2\n[terrain.source]\nkind = \"flat\"\nsize = [4.0, 4.0]\n",
+    )
+    .unwrap();
+    let (rrd, json) = (dir.join("short.rrd"), dir.join("short.json"));
+    let out = hexsim()
+        .arg("run")
+        .arg(&file)
+        .arg("--record")
+        .arg(&rrd)
+        .arg("--metrics")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(rrd.metadata().unwrap().len() > 0);
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(
+        (m["walk_time"].as_f64().unwrap() - 0.3).abs() < 1e-9,
+        "{}",
+        m["walk_time"]
+    );
+    let refused = |args: &[&str], expected: &str| {
+        let out = hexsim().arg("run").args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(expected), "{stderr}");
+    };
+    refused(&["ladder/gaps.toml"], "a sweep of 12 scenarios");
+    refused(&["scenarios/ball_bell.toml"], "a ball scenario");
+    refused(
+        &[file.to_str().unwrap(), "--duration", "2"],
+        "cannot be used with '--duration",
+    );
+}

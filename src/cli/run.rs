@@ -15,6 +15,19 @@ use super::{COMMAND_LINE, Cli, Command, conclude, progress_bar, warn_about};
 
 #[derive(Args)]
 pub struct RunArgs {
+    /// A scenario file (TOML, as `hexsim batch` reads) to run and record instead of the walk
+    /// the flags describe; only the output flags (--record, --trajectory, --metrics, --spawn,
+    /// --strict, --allow-flags) go with it. A sweep is refused: `hexsim batch` runs those.
+    #[arg(
+        value_name = "SCENARIO",
+        conflicts_with_all = [
+            "robot", "terrain", "gait", "duration", "settle", "follow_terrain", "reactive", "dt",
+            "speed", "sideways", "turn", "start", "heading", "on_ground", "seed",
+            "servo_stiffness", "servo_damping", "no_feedforward", "no_rolling", "articulation",
+            "solver_iterations", "pgs_iterations", "log_rate", "allow_unstable_dt",
+        ]
+    )]
+    scenario: Option<PathBuf>,
     /// Robot URDF. Default: robots/hex18.urdf (built in).
     #[arg(long)]
     robot: Option<PathBuf>,
@@ -146,6 +159,25 @@ pub(super) fn default_walk(robot: &Path, gait: Option<&Path>) -> ScenarioSpec {
     })
 }
 
+/// The one walk a scenario file holds (`hexsim run SCENARIO.toml`).
+fn from_file(file: &Path) -> Result<Scenario> {
+    let mut scenarios = hexsim::scenario::load_file(file)?;
+    let f = file.display();
+    if scenarios.len() != 1 {
+        anyhow::bail!(
+            "{f}: a sweep of {} scenarios; `hexsim run` runs one (run them with `hexsim batch {f}`)",
+            scenarios.len()
+        );
+    }
+    let scenario = scenarios.remove(0);
+    if scenario.kind() != Kind::Walk {
+        anyhow::bail!(
+            "{f}: a ball scenario; `hexsim run` walks a robot (`hexsim batch {f}` runs it)"
+        );
+    }
+    Ok(scenario)
+}
+
 /// The scenario the flags describe.
 fn spec(args: &RunArgs) -> ScenarioSpec {
     ScenarioSpec {
@@ -199,14 +231,19 @@ fn spec(args: &RunArgs) -> ScenarioSpec {
 }
 
 pub fn run(args: RunArgs) -> Result<ExitCode> {
-    let spec = spec(&args);
-    let scenario = Scenario::resolve(spec, "run".into(), Path::new(COMMAND_LINE))?;
+    let scenario = match &args.scenario {
+        Some(file) => from_file(file)?,
+        None => Scenario::resolve(spec(&args), "run".into(), Path::new(COMMAND_LINE))?,
+    };
     warn_about([&scenario], args.strict)?;
     let gait_name = scenario.gait().map_or(String::new(), |g| g.name.clone());
     let terrain_name = scenario.terrain_name().to_string();
     let bar = progress_bar(
         scenario.total_steps(),
-        format!("{} s", args.settle + args.duration),
+        format!(
+            "{} s",
+            scenario.spec.settle.unwrap_or(DEFAULT_SETTLE) + scenario.spec.duration
+        ),
     );
     let record = (!args.no_record).then(|| args.record.clone());
     let outputs = Outputs::files(record, args.trajectory.clone(), args.metrics.clone()).with_some(
@@ -223,7 +260,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     };
     println!(
         "{gait_name} ({}) on {terrain_name}: walked {:.2} s{}",
-        args.robot
+        scenario
+            .spec
+            .robot
             .as_deref()
             .map_or("hex18".into(), |p| p.display().to_string()),
         m.walk_time,
