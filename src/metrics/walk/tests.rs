@@ -1,0 +1,53 @@
+//! Tests of `walk`.
+
+use super::*;
+use crate::terrain::GroundFrame;
+use glam::DVec3;
+
+/// A foot on a 30° slope moving 0.2 m/s in its plane slides 0.2 mm in a 1 ms step while it
+/// touches the ground, loaded or not; the loaded share counts none once its force is clamped
+/// at zero (lifting off, or chattering in mid-stance).
+#[test]
+fn a_contact_slides_whole_and_its_loaded_share_apart() {
+    let normal = DVec3::new(-0.5, 0.0, 0.75f64.sqrt());
+    let contact = |normal_force| ContactForce {
+        point: DVec3::ZERO,
+        force: normal * normal_force,
+        normal_force,
+        friction: DVec3::ZERO,
+        penetration: 1e-4,
+        normal_velocity: 0.1,
+        slip: DVec3::new(0.75f64.sqrt(), 0.0, 0.5) * 0.2,
+        sticking: false,
+        frame: GroundFrame::from_normal(normal),
+    };
+    let (whole, loaded) = slid(&contact(5.0), 1e-3);
+    assert!((whole - 2e-4).abs() < 1e-15);
+    assert_eq!(loaded, whole);
+    let (whole, loaded) = slid(&contact(0.0), 1e-3);
+    assert!((whole - 2e-4).abs() < 1e-15);
+    assert_eq!(loaded, 0.0);
+}
+
+/// Skating is a share of the distance commanded: a robot marking time (cluster/test's long
+/// walks: 0.2 m of foot slip while the body wandered 0.06 m in 150 s) is not flagged, the
+/// same slip on a walk commanded forward is.
+#[test]
+fn marking_time_is_not_skating() {
+    let judged = |moving: bool| {
+        let mut m = HexapodMetrics::new(1e-3, 2.5, Vec::new(), None);
+        m.foot_slip = [0.218, 0.1, 0.1, 0.1, 0.1, 0.1];
+        m.distance = 0.059;
+        m.forward_distance = 0.059;
+        m.command_progress = 0.059;
+        m.acc.moving = moving;
+        m.judge();
+        m.walk_flags
+    };
+    assert_eq!(judged(false), Vec::<String>::new());
+    let flags = judged(true);
+    assert!(
+        flags.len() == 1 && flags[0].starts_with("skated"),
+        "{flags:?}"
+    );
+}
