@@ -117,17 +117,25 @@ pub fn claim_folder(dir: &Path, opt: &Optimization) -> Result<(), String> {
     }
 }
 
-/// Records the specification a fresh search's log is written by.
+/// Records the specification a fresh search's log is written by: whole or not at all, written
+/// beside it and renamed into place, for the shards of an array job start together and each
+/// reads what the first wrote (written in place, a shard once read it empty: "EOF while
+/// parsing", cluster/test).
 pub fn write_specification(dir: &Path, parts: &BTreeMap<String, String>) -> Result<(), String> {
     let file = specification_file(dir);
+    let partial = dir.join(format!("specification.json.{}.partial", std::process::id()));
     std::fs::create_dir_all(dir)
         .and_then(|()| {
             std::fs::write(
-                &file,
+                &partial,
                 serde_json::to_string_pretty(parts).unwrap_or_default(),
             )
         })
-        .map_err(|e| format!("{}: {e}", file.display()))
+        .and_then(|()| std::fs::rename(&partial, &file))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&partial);
+            format!("{}: {e}", file.display())
+        })
 }
 
 /// One evaluation's log line: the parameters as the scenario got them (a choice by its name),
