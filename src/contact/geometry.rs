@@ -176,14 +176,14 @@ fn among_walls(
     };
     touching.add(best);
     let starts = if best.penetration <= 0.0 {
-        let mut edges = [None; 8];
-        for (k, (u, v)) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
-            .into_iter()
-            .enumerate()
-        {
-            edges[k] = Some((center.x + u * radius, center.y + v * radius));
-        }
-        edges
+        let edge = |u: f64, v: f64| Some((center.x + u * radius, center.y + v * radius));
+        let (e, w, n, s) = (
+            edge(1.0, 0.0),
+            edge(-1.0, 0.0),
+            edge(0.0, 1.0),
+            edge(0.0, -1.0),
+        );
+        [e, w, n, s, None, None, None, None]
     } else {
         crease_starts(terrain, center, radius, &best)
     };
@@ -248,6 +248,9 @@ fn crease_starts(
 ) -> [Option<(f64, f64)>; 8] {
     const REACH: f64 = 0.7;
     let n = found.frame.normal;
+    if n.z <= 1e-6 {
+        return [None; 8]; // a wall's face: no tangent plane over the ground
+    }
     // the sphere's lower surface at REACH·r from its centre's vertical
     let sphere = center.z - radius * (1.0 - REACH * REACH).sqrt();
     // nothing around rises that high (the cells' bounds): no probe can fire
@@ -270,9 +273,6 @@ fn crease_starts(
     ]
     .map(|(u, v)| {
         let (x, y) = (center.x + REACH * radius * u, center.y + REACH * radius * v);
-        if n.z <= 1e-6 {
-            return None;
-        }
         let plane = found.point.z - (n.x * (x - found.point.x) + n.y * (y - found.point.y)) / n.z;
         if let Some(k) = curvature {
             // the distance along the tangent plane, its horizontal one over cos(tilt)

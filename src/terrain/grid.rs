@@ -202,18 +202,25 @@ impl HeightGrid {
     /// sphere of radius r centred higher than this above (x, y) cannot touch the ground, which
     /// spares a swinging foot the closest-point search.
     pub fn ceiling_near(&self, x: f64, y: f64, r: f64) -> f64 {
+        self.cells_near(x, y, r)
+            .flat_map(|row| &self.ceilings[row])
+            .fold(f64::NEG_INFINITY, |m, &c| m.max(c))
+    }
+
+    /// The cells (as ranges of row-major cell indices, a row each) that the square of
+    /// half-width `r` around (x, y) overlaps.
+    fn cells_near(
+        &self,
+        x: f64,
+        y: f64,
+        r: f64,
+    ) -> impl Iterator<Item = std::ops::RangeInclusive<usize>> {
         let (j0, _, _) = locate(x - r, self.x0, self.dx, self.nx);
         let (j1, _, _) = locate(x + r, self.x0, self.dx, self.nx);
         let (i0, _, _) = locate(y - r, self.y0, self.dy, self.ny);
         let (i1, _, _) = locate(y + r, self.y0, self.dy, self.ny);
         let cells = self.nx - 1;
-        let mut ceiling = f64::NEG_INFINITY;
-        for i in i0..=i1 {
-            for &c in &self.ceilings[i * cells + j0..=i * cells + j1] {
-                ceiling = ceiling.max(c);
-            }
-        }
-        ceiling
+        (i0..=i1).map(move |i| i * cells + j0..=i * cells + j1)
     }
 
     /// An upper bound of the surface's curvature |∂²z/∂u²| along any horizontal direction u
@@ -232,17 +239,10 @@ impl HeightGrid {
         if self.bends.is_empty() {
             return None;
         }
-        let (j0, _, _) = locate(x - r, self.x0, self.dx, self.nx);
-        let (j1, _, _) = locate(x + r, self.x0, self.dx, self.nx);
-        let (i0, _, _) = locate(y - r, self.y0, self.dy, self.ny);
-        let (i1, _, _) = locate(y + r, self.y0, self.dy, self.ny);
-        let cells = self.nx - 1;
-        let mut bend = 0u8;
-        for i in i0..=i1 {
-            for &b in &self.bends[i * cells + j0..=i * cells + j1] {
-                bend = bend.max(b);
-            }
-        }
+        let bend = self
+            .cells_near(x, y, r)
+            .flat_map(|row| &self.bends[row])
+            .fold(0u8, |m, &b| m.max(b));
         let h = self.dx.min(self.dy);
         Some(6.0 * decode_bend(bend) / (h * h))
     }
