@@ -168,4 +168,12 @@ fn the_outputs_page_lists_every_key_of_a_batch_record() {
         .filter(|k| record.get(*k).is_none())
         .collect();
     assert_eq!(absent, BTreeSet::from(["message", "regressions"]));
+    // the record's metadata is a metrics file's, and agrees with the keys --resume reads
+    let metadata = &record["metadata"];
+    assert_eq!(metadata["fingerprint"], record["hash"]);
+    assert_eq!(metadata["inputs"], record["inputs"]);
+    assert!(
+        metadata["dt"].as_f64().is_some_and(|dt| dt > 0.0),
+        "{metadata}"
+    );
 }

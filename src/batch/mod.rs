@@ -383,6 +383,7 @@ fn run_one(
         metrics: serde_json::Value::Null,
         expectations: Vec::new(),
         regressions: Vec::new(),
+        metadata: Some(Box::new(s.metadata())),
     };
     match result {
         // a set-up cut short by Ctrl-C (the terrain's generation): not a result, --resume runs it

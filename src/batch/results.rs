@@ -58,6 +58,11 @@ pub struct Record {
     /// baseline, or when nothing moved.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub regressions: Vec<super::baseline::Regression>,
+    /// Where the run came from: the block a metrics file ends with (robot, terrain, gait, dt,
+    /// articulation, …), so that a record read alone says what it measured. Absent in results
+    /// written before it existed, or for a scenario that could not be set up.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metadata: Option<Box<crate::metrics::metadata::Metadata>>,
 }
 
 impl Record {

@@ -1,12 +1,12 @@
 //! Where a metrics file came from: the block a run's metrics JSON ends with, so that a result
 //! read elsewhere names its inputs, their fingerprint, the version and the settings it ran with.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// A run's provenance (docs/outputs.md lists each key).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Metadata {
     pub hexsim_version: String,
     /// The scenario's name, and its file (null: made on the command line).
