@@ -260,3 +260,46 @@ fn optimize_and_robot_refuse_to_write_over_what_they_read() {
         text(&out)
     );
 }
+
+/// A full disk under `terrain export` and `batch -o`: exit 2 naming the file, never "wrote" —
+/// the exports are streamed, and a failed write used to be reported as "cannot read".
+#[test]
+fn exports_and_results_on_a_full_disk_name_the_file() {
+    let dir = scratch("full-disk");
+    let terrain = dir.join("flat.toml");
+    std::fs::write(
+        &terrain,
+        "[source]\nkind = \"sine\"\nsize = [2.0, 2.0]\ncell = 0.02\namplitude = 0.01\nwavelength = 0.5\n",
+    )
+    .unwrap();
+    for flag in ["--csv", "--stl", "--png"] {
+        let out = hexsim()
+            .args(["terrain", "export"])
+            .arg(&terrain)
+            .args([flag, "/dev/full"])
+            .output()
+            .unwrap();
+        let said = text(&out);
+        assert_eq!(out.status.code(), Some(2), "{flag}: {said}");
+        assert!(
+            said.contains("cannot write /dev/full: No space left"),
+            "{flag}: {said}"
+        );
+        assert!(!said.contains("wrote"), "{flag}: {said}");
+    }
+    let scenario = dir.join("drop.toml");
+    std::fs::write(
+        &scenario,
+        "kind = \"ball\"\nduration = 0.05\n[terrain.source]\nkind = \"flat\"\nsize = [4.0, 4.0]\n",
+    )
+    .unwrap();
+    let out = hexsim()
+        .arg("batch")
+        .arg(&scenario)
+        .args(["-q", "-o", "/dev/full"])
+        .output()
+        .unwrap();
+    let said = text(&out);
+    assert_eq!(out.status.code(), Some(2), "{said}");
+    assert!(said.contains("/dev/full"), "{said}");
+}

@@ -1,7 +1,8 @@
 //! `hexsim terrain`: inspect and export terrains.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Subcommand;
+use hexsim::record::output::write_streamed;
 use hexsim::terrain;
 use std::path::PathBuf;
 
@@ -49,13 +50,16 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
             )?;
             let grid = terrain::load(&terrain)?;
             if let Some(path) = stl {
-                terrain::io::write_stl(&grid, &path)
-                    .with_context(|| format!("writing {}", path.display()))?;
+                write_streamed(&path, |out| Ok(terrain::io::stl_to(&grid, out)?))?;
                 println!("wrote {}", path.display());
             }
             if let Some(path) = png {
-                let (offset, scale) = terrain::io::write_png(&grid, &path)
-                    .with_context(|| format!("writing {}", path.display()))?;
+                let mut read_back = (0.0, 0.0);
+                write_streamed(&path, |out| {
+                    read_back = terrain::io::png_to(&grid, out)?;
+                    Ok(())
+                })?;
+                let (offset, scale) = read_back;
                 let [x0, x1] = grid.x_range();
                 let [y0, y1] = grid.y_range();
                 println!(
@@ -64,8 +68,7 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
                 );
             }
             if let Some(path) = csv {
-                terrain::io::write_csv(&grid, &path)
-                    .with_context(|| format!("writing {}", path.display()))?;
+                write_streamed(&path, |out| Ok(terrain::io::csv_to(&grid, out)?))?;
                 println!("wrote {}", path.display());
             }
             Ok(())

@@ -89,6 +89,35 @@ pub fn write_atomically(path: &Path, contents: &[u8]) -> Result<()> {
     commit(path)
 }
 
+/// Streams a file to `path` through the temporary name: `write` fills a buffered writer, which
+/// is flushed and renamed into place; a write that fails (a full disk) names the file and leaves
+/// no temporary behind.
+pub fn write_streamed(
+    path: &Path,
+    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<()>,
+) -> Result<()> {
+    let partial = partial_path(path);
+    let written = std::fs::File::create(&partial)
+        .map_err(anyhow::Error::from)
+        .and_then(|file| {
+            let mut out = std::io::BufWriter::new(file);
+            write(&mut out)?;
+            let file = out.into_inner().map_err(|e| e.into_error())?;
+            file.sync_all().or_else(|e| {
+                // a device or FIFO cannot be synced, and need not be
+                if is_special(&partial) { Ok(()) } else { Err(e) }
+            })?;
+            Ok(())
+        });
+    if let Err(e) = written {
+        if !is_special(&partial) {
+            std::fs::remove_file(&partial).ok();
+        }
+        return Err(e).with_context(|| format!("cannot write {}", path.display()));
+    }
+    commit(path)
+}
+
 /// Writes `value` as JSON to `path`, if there is one, through the temporary name; names it.
 pub fn write_json(path: Option<&Path>, value: &impl serde::Serialize) -> Result<Option<PathBuf>> {
     let Some(path) = path else { return Ok(None) };

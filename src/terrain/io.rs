@@ -9,6 +9,8 @@ use std::path::Path;
 pub enum HeightFileError {
     #[error("cannot read: {0}")]
     Io(std::io::Error),
+    #[error("cannot write: {0}")]
+    Write(std::io::Error),
     #[error("line {line}: {message}")]
     Csv { line: u64, message: String },
     #[error("no heights: the file has no data rows")]
@@ -132,20 +134,29 @@ fn csv_error(e: csv::Error, fallback_line: u64) -> HeightFileError {
 }
 
 /// Writes a grid as CSV in the layout [`read_csv`] reads, with a comment line giving the extent.
-pub fn write_csv(grid: &HeightGrid, path: &Path) -> Result<(), HeightFileError> {
-    use std::fmt::Write as _;
+pub fn csv_to(grid: &HeightGrid, out: &mut impl std::io::Write) -> std::io::Result<()> {
     let [x0, x1] = grid.x_range();
     let [y0, y1] = grid.y_range();
-    let mut text =
-        format!("# heights [m]; row i -> y in [{y0}, {y1}], column j -> x in [{x0}, {x1}]\n");
+    writeln!(
+        out,
+        "# heights [m]; row i -> y in [{y0}, {y1}], column j -> x in [{x0}, {x1}]"
+    )?;
     for i in 0..grid.rows() {
-        let row: Vec<String> = (0..grid.cols())
-            .map(|j| grid.sample(i, j).to_string())
-            .collect();
-        let _ = writeln!(text, "{}", row.join(","));
+        for j in 0..grid.cols() {
+            let separator = if j + 1 < grid.cols() { "," } else { "\n" };
+            write!(out, "{}{separator}", grid.sample(i, j))?;
+        }
     }
-    std::fs::write(path, text)?;
     Ok(())
+}
+
+/// [`csv_to`] a file (in place: the command line writes through a temporary name).
+pub fn write_csv(grid: &HeightGrid, path: &Path) -> Result<(), HeightFileError> {
+    let mut out =
+        std::io::BufWriter::new(std::fs::File::create(path).map_err(HeightFileError::Write)?);
+    csv_to(grid, &mut out)
+        .and_then(|()| std::io::Write::flush(&mut out))
+        .map_err(HeightFileError::Write)
 }
 
 /// Reads a grayscale PNG as heights `offset + scale · v / v_max` (v_max = 65535 for 16-bit, 255 for
@@ -194,7 +205,10 @@ pub fn read_png(
 
 /// Writes the grid as a 16-bit grayscale PNG spanning its height range; returns (offset, scale)
 /// such that height = offset + scale · v / 65535, to be put in the terrain file that reads it back.
-pub fn write_png(grid: &HeightGrid, path: &Path) -> Result<(f64, f64), HeightFileError> {
+pub fn png_to(
+    grid: &HeightGrid,
+    out: &mut (impl std::io::Write + std::io::Seek),
+) -> std::io::Result<(f64, f64)> {
     let (lo, hi) = grid.height_bounds();
     let scale = hi - lo;
     let (rows, cols) = (grid.rows(), grid.cols());
@@ -212,8 +226,23 @@ pub fn write_png(grid: &HeightGrid, path: &Path) -> Result<(f64, f64), HeightFil
     let buffer =
         image::ImageBuffer::<image::Luma<u16>, _>::from_raw(cols as u32, rows as u32, pixels)
             .expect("buffer length is rows × cols by construction");
-    buffer.save_with_format(path, image::ImageFormat::Png)?;
+    buffer
+        .write_to(out, image::ImageFormat::Png)
+        .map_err(|e| match e {
+            image::ImageError::IoError(io) => io,
+            // encoding a 16-bit grayscale buffer of its own size cannot fail otherwise
+            other => std::io::Error::other(other),
+        })?;
     Ok((lo, scale))
+}
+
+/// [`png_to`] a file (in place); returns (offset, scale).
+pub fn write_png(grid: &HeightGrid, path: &Path) -> Result<(f64, f64), HeightFileError> {
+    let mut out =
+        std::io::BufWriter::new(std::fs::File::create(path).map_err(HeightFileError::Write)?);
+    let read_back = png_to(grid, &mut out).map_err(HeightFileError::Write)?;
+    std::io::Write::flush(&mut out).map_err(HeightFileError::Write)?;
+    Ok(read_back)
 }
 
 /// The grid as a triangle mesh: vertices (x, y, z) row-major and two triangles per cell, wound
@@ -245,31 +274,32 @@ pub fn mesh(grid: &HeightGrid) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
 }
 
 /// Writes the grid's surface as a binary STL.
-pub fn write_stl(grid: &HeightGrid, path: &Path) -> Result<(), HeightFileError> {
+pub fn stl_to(grid: &HeightGrid, out: &mut impl std::io::Write) -> std::io::Result<()> {
     let (vertices, triangles) = mesh(grid);
-    let stl_triangles: Vec<stl_io::Triangle> = triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|k| vertices[k as usize]);
-            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-            let n = [
-                u[1] * v[2] - u[2] * v[1],
-                u[2] * v[0] - u[0] * v[2],
-                u[0] * v[1] - u[1] * v[0],
-            ];
-            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-                .sqrt()
-                .max(f32::MIN_POSITIVE);
-            stl_io::Triangle {
-                normal: stl_io::Normal::new([n[0] / l, n[1] / l, n[2] / l]),
-                vertices: [a, b, c].map(stl_io::Vertex::new),
-            }
-        })
-        .collect();
-    let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    stl_io::write_stl(&mut file, stl_triangles.iter())?;
-    Ok(())
+    let stl_triangles = triangles.iter().map(|t| {
+        let [a, b, c] = t.map(|k| vertices[k as usize]);
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+            .sqrt()
+            .max(f32::MIN_POSITIVE);
+        stl_io::Triangle {
+            normal: stl_io::Normal::new([n[0] / l, n[1] / l, n[2] / l]),
+            vertices: [a, b, c].map(stl_io::Vertex::new),
+        }
+    });
+    stl_io::write_stl(out, stl_triangles)
+}
+
+/// [`stl_to`] a file (in place).
+pub fn write_stl(grid: &HeightGrid, path: &Path) -> Result<(), HeightFileError> {
+    let mut out = std::fs::File::create(path).map_err(HeightFileError::Write)?;
+    stl_to(grid, &mut out).map_err(HeightFileError::Write)
 }
 
 /// Reads an STL surface and rasterises it to a grid with the given cell size (metres): each grid
