@@ -39,14 +39,21 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
         .collect()
 }
 
+/// How far a foot may slide in contact over a 10 s walk: 0.1 m (issue 40's bar), but 0.4 m for
+/// WORMS, whose soles are rigid pads 23 cm across planned as a point at their foot sphere: as
+/// its coxa swings a stance leg ±18°, the pad turns with it and its rim, where it stands on a
+/// leaning shin, scrubs some 70 mm a step (measured flat: 0.05–0.30 m per foot in 10 s). Before
+/// the soles counted as the feet, its feet never touched and the bar held for nothing.
+fn slip_bar(name: &str) -> f64 {
+    if name == "worms" { 0.4 } else { 0.1 }
+}
+
 /// Each foot of a walk touched the ground for at least 5 % of it, so its slip was measured on a
 /// foot that stood: a tripod's feet stand half the walk, and on the natural terrain a blind
 /// tripod's feet can swing over a dip (measured: PhantomX's lr and rf 9 % and 11 % there, every
-/// other foot of every robot 34–51 %). WORMS is the exception, named: its pad
-/// feet's foot spheres never touch — the contact spheres of its `*_link_3` links, fitted from its
-/// collision geometry, stand lower and carry it (on flat ground 0 s of foot contact, 4.0–5.0 s of
-/// `*_link_3` contact in 10 s) — so its `foot_slip` measures nothing there: an open problem
-/// (docs/robots.md), asserted as it is so that a change shows.
+/// other foot of every robot 34–51 %). WORMS stands on the rims of pads wider than its foot
+/// spheres; those are its feet's soles and count as its feet (`contact_set::in_sole`): before
+/// they did, its feet touched 0 s in 10 s and its shins "touched" 4–5 s.
 fn feet_carry(metrics: &serde_json::Value, name: &str) {
     let stance: Vec<f64> = metrics["stance_fraction"]
         .as_array()
@@ -54,14 +61,6 @@ fn feet_carry(metrics: &serde_json::Value, name: &str) {
         .iter()
         .map(|v| v.as_f64().unwrap())
         .collect();
-    if name == "worms" {
-        let links = metrics["link_contact_time"].as_object().unwrap();
-        assert!(
-            links.keys().filter(|k| k.ends_with("_link_3")).count() == 6,
-            "worms: {links:?}"
-        );
-        return;
-    }
     assert!(
         stance.iter().all(|&s| s >= 0.05),
         "{name}: the feet touched the ground for {stance:.2?} of the walk"
@@ -180,7 +179,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         // 0.6–0.95 m in 8 s (see setup::time_step::SERVO_STEP_LIMIT)
         let slip = foot_slip(&flat);
         assert!(
-            slip.iter().all(|&s| s < 0.1),
+            slip.iter().all(|&s| s < slip_bar(name)),
             "{name}: feet slid {slip:.3?} m over 10 s on flat ground"
         );
         feet_carry(&flat, name);
@@ -195,9 +194,9 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         );
         // the paper's terrain three times along x: WORMS walks past its 4 m in 10 s
         // the run exits 0: not flagged (skating, drifting, turning; issue 40's bars). WORMS,
-        // carried by its `*_link_3` contact spheres rather than its feet (see `feet_carry`),
-        // drifted 0.59 m (12 %) and turned 10.7° until a foot's faces in a corner stopped
-        // pushing it along its slip (contact::joint); now 0.19 m and 5.4°
+        // standing on its pads' rims (see `feet_carry`), drifted 0.59 m (12 %) and turned
+        // 10.7° until a foot's faces in a corner stopped pushing it along its slip
+        // (contact::joint); now 0.19 m and 5.4°
         let natural = walk_with(
             robot,
             "terrains/natural_long.toml",
@@ -219,7 +218,7 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         );
         let slip = foot_slip(&natural);
         assert!(
-            slip.iter().all(|&s| s < 0.1),
+            slip.iter().all(|&s| s < slip_bar(name)),
             "{name}: feet slid {slip:.3?} m over 10 s on the natural terrain"
         );
         feet_carry(&natural, name);

@@ -78,6 +78,20 @@ pub fn attach(links: &mut [Link], shapes: &[(Vec<Placed>, Vec<Placed>)], base: &
     notes
 }
 
+/// How far short of the foot's reach (in foot radii) a sphere of the foot's link may end and
+/// still be part of its sole: the reach measured from the link's origin, on the knee's axis.
+const SOLE_DEPTH: f64 = 1.5;
+
+/// True if `sphere`, of the link that carries `foot`, is part of the foot's sole: it reaches as
+/// far from the knee as the foot's tip, within [`SOLE_DEPTH`] foot radii. A flat pad wider than
+/// its foot sphere (WORMS's rubber feet, 23 cm across on a 56 mm sphere) touches the ground with
+/// its rim whenever the shin leans; that is the foot on the ground, not a shin, and is reported
+/// and felt as the foot's contact. The shin above it reaches less far (WORMS: 0.43 against 0.46 m).
+pub fn in_sole(sphere: &ContactSphere, foot: &super::model::Foot) -> bool {
+    let reach = foot.center.length() + foot.radius;
+    sphere.center.length() + sphere.radius >= reach - SOLE_DEPTH * foot.radius
+}
+
 /// The sphere around a set of spheres (not the least one, but one that costs nothing to test):
 /// centred on their box's centre. None for an empty set.
 pub fn bound(spheres: &[ContactSphere]) -> Option<ContactSphere> {
@@ -351,5 +365,50 @@ mod tests {
                 .iter()
                 .all(|s| s.center.distance(DVec3::new(0.0, 0.0, -0.06)) >= 0.02 - 1e-12)
         );
+    }
+
+    /// WORMS's shin: a box 0.45 m long to 0.425 m from the knee, then a pad 0.23 m across and
+    /// 18 mm thick at 0.535 m, its foot sphere (56 mm) at the tip. The pad's spheres are the
+    /// foot's sole, the shin's are not.
+    #[test]
+    fn a_pad_wider_than_its_foot_is_the_foots_sole() {
+        let at = |z: f64, geometry| Placed {
+            origin: DAffine3::from_translation(DVec3::new(0.0, 0.0, z)),
+            geometry,
+        };
+        let shin = spheres_of(
+            &at(
+                0.2,
+                urdf_rs::Geometry::Box {
+                    size: urdf_rs::Vec3([0.11, 0.15, 0.45]),
+                },
+            ),
+            Path::new("."),
+        )
+        .unwrap();
+        let pad = spheres_of(
+            &at(
+                0.535,
+                urdf_rs::Geometry::Cylinder {
+                    radius: 0.115,
+                    length: 0.018,
+                },
+            ),
+            Path::new("."),
+        )
+        .unwrap();
+        let foot = super::super::model::Foot {
+            center: DVec3::new(0.0, 0.0, 0.4884),
+            radius: 0.0556,
+            from: super::super::model::FootFrom::CollisionTip,
+        };
+        assert!(
+            !shin.is_empty() && pad.len() > 20,
+            "{} {}",
+            shin.len(),
+            pad.len()
+        );
+        assert!(pad.iter().all(|s| in_sole(s, &foot)));
+        assert!(shin.iter().all(|s| !in_sole(s, &foot)));
     }
 }

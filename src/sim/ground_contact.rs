@@ -70,6 +70,9 @@ pub(super) struct GroundContacts {
     slots: Vec<Slot>,
     links: Vec<LinkSpheres>,
     spheres: Vec<ContactSphere>,
+    /// Per sphere in `spheres`: the leg whose foot's sole it is part of (see
+    /// `contact_set::in_sole`), whose contact it is reported as.
+    soles: Vec<Option<usize>>,
     /// The highest the terrain's surface reaches anywhere.
     ceiling: f64,
     /// This step's touching contacts: their index in `slots`, rapier point, solver input.
@@ -87,6 +90,7 @@ impl GroundContacts {
     pub fn new(model: &RobotModel, terrain: &HeightGrid) -> Self {
         let mut links = Vec::new();
         let mut spheres = Vec::new();
+        let mut soles = Vec::new();
         for (k, link) in model.links.iter().enumerate() {
             if let Some(bound) = contact_set::bound(&link.contacts) {
                 links.push(LinkSpheres {
@@ -97,6 +101,10 @@ impl GroundContacts {
                     touched: false,
                 });
                 spheres.extend_from_slice(&link.contacts);
+                let leg = model.legs.iter().position(|leg| leg.foot_link == k);
+                soles.extend(link.contacts.iter().map(|sphere| {
+                    leg.filter(|&leg| contact_set::in_sole(sphere, &model.legs[leg].foot))
+                }));
             }
         }
         let [x0, x1] = terrain.x_range();
@@ -107,6 +115,7 @@ impl GroundContacts {
             slots: vec![Slot::default(); (6 + spheres.len()) * MAX_FACES],
             links,
             spheres,
+            soles,
             ceiling,
             ids: Vec::new(),
             points: Vec::new(),
@@ -240,9 +249,14 @@ impl GroundContacts {
             body.add_force(c.force.as_vec3(), true);
             body.add_torque((c.point - point.com).cross(c.force).as_vec3(), true);
             let sphere = id / MAX_FACES;
-            if sphere < 6 {
-                // a foot pressing into several faces reports them as one contact
-                match &mut feet[sphere] {
+            let foot = match sphere {
+                0..6 => Some(sphere),
+                _ => self.soles[sphere - 6],
+            };
+            if let Some(foot) = foot {
+                // a foot pressing into several faces, or with its sole, reports them as one
+                // contact
+                match &mut feet[foot] {
                     Some(foot) => foot.merge(&c),
                     none => *none = Some(c),
                 }
