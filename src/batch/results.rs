@@ -62,7 +62,7 @@ pub struct Record {
     /// articulation, …), so that a record read alone says what it measured. Absent in results
     /// written before it existed, or for a scenario that could not be set up.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub metadata: Option<Box<crate::metrics::metadata::Metadata>>,
+    pub metadata: Option<Box<crate::record::metadata::Metadata>>,
 }
 
 impl Record {

@@ -40,7 +40,7 @@ pub struct BallMetrics {
     radius: f64,
     /// Where the metrics are written as JSON when the run ends, if anywhere.
     #[serde(skip)]
-    output: Option<super::metadata::MetricsFile>,
+    output: Option<crate::record::metadata::MetricsFile>,
 }
 
 impl BallMetrics {
@@ -48,7 +48,7 @@ impl BallMetrics {
     pub fn new(
         initial: &BallSample,
         radius: f64,
-        output: Option<super::metadata::MetricsFile>,
+        output: Option<crate::record::metadata::MetricsFile>,
     ) -> Self {
         BallMetrics {
             output,
@@ -65,7 +65,7 @@ impl BallMetrics {
 impl<W: ?Sized> Observer<BallSample, W> for BallMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
-        super::metadata::write(self.output.as_ref(), self)
+        crate::record::metadata::write(self.output.as_ref(), self)
     }
 
     fn observe(&mut self, s: &BallSample, _: &W) -> Result<()> {

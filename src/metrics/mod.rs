@@ -5,7 +5,6 @@
 //! a new metric is its field, its computation and one entry here.
 
 pub mod ball;
-pub mod metadata;
 pub mod walk;
 
 pub use ball::BallMetrics;

@@ -1,7 +1,7 @@
 //! A walk's metrics: accumulated step by step over the walk (settling excluded), written as JSON,
 //! and their table.
 
-use super::metadata::MetricsFile;
+use crate::record::metadata::MetricsFile;
 
 use crate::contact::ContactForce;
 use crate::record::Observer;
@@ -361,7 +361,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
         self.judge();
-        super::metadata::write(self.output.as_ref(), self)
+        crate::record::metadata::write(self.output.as_ref(), self)
     }
 
     fn observe(&mut self, s: &WalkSample, walker: &Walker) -> Result<()> {

@@ -15,14 +15,15 @@ pub mod hexapod;
 pub mod joint_columns;
 pub mod links;
 pub mod mesh;
+pub mod metadata;
 pub mod output;
 pub mod progress;
 pub mod rerun;
 pub mod standing;
 pub mod table;
 
-use crate::metrics::metadata::{Metadata, MetricsFile};
 use anyhow::Result;
+use metadata::{Metadata, MetricsFile};
 use std::path::{Path, PathBuf};
 use table::{RowOf, SharedTable, Sink, Tabulated};
 

@@ -357,7 +357,7 @@ impl Scenario {
     }
 
     /// Where a run of it comes from, for the end of its metrics file.
-    pub fn metadata(&self) -> crate::metrics::metadata::Metadata {
+    pub fn metadata(&self) -> crate::record::metadata::Metadata {
         let read = |what: &str| {
             self.read
                 .iter()
@@ -368,7 +368,7 @@ impl Scenario {
             Setup::Walk(w) => Some(w),
             Setup::Ball(_) => None,
         };
-        crate::metrics::metadata::Metadata {
+        crate::record::metadata::Metadata {
             hexsim_version: env!("CARGO_PKG_VERSION").to_string(),
             scenario: self.name.clone(),
             scenario_file: (!self.file.as_os_str().is_empty())

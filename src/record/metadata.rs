@@ -56,7 +56,7 @@ pub fn write(
         metrics,
         metadata: file.metadata.as_deref(),
     };
-    crate::record::output::write_json(Some(Path::new(&file.path)), &described)
+    super::output::write_json(Some(Path::new(&file.path)), &described)
 }
 
 #[cfg(test)]
