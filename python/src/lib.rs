@@ -67,14 +67,15 @@ fn load(file: Option<&Path>, fields: Option<toml::Table>) -> Result<Scenario, St
                     file.display()
                 ));
             }
-            table.extend(fields);
+            lay_over(&mut table, fields)?;
             let name = file
                 .file_stem()
                 .map_or("scenario".into(), |s| s.to_string_lossy().into_owned());
             scenario::from_table(table, name, file).map_err(|e| e.to_string())
         }
         (None, fields) => {
-            let mut table = fields.unwrap_or_default();
+            let mut table = toml::Table::new();
+            lay_over(&mut table, fields.unwrap_or_default())?;
             // `hexsim run`'s walk when no duration is given
             table
                 .entry("duration")
@@ -83,6 +84,16 @@ fn load(file: Option<&Path>, fields: Option<toml::Table>) -> Result<Scenario, St
                 .map_err(|e| e.to_string())
         }
     }
+}
+
+/// Lays the keyword arguments over a scenario's table as sweeps and comparisons do
+/// (`scenario::overlay`): a name is a field, whole (`contact={...}` replaces the table), or a
+/// dotted path to one (`**{"contact.stiffness": 3e4}` changes that field alone).
+fn lay_over(table: &mut toml::Table, fields: toml::Table) -> Result<(), String> {
+    for (path, value) in fields {
+        scenario::overlay::set(table, &path, value).map_err(|e| format!("`{path}`: {e}"))?;
+    }
+    Ok(())
 }
 
 /// Python keyword arguments as a scenario's TOML fields: dicts, lists, numbers, strings and
@@ -152,7 +163,8 @@ fn toml_of(value: &Bound<'_, PyAny>, field: &str) -> PyResult<Option<toml::Value
 ///
 /// `Simulation(scenario=None, *, record=None, trajectory=None, metrics=None, **fields)`:
 /// `scenario` is a scenario file; `fields` are a scenario file's fields (`robot`, `terrain`,
-/// `gait`, `contact`, `servo`, `duration`, `dt`, `seed`, `start`, …), replacing the file's;
+/// `gait`, `contact`, `servo`, `duration`, `dt`, `seed`, `start`, …), replacing the file's, or
+/// dotted paths to one field of a table (`**{"contact.stiffness": 3e4}`, as a sweep names it);
 /// `record`, `trajectory`, `metrics` are the files `hexsim run --record/--trajectory/--metrics`
 /// would write, rewritten at every `reset`.
 #[pyclass(unsendable, module = "hexsim._hexsim")]

@@ -142,6 +142,24 @@ def test_the_end_of_the_scenario_and_close(tmp_path):
         sim.step()
 
 
+def test_a_dotted_field_changes_one_field_of_a_table(tmp_path):
+    # as a sweep names it: the rest of the file's table stays, where a whole table replaces it
+    scenario = tmp_path / "walk.toml"
+    scenario.write_text("duration = 1.0\n[start]\nx = -1.0\ny = 0.2\n")
+    dotted = hexsim.Simulation(str(scenario), **{"start.y": 0.1})
+    whole = hexsim.Simulation(str(scenario), start={"y": 0.1})
+    for sim in (dotted, whole):
+        sim.step()
+    x, y, _ = dotted.state()["body_position"]
+    assert abs(x - -1.0) < 0.01 and abs(y - 0.1) < 0.01, (x, y)
+    x, y, _ = whole.state()["body_position"]  # x: the default, 0.75 m inside the edge
+    assert abs(x - -1.25) < 0.01 and abs(y - 0.1) < 0.01, (x, y)
+    with pytest.raises(hexsim.HexsimError, match="stiffnes"):
+        hexsim.Simulation(str(scenario), **{"contact.stiffnes": 3e4})
+    with pytest.raises(hexsim.HexsimError, match="`start.x` is a float"):
+        hexsim.Simulation(str(scenario), **{"start.x.y": 1.2})
+
+
 @pytest.mark.parametrize(
     "kwargs, message",
     [
