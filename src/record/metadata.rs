@@ -28,6 +28,10 @@ pub struct Metadata {
     pub dt: f64,
     /// "multibody" or "impulse" (walks; null for a ball).
     pub articulation: Option<String>,
+    /// Each trajectory joint column's name (`lf_coxa`, …) → the URDF joint it is (walks; null
+    /// for a ball).
+    #[serde(default)]
+    pub joints: Option<BTreeMap<String, String>>,
 }
 
 /// Where a run's metrics are written, and the metadata they end with.
@@ -79,6 +83,7 @@ mod tests {
             seed: Some(3),
             dt: 1e-3,
             articulation: None,
+            joints: None,
         };
         let file = MetricsFile {
             path: path.clone(),

@@ -381,6 +381,11 @@ impl Scenario {
             seed: self.seed,
             dt: self.spec.dt(),
             articulation: walk.map(|w| w.settings.articulation.name().to_string()),
+            joints: walk.map(|w| {
+                let columns = crate::record::joint_columns::joint_columns(&w.robot);
+                let urdf = w.robot.joints.iter().map(|j| j.name.clone());
+                columns.into_iter().zip(urdf).collect()
+            }),
         }
     }
 
