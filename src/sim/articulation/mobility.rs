@@ -9,7 +9,7 @@
 //! elimination step is a few vector operations over all contact axes at once, and nothing
 //! allocates.
 
-use glam::Vec4;
+use glam::{BVec4A, Vec4};
 use rapier3d::prelude::{NO_PARENT, TreeLu};
 
 /// Degrees of freedom of the hexapod's multibody: the free root and 18 joints (the robot loader
@@ -120,17 +120,19 @@ impl Mobility {
         }
         // more contacts (shins, a belly): M⁻¹·Aᵀ group by group (each column of Aᵀ is solved on
         // its own), then W's blocks between every two groups
+        let needed = needed_rows(&self.groups[..groups], axes, factors.parents());
         for g in 0..groups {
+            let valid = lanes(axes - g * GROUP_AXES);
             let group = &mut self.groups[g];
             group.solved = group.jacobian;
-            solve::<CHUNKS>(&mut group.solved, factors);
+            solve::<CHUNKS>(&mut group.solved, factors, &needed, &valid);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
         }
         for g in 0..groups {
             let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
-            for d in 0..DOFS {
+            for d in (0..DOFS).filter(|&d| needed[d]) {
                 let a_row = self.groups[g].jacobian[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
@@ -153,15 +155,18 @@ impl Mobility {
 
     /// [`Mobility::compute`] for one group of axes, `C` chunks of them.
     fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
+        let needed = needed_rows(&self.groups[..1], axes, factors.parents());
         let group = &mut self.groups[0];
         group.solved = group.jacobian;
-        solve::<C>(&mut group.solved, factors);
-        // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg)
+        solve::<C>(&mut group.solved, factors, &needed, &lanes(axes));
+        // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg,
+        // and a row of A without entries, not needed, adds nothing)
         let product = &mut self.product[..axes];
         for row in product.iter_mut() {
             *row = [Vec4::ZERO; CHUNKS];
         }
-        for (a_row, x_row) in group.jacobian.iter().zip(group.solved.iter()) {
+        let rows = group.jacobian.iter().zip(group.solved.iter()).zip(needed);
+        for ((a_row, x_row), _) in rows.filter(|(_, needed)| *needed) {
             for (a, w_row) in product.iter_mut().enumerate() {
                 let coefficient = a_row[a / LANE][a % LANE];
                 if coefficient != 0.0 {
@@ -196,14 +201,69 @@ impl ContactAxes<'_> {
     }
 }
 
+/// The lanes of a group that hold this step's contact axes. The others keep the entries of an
+/// earlier step's contacts (a step sets only the axes it has): they are solved along, lanes
+/// being independent right-hand sides, but never read.
+type Lanes = [BVec4A; CHUNKS];
+
+/// A group's first `axes` lanes (at most [`GROUP_AXES`]).
+fn lanes(axes: usize) -> Lanes {
+    let axes = axes.min(GROUP_AXES);
+    std::array::from_fn(|c| {
+        let lane = |l: usize| LANE * c + l < axes;
+        BVec4A::new(lane(0), lane(1), lane(2), lane(3))
+    })
+}
+
+/// Whether a row has an entry in one of `lanes`' (its first `C` chunks).
+#[inline]
+fn has_entry<const C: usize>(row: &Row, lanes: &Lanes) -> bool {
+    (0..C).any(|c| (row[c].cmpne(Vec4::ZERO) & lanes[c]).any())
+}
+
+/// Which rows of M⁻¹·Aᵀ the product W = A·(M⁻¹·Aᵀ) reads: those where one of the `axes`
+/// contact axes (over `groups`) has a Jacobian entry, and their ancestors, which the lower
+/// solve reads on the way down. A leg whose foot is in the air (half of them in a tripod's
+/// stance) has none.
+fn needed_rows(groups: &[Group], axes: usize, parents: &[usize]) -> [bool; DOFS] {
+    let mut needed = [false; DOFS];
+    for (g, group) in groups.iter().enumerate() {
+        let valid = lanes(axes.saturating_sub(g * GROUP_AXES));
+        for (k, row) in group.jacobian.iter().enumerate() {
+            needed[k] |= has_entry::<CHUNKS>(row, &valid);
+        }
+    }
+    for k in (0..DOFS).rev() {
+        if needed[k] && parents[k] != NO_PARENT {
+            needed[parents[k]] = true;
+        }
+    }
+    needed
+}
+
 /// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of freedom
-/// and its ancestors); `C` chunks of lanes.
-fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
+/// and its ancestors); `C` chunks of lanes. Only the rows `needed` ([`needed_rows`]) are solved
+/// for; the others are left as they are, and the product never reads them.
+///
+/// What is skipped changes no bit of what is read: on the way up a row that is zero in every
+/// lane of this step's axes (`valid`) would subtract nothing from its ancestors' (x − 0·u = x),
+/// and on the way down a row feeds only its descendants, which are not needed when it is not.
+/// A leg in the air so costs the solves nothing (its three rows, each with a chain of up to
+/// eight ancestors).
+fn solve<const C: usize>(
+    x: &mut [Row; DOFS],
+    factors: &TreeLu,
+    needed: &[bool; DOFS],
+    valid: &Lanes,
+) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
     for k in (0..DOFS).rev() {
         let yk = x[k];
+        if !has_entry::<C>(&yk, valid) {
+            continue;
+        }
         let mut i = parents[k];
         while i != NO_PARENT {
             let u = a[i + k * DOFS];
@@ -215,6 +275,9 @@ fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
     }
     // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
     for k in 0..DOFS {
+        if !needed[k] {
+            continue;
+        }
         let mut row = x[k];
         let mut j = parents[k];
         while j != NO_PARENT {
