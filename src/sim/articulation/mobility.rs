@@ -178,9 +178,25 @@ impl Mobility {
         }
     }
 
-    /// W's entry for contact axes `a` and `b`.
+    /// W's 3 × 3 block between contacts `i` and `j` (axes t₁, t₂, n each; `w` of their axes,
+    /// read at once: a contact's three axes lie in one group), as `[column][row]`, columns by
+    /// `j`'s axes.
     #[inline]
-    pub fn w(&self, a: usize, b: usize) -> f32 {
+    pub fn block(&self, i: usize, j: usize) -> [[f32; 3]; 3] {
+        let (group, first) = (3 * j / GROUP_AXES, 3 * j % GROUP_AXES);
+        let mut block = [[0.0; 3]; 3];
+        for (b, column) in block.iter_mut().enumerate() {
+            let lane = first + b;
+            for (a, entry) in column.iter_mut().enumerate() {
+                *entry = self.product[(3 * i + a) * self.in_use + group][lane / LANE][lane % LANE];
+            }
+        }
+        block
+    }
+
+    /// W's entry for contact axes `a` and `b`.
+    #[cfg(test)]
+    fn w(&self, a: usize, b: usize) -> f32 {
         let (group, lane) = (b / GROUP_AXES, b % GROUP_AXES);
         self.product[a * self.in_use + group][lane / LANE][lane % LANE]
     }
@@ -338,7 +354,7 @@ mod tests {
     /// Six feet's axes (one group) and a belly's too (several groups, W's blocks across them).
     #[test]
     fn matches_a_dense_solve() {
-        for axes in [11, 18, 47] {
+        for axes in [11, 18, 47, 48] {
             let parents = parents();
             assert_eq!(parents.len(), DOFS);
             let m = mass(&parents);
@@ -365,11 +381,61 @@ mod tests {
             for r in 0..axes {
                 for c in 0..axes {
                     let error = (mobility.w(r, c) - expected[(r, c)]).abs();
+                    if axes % 3 == 0 {
+                        // whole contacts: their blocks read the same entries
+                        assert_eq!(mobility.block(r / 3, c / 3)[c % 3][r % 3], mobility.w(r, c));
+                    }
                     assert!(
                         error <= 1e-4 * scale,
                         "{axes} axes: W[{r}][{c}] off by {error}"
                     );
                 }
+            }
+        }
+    }
+
+    /// Legs without contacts are skipped, judged on this step's axes alone: after a step with
+    /// six feet down, a step with two (the other lanes holding the six's entries) gets the
+    /// same W bit for bit as a fresh solve, and the dense one's within rounding.
+    #[test]
+    fn legs_in_the_air_are_skipped_exactly() {
+        let parents = parents();
+        let m = mass(&parents);
+        let mut factors = TreeLu::default();
+        factors.factorize(&m, &parents);
+        let jacobian = |axes: usize, legs: usize| {
+            na::DMatrix::<f32>::from_fn(axes, DOFS, |r, d| {
+                if d < 6 || (d - 6) / 3 == (r / 3) % legs {
+                    ((r * 5 + d * 3) % 17) as f32 / 17.0 - 0.4
+                } else {
+                    0.0
+                }
+            })
+        };
+        let fill = |mobility: &mut Mobility, a: &na::DMatrix<f32>| {
+            mobility.reserve(a.nrows());
+            for r in 0..a.nrows() {
+                for d in 0..DOFS {
+                    mobility.set(d, r, a[(r, d)]);
+                }
+            }
+            assert!(mobility.compute(&factors, a.nrows()));
+        };
+        let mut reused = Mobility::default();
+        fill(&mut reused, &jacobian(18, 6));
+        let two = jacobian(6, 2);
+        fill(&mut reused, &two);
+        let mut fresh = Mobility::default();
+        fill(&mut fresh, &two);
+        let expected = &two * m.try_inverse().expect("invertible") * two.transpose();
+        for r in 0..6 {
+            for c in 0..6 {
+                assert_eq!(reused.w(r, c).to_bits(), fresh.w(r, c).to_bits());
+                let error = (reused.w(r, c) - expected[(r, c)]).abs();
+                assert!(
+                    error <= 1e-4 * expected.amax(),
+                    "W[{r}][{c}] off by {error}"
+                );
             }
         }
     }

@@ -236,9 +236,11 @@ impl Joints for MultibodyRobot {
         );
         for i in 0..n {
             for j in 0..n {
-                let w = |a: usize, b: usize| self.scratch.w(3 * i + a, 3 * j + b) as f64;
-                mobility[i * n + j] =
-                    DMat3::from_cols_array_2d(&[0, 1, 2].map(|b| [0, 1, 2].map(|a| w(a, b))));
+                let [x, y, z] = self
+                    .scratch
+                    .block(i, j)
+                    .map(|c| glam::Vec3::from_array(c).as_dvec3());
+                mobility[i * n + j] = DMat3::from_cols(x, y, z);
             }
         }
     }
