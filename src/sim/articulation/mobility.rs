@@ -24,6 +24,8 @@ const CHUNKS: usize = 5;
 pub const GROUP_AXES: usize = LANE * CHUNKS - 2;
 
 /// One degree of freedom's entries for a group's contact axes (glam's `Vec4` is one SSE register).
+/// A single lane is read and written through `as_ref` / `as_mut` (an array index), not glam's
+/// `Index`, which is a match over the four lanes.
 type Row = [Vec4; CHUNKS];
 
 /// A group of contact axes: their Jacobian and M⁻¹ applied to it.
@@ -79,7 +81,7 @@ impl Mobility {
     #[cfg(test)]
     fn set(&mut self, dof: usize, axis: usize, value: f32) {
         let (group, lane) = (axis / GROUP_AXES, axis % GROUP_AXES);
-        self.groups[group].jacobian[dof][lane / LANE][lane % LANE] = value;
+        self.groups[group].jacobian[dof][lane / LANE].as_mut()[lane % LANE] = value;
     }
 
     /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
@@ -136,7 +138,7 @@ impl Mobility {
                 let a_row = self.groups[g].jacobian[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
-                    let coefficient = a_row[lane / LANE][lane % LANE];
+                    let coefficient = a_row[lane / LANE].as_ref()[lane % LANE];
                     if coefficient == 0.0 {
                         continue;
                     }
@@ -168,7 +170,7 @@ impl Mobility {
         let rows = group.jacobian.iter().zip(group.solved.iter()).zip(needed);
         for ((a_row, x_row), _) in rows.filter(|(_, needed)| *needed) {
             for (a, w_row) in product.iter_mut().enumerate() {
-                let coefficient = a_row[a / LANE][a % LANE];
+                let coefficient = a_row[a / LANE].as_ref()[a % LANE];
                 if coefficient != 0.0 {
                     for c in 0..C {
                         w_row[c] += x_row[c] * coefficient;
@@ -188,7 +190,8 @@ impl Mobility {
         for (b, column) in block.iter_mut().enumerate() {
             let lane = first + b;
             for (a, entry) in column.iter_mut().enumerate() {
-                *entry = self.product[(3 * i + a) * self.in_use + group][lane / LANE][lane % LANE];
+                *entry = self.product[(3 * i + a) * self.in_use + group][lane / LANE].as_ref()
+                    [lane % LANE];
             }
         }
         block
@@ -198,7 +201,7 @@ impl Mobility {
     #[cfg(test)]
     fn w(&self, a: usize, b: usize) -> f32 {
         let (group, lane) = (b / GROUP_AXES, b % GROUP_AXES);
-        self.product[a * self.in_use + group][lane / LANE][lane % LANE]
+        self.product[a * self.in_use + group][lane / LANE].as_ref()[lane % LANE]
     }
 }
 
@@ -213,7 +216,7 @@ impl ContactAxes<'_> {
     #[inline]
     pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
         let lane = self.first + axis;
-        self.jacobian[dof][lane / LANE][lane % LANE] = value;
+        self.jacobian[dof][lane / LANE].as_mut()[lane % LANE] = value;
     }
 }
 
