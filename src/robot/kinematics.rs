@@ -116,8 +116,8 @@ impl LegChain {
     }
 
     /// [`Self::solve`], taking the forward kinematics of `guess` from `warm` when it holds them
-    /// (the last answer's, bit for bit the same as computing them again: a sixth of the gait's
-    /// cost), and leaving this answer's there for the next solve.
+    /// (the last answer's, bit for bit the same as computing them again: a fifth of the gait's
+    /// instructions on hex18's walk), and leaving this answer's there for the next solve.
     pub fn solve_warm(
         &self,
         target: DVec3,
