@@ -356,15 +356,27 @@ fn closest_from(
     orientation: Orientation,
     (mut x, mut y): (f64, f64),
 ) -> SphereGeometry {
-    let (height, mut frame) = terrain.height_and_frame(x, y, orientation);
+    // the search needs only the normal at each point; the ground frame is made once, at the end
+    // (the exact normal's frame is a function of the normal alone)
+    let at = |x: f64, y: f64| match orientation {
+        Orientation::Exact => {
+            let s = terrain.surface(x, y);
+            (s.height, s.normal())
+        }
+        Orientation::Paper { .. } => {
+            let (height, frame) = terrain.height_and_frame(x, y, orientation);
+            (height, frame.normal)
+        }
+    };
+    let (height, mut normal) = at(x, y);
     let mut surface = DVec3::new(x, y, height);
     // Where d·κ < −1 (the centre beyond the hollow's centre of curvature) the plain iteration
     // overshoots and oscillates: each time a step grows, the steps are shortened by half.
     let mut relax = 1.0;
     let mut last_step = f64::INFINITY;
     for _ in 1..CLOSEST_POINT_ITERATIONS {
-        let distance = (center - surface).dot(frame.normal);
-        let foot = center - distance * frame.normal;
+        let distance = (center - surface).dot(normal);
+        let foot = center - distance * normal;
         let step = ((foot.x - x).powi(2) + (foot.y - y).powi(2)).sqrt();
         if step < CLOSEST_POINT_TOLERANCE {
             break;
@@ -375,9 +387,13 @@ fn closest_from(
         last_step = step;
         (x, y) = (x + relax * (foot.x - x), y + relax * (foot.y - y));
         let height;
-        (height, frame) = terrain.height_and_frame(x, y, orientation);
+        (height, normal) = at(x, y);
         surface = DVec3::new(x, y, height);
     }
+    let frame = match orientation {
+        Orientation::Exact => GroundFrame::from_normal(normal),
+        Orientation::Paper { .. } => terrain.height_and_frame(x, y, orientation).1,
+    };
     let offset = center - surface;
     let distance = offset.length().copysign(offset.dot(frame.normal));
     SphereGeometry {

@@ -26,7 +26,7 @@ use super::schedule::{LegPhase, leg_phase};
 use super::slew;
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
-use crate::robot::kinematics::{IkSolution, LegChain};
+use crate::robot::kinematics::{IkSolution, IkWarm, LegChain};
 use glam::{DMat3, DQuat, DVec3};
 
 /// A velocity command in the body frame.
@@ -83,6 +83,10 @@ pub struct GaitController {
     rolling: bool,
     /// The last answer on the ground per leg (a swinging foot's path without the lift).
     grounded: [[f64; 3]; 6],
+    /// The forward kinematics of each leg's last answers (`last`, `grounded`), which its next
+    /// solves start from ([`LegChain::solve_warm`]).
+    warm_last: [Option<IkWarm>; 6],
+    warm_grounded: [Option<IkWarm>; 6],
     /// How far each foot's standing target may be lowered and raised (m) and stay within the
     /// leg's reach with room to spare and, raised, to lift a step (see [`Self::levelling`]).
     vertical_room: [(f64, f64); 6],
@@ -261,6 +265,8 @@ impl GaitController {
             rest,
             rolling: true,
             grounded: last,
+            warm_last: [None; 6],
+            warm_grounded: [None; 6],
             vertical_room,
             reactive: None,
             foothold: [DVec3::ZERO; 6],
@@ -577,15 +583,20 @@ impl GaitController {
     /// on the ground (see the module's doc).
     fn place(&mut self, k: usize, planned: DVec3, lift: f64) -> (DVec3, IkSolution) {
         let chain = &self.chains[k];
+        let warm_last = &mut self.warm_last[k];
         if !self.rolling {
-            return (planned, chain.solve(planned, self.last[k]));
+            return (planned, chain.solve_warm(planned, self.last[k], warm_last));
         }
         // each solve starts from its own last answer, a step's motion away
-        let on_ground = chain.solve(planned - DVec3::Z * lift, self.grounded[k]);
+        let on_ground = chain.solve_warm(
+            planned - DVec3::Z * lift,
+            self.grounded[k],
+            &mut self.warm_grounded[k],
+        );
         self.grounded[k] = on_ground.angles;
         let turn = DQuat::from_mat3(&(on_ground.foot_rotation * self.rest[k].transpose()));
         let foot = planned + turn.to_scaled_axis().cross(DVec3::Z) * self.radius[k];
-        (foot, chain.solve(foot, self.last[k]))
+        (foot, chain.solve_warm(foot, self.last[k], warm_last))
     }
 }
 

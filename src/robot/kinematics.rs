@@ -28,6 +28,17 @@ pub struct IkSolution {
     pub foot_rotation: DMat3,
 }
 
+/// A solve's answer with the forward kinematics it ended on ([`LegChain::solve_warm`]): the
+/// gait solves every leg every step from its last answer, and so starts where this ends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IkWarm {
+    angles: [f64; 3],
+    frames: Frames,
+}
+
+/// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]).
+type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3);
+
 /// The IK answer is accepted as reaching the target within this distance (m).
 pub const IK_TOLERANCE: f64 = 1e-6;
 
@@ -69,7 +80,7 @@ impl LegChain {
 
     /// Joint positions and axes (body frame), the foot position, and the foot link's orientation
     /// (turned frame).
-    fn frames(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3, DMat3) {
+    fn frames(&self, q: [f64; 3]) -> Frames {
         let mut frame = DAffine3::IDENTITY;
         let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
         for k in 0..3 {
@@ -101,8 +112,23 @@ impl LegChain {
     /// with its error. (The gait solves six legs every step: each trial's forward kinematics
     /// also gives the next iteration's Jacobian.)
     pub fn solve(&self, target: DVec3, guess: [f64; 3]) -> IkSolution {
+        self.solve_warm(target, guess, &mut None)
+    }
+
+    /// [`Self::solve`], taking the forward kinematics of `guess` from `warm` when it holds them
+    /// (the last answer's, bit for bit the same as computing them again: a fifth of the gait's
+    /// instructions on hex18's walk), and leaving this answer's there for the next solve.
+    pub fn solve_warm(
+        &self,
+        target: DVec3,
+        guess: [f64; 3],
+        warm: &mut Option<IkWarm>,
+    ) -> IkSolution {
         let mut q = self.clamp(guess);
-        let (mut joints, mut foot, mut rotation) = self.frames(q);
+        let (mut joints, mut foot, mut rotation) = match warm {
+            Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits) => w.frames,
+            _ => self.frames(q),
+        };
         let mut error = target - foot;
         for _ in 0..50 {
             if error.length() < IK_TOLERANCE * 0.1 {
@@ -134,6 +160,10 @@ impl LegChain {
             rotation = next_rotation;
             error = target - foot;
         }
+        *warm = Some(IkWarm {
+            angles: q,
+            frames: (joints, foot, rotation),
+        });
         IkSolution {
             angles: q,
             error: error.length(),

@@ -279,12 +279,38 @@ impl RobotModel {
 
     /// [`Self::link_poses`] into `poses`, reusing its allocation (every step of a walk).
     pub fn link_poses_into(&self, q: &[f64], poses: &mut Vec<DAffine3>) {
+        self.poses_into(q, poses, |_, _| {});
+    }
+
+    /// [`Self::link_poses_into`], and into `joints` each joint's frame on the way: its parent's
+    /// pose times its origin, the frame [`Self::joint_axis`] would compute again (per model joint;
+    /// [`crate::robot::statics::holding_torques_at`] reads them).
+    pub fn link_and_joint_poses_into(
+        &self,
+        q: &[f64],
+        poses: &mut Vec<DAffine3>,
+        joints: &mut Vec<DAffine3>,
+    ) {
+        joints.clear();
+        joints.resize(self.joints.len(), DAffine3::IDENTITY);
+        self.poses_into(q, poses, |j, frame| joints[j] = frame);
+    }
+
+    /// Each link's pose into `poses`, telling `joint` each joint's frame on the way.
+    fn poses_into(
+        &self,
+        q: &[f64],
+        poses: &mut Vec<DAffine3>,
+        mut joint: impl FnMut(usize, DAffine3),
+    ) {
         poses.clear();
         poses.resize(self.links.len(), DAffine3::IDENTITY);
         for (k, link) in self.links.iter().enumerate() {
             if let Some(ji) = link.parent_joint {
                 let j = &self.joints[ji];
-                poses[k] = poses[j.parent] * j.origin * DAffine3::from_axis_angle(j.axis, q[ji]);
+                let frame = poses[j.parent] * j.origin;
+                joint(ji, frame);
+                poses[k] = frame * DAffine3::from_axis_angle(j.axis, q[ji]);
             }
         }
     }

@@ -38,6 +38,7 @@ pub struct Walker {
     given_targets: Option<Vec<f64>>,
     /// The feed-forward's link poses and holding torques, kept between steps (no allocation).
     poses: Vec<glam::DAffine3>,
+    joint_frames: Vec<glam::DAffine3>,
     torques: Vec<f64>,
     /// The ground plane the body rides above when following the terrain, smoothed (see
     /// [`Walker::ground_reference`]); None until the first step that follows it.
@@ -123,6 +124,7 @@ impl Walker {
             feel: [FootFeel::default(); 6],
             given_targets: None,
             poses: Vec::new(),
+            joint_frames: Vec::new(),
             torques: vec![0.0; n],
             ground_plane: None,
             ground_rate: 0.0,
@@ -282,11 +284,22 @@ impl Walker {
     /// 0.27 m; planned along gravity: 2.09 m, 0.085 m).
     fn hold_load(&mut self, stance: [bool; 6]) {
         let model = self.hexapod.model();
-        model.link_poses_into(&self.targets_by_joint, &mut self.poses);
+        model.link_and_joint_poses_into(
+            &self.targets_by_joint,
+            &mut self.poses,
+            &mut self.joint_frames,
+        );
         let body = self.hexapod.body_frame().matrix3;
         let gravity = body.transpose() * DVec3::new(0.0, 0.0, -STANDARD_GRAVITY);
         let loads = statics::stance_loads_under(model, &self.poses, gravity, stance);
-        statics::holding_torques_under(model, &self.poses, gravity, &loads, &mut self.torques);
+        statics::holding_torques_at(
+            model,
+            &self.poses,
+            &self.joint_frames,
+            gravity,
+            &loads,
+            &mut self.torques,
+        );
         let stiffness = self.hexapod.gains().stiffness;
         for (target, torque) in self.targets_by_joint.iter_mut().zip(&self.torques) {
             *target += torque / stiffness;

@@ -9,7 +9,7 @@
 //! elimination step is a few vector operations over all contact axes at once, and nothing
 //! allocates.
 
-use glam::Vec4;
+use glam::{BVec4A, Vec4};
 use rapier3d::prelude::{NO_PARENT, TreeLu};
 
 /// Degrees of freedom of the hexapod's multibody: the free root and 18 joints (the robot loader
@@ -24,6 +24,8 @@ const CHUNKS: usize = 5;
 pub const GROUP_AXES: usize = LANE * CHUNKS - 2;
 
 /// One degree of freedom's entries for a group's contact axes (glam's `Vec4` is one SSE register).
+/// A single lane is read and written through `as_ref` / `as_mut` (an array index), not glam's
+/// `Index`, which is a match over the four lanes.
 type Row = [Vec4; CHUNKS];
 
 /// A group of contact axes: their Jacobian and M⁻¹ applied to it.
@@ -79,7 +81,7 @@ impl Mobility {
     #[cfg(test)]
     fn set(&mut self, dof: usize, axis: usize, value: f32) {
         let (group, lane) = (axis / GROUP_AXES, axis % GROUP_AXES);
-        self.groups[group].jacobian[dof][lane / LANE][lane % LANE] = value;
+        self.groups[group].jacobian[dof][lane / LANE].as_mut()[lane % LANE] = value;
     }
 
     /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
@@ -120,21 +122,23 @@ impl Mobility {
         }
         // more contacts (shins, a belly): M⁻¹·Aᵀ group by group (each column of Aᵀ is solved on
         // its own), then W's blocks between every two groups
+        let needed = needed_rows(&self.groups[..groups], axes, factors.parents());
         for g in 0..groups {
+            let valid = lanes(axes - g * GROUP_AXES);
             let group = &mut self.groups[g];
             group.solved = group.jacobian;
-            solve::<CHUNKS>(&mut group.solved, factors);
+            solve::<CHUNKS>(&mut group.solved, factors, &needed, &valid);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
         }
         for g in 0..groups {
             let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
-            for d in 0..DOFS {
+            for d in (0..DOFS).filter(|&d| needed[d]) {
                 let a_row = self.groups[g].jacobian[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
-                    let coefficient = a_row[lane / LANE][lane % LANE];
+                    let coefficient = a_row[lane / LANE].as_ref()[lane % LANE];
                     if coefficient == 0.0 {
                         continue;
                     }
@@ -153,17 +157,20 @@ impl Mobility {
 
     /// [`Mobility::compute`] for one group of axes, `C` chunks of them.
     fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
+        let needed = needed_rows(&self.groups[..1], axes, factors.parents());
         let group = &mut self.groups[0];
         group.solved = group.jacobian;
-        solve::<C>(&mut group.solved, factors);
-        // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg)
+        solve::<C>(&mut group.solved, factors, &needed, &lanes(axes));
+        // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg,
+        // and a row of A without entries, not needed, adds nothing)
         let product = &mut self.product[..axes];
         for row in product.iter_mut() {
             *row = [Vec4::ZERO; CHUNKS];
         }
-        for (a_row, x_row) in group.jacobian.iter().zip(group.solved.iter()) {
+        let rows = group.jacobian.iter().zip(group.solved.iter()).zip(needed);
+        for ((a_row, x_row), _) in rows.filter(|(_, needed)| *needed) {
             for (a, w_row) in product.iter_mut().enumerate() {
-                let coefficient = a_row[a / LANE][a % LANE];
+                let coefficient = a_row[a / LANE].as_ref()[a % LANE];
                 if coefficient != 0.0 {
                     for c in 0..C {
                         w_row[c] += x_row[c] * coefficient;
@@ -173,11 +180,28 @@ impl Mobility {
         }
     }
 
-    /// W's entry for contact axes `a` and `b`.
+    /// W's 3 × 3 block between contacts `i` and `j` (axes t₁, t₂, n each; `w` of their axes,
+    /// read at once: a contact's three axes lie in one group), as `[column][row]`, columns by
+    /// `j`'s axes.
     #[inline]
-    pub fn w(&self, a: usize, b: usize) -> f32 {
+    pub fn block(&self, i: usize, j: usize) -> [[f32; 3]; 3] {
+        let (group, first) = (3 * j / GROUP_AXES, 3 * j % GROUP_AXES);
+        let mut block = [[0.0; 3]; 3];
+        for (b, column) in block.iter_mut().enumerate() {
+            let lane = first + b;
+            for (a, entry) in column.iter_mut().enumerate() {
+                *entry = self.product[(3 * i + a) * self.in_use + group][lane / LANE].as_ref()
+                    [lane % LANE];
+            }
+        }
+        block
+    }
+
+    /// W's entry for contact axes `a` and `b`.
+    #[cfg(test)]
+    fn w(&self, a: usize, b: usize) -> f32 {
         let (group, lane) = (b / GROUP_AXES, b % GROUP_AXES);
-        self.product[a * self.in_use + group][lane / LANE][lane % LANE]
+        self.product[a * self.in_use + group][lane / LANE].as_ref()[lane % LANE]
     }
 }
 
@@ -192,18 +216,73 @@ impl ContactAxes<'_> {
     #[inline]
     pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
         let lane = self.first + axis;
-        self.jacobian[dof][lane / LANE][lane % LANE] = value;
+        self.jacobian[dof][lane / LANE].as_mut()[lane % LANE] = value;
     }
 }
 
+/// The lanes of a group that hold this step's contact axes. The others keep the entries of an
+/// earlier step's contacts (a step sets only the axes it has): they are solved along, lanes
+/// being independent right-hand sides, but never read.
+type Lanes = [BVec4A; CHUNKS];
+
+/// A group's first `axes` lanes (at most [`GROUP_AXES`]).
+fn lanes(axes: usize) -> Lanes {
+    let axes = axes.min(GROUP_AXES);
+    std::array::from_fn(|c| {
+        let lane = |l: usize| LANE * c + l < axes;
+        BVec4A::new(lane(0), lane(1), lane(2), lane(3))
+    })
+}
+
+/// Whether a row has an entry in one of `lanes`' (its first `C` chunks).
+#[inline]
+fn has_entry<const C: usize>(row: &Row, lanes: &Lanes) -> bool {
+    (0..C).any(|c| (row[c].cmpne(Vec4::ZERO) & lanes[c]).any())
+}
+
+/// Which rows of M⁻¹·Aᵀ the product W = A·(M⁻¹·Aᵀ) reads: those where one of the `axes`
+/// contact axes (over `groups`) has a Jacobian entry, and their ancestors, which the lower
+/// solve reads on the way down. A leg whose foot is in the air (half of them in a tripod's
+/// stance) has none.
+fn needed_rows(groups: &[Group], axes: usize, parents: &[usize]) -> [bool; DOFS] {
+    let mut needed = [false; DOFS];
+    for (g, group) in groups.iter().enumerate() {
+        let valid = lanes(axes.saturating_sub(g * GROUP_AXES));
+        for (k, row) in group.jacobian.iter().enumerate() {
+            needed[k] |= has_entry::<CHUNKS>(row, &valid);
+        }
+    }
+    for k in (0..DOFS).rev() {
+        if needed[k] && parents[k] != NO_PARENT {
+            needed[parents[k]] = true;
+        }
+    }
+    needed
+}
+
 /// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of freedom
-/// and its ancestors); `C` chunks of lanes.
-fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
+/// and its ancestors); `C` chunks of lanes. Only the rows `needed` ([`needed_rows`]) are solved
+/// for; the others are left as they are, and the product never reads them.
+///
+/// What is skipped changes no bit of what is read: on the way up a row that is zero in every
+/// lane of this step's axes (`valid`) would subtract nothing from its ancestors' (x − 0·u = x),
+/// and on the way down a row feeds only its descendants, which are not needed when it is not.
+/// A leg in the air so costs the solves nothing (its three rows, each with a chain of up to
+/// eight ancestors).
+fn solve<const C: usize>(
+    x: &mut [Row; DOFS],
+    factors: &TreeLu,
+    needed: &[bool; DOFS],
+    valid: &Lanes,
+) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
     for k in (0..DOFS).rev() {
         let yk = x[k];
+        if !has_entry::<C>(&yk, valid) {
+            continue;
+        }
         let mut i = parents[k];
         while i != NO_PARENT {
             let u = a[i + k * DOFS];
@@ -215,6 +294,9 @@ fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
     }
     // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
     for k in 0..DOFS {
+        if !needed[k] {
+            continue;
+        }
         let mut row = x[k];
         let mut j = parents[k];
         while j != NO_PARENT {
@@ -275,7 +357,7 @@ mod tests {
     /// Six feet's axes (one group) and a belly's too (several groups, W's blocks across them).
     #[test]
     fn matches_a_dense_solve() {
-        for axes in [11, 18, 47] {
+        for axes in [11, 18, 47, 48] {
             let parents = parents();
             assert_eq!(parents.len(), DOFS);
             let m = mass(&parents);
@@ -302,11 +384,61 @@ mod tests {
             for r in 0..axes {
                 for c in 0..axes {
                     let error = (mobility.w(r, c) - expected[(r, c)]).abs();
+                    if axes % 3 == 0 {
+                        // whole contacts: their blocks read the same entries
+                        assert_eq!(mobility.block(r / 3, c / 3)[c % 3][r % 3], mobility.w(r, c));
+                    }
                     assert!(
                         error <= 1e-4 * scale,
                         "{axes} axes: W[{r}][{c}] off by {error}"
                     );
                 }
+            }
+        }
+    }
+
+    /// Legs without contacts are skipped, judged on this step's axes alone: after a step with
+    /// six feet down, a step with two (the other lanes holding the six's entries) gets the
+    /// same W bit for bit as a fresh solve, and the dense one's within rounding.
+    #[test]
+    fn legs_in_the_air_are_skipped_exactly() {
+        let parents = parents();
+        let m = mass(&parents);
+        let mut factors = TreeLu::default();
+        factors.factorize(&m, &parents);
+        let jacobian = |axes: usize, legs: usize| {
+            na::DMatrix::<f32>::from_fn(axes, DOFS, |r, d| {
+                if d < 6 || (d - 6) / 3 == (r / 3) % legs {
+                    ((r * 5 + d * 3) % 17) as f32 / 17.0 - 0.4
+                } else {
+                    0.0
+                }
+            })
+        };
+        let fill = |mobility: &mut Mobility, a: &na::DMatrix<f32>| {
+            mobility.reserve(a.nrows());
+            for r in 0..a.nrows() {
+                for d in 0..DOFS {
+                    mobility.set(d, r, a[(r, d)]);
+                }
+            }
+            assert!(mobility.compute(&factors, a.nrows()));
+        };
+        let mut reused = Mobility::default();
+        fill(&mut reused, &jacobian(18, 6));
+        let two = jacobian(6, 2);
+        fill(&mut reused, &two);
+        let mut fresh = Mobility::default();
+        fill(&mut fresh, &two);
+        let expected = &two * m.try_inverse().expect("invertible") * two.transpose();
+        for r in 0..6 {
+            for c in 0..6 {
+                assert_eq!(reused.w(r, c).to_bits(), fresh.w(r, c).to_bits());
+                let error = (reused.w(r, c) - expected[(r, c)]).abs();
+                assert!(
+                    error <= 1e-4 * expected.amax(),
+                    "W[{r}][{c}] off by {error}"
+                );
             }
         }
     }

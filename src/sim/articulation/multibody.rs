@@ -202,10 +202,21 @@ impl Joints for MultibodyRobot {
             let arm = c.point - c.com;
             let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
             let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
+            // a degree of freedom off the link's path (another leg's joint: two thirds of them)
+            // has a column of +0 (rapier clears the Jacobian before filling the path), whose
+            // point column is +0 and whose entries are these, computed once
+            let off_path = axes.map(|axis| axis.dot(glam::Vec3::ZERO));
             let mut velocity = glam::Vec3::ZERO;
             let mut rows = self.scratch.contact(i);
             let columns = jacobian.as_slice().chunks_exact(6);
             for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
+                if column.iter().all(|v| v.to_bits() == 0) {
+                    velocity += glam::Vec3::ZERO * rate;
+                    for (a, &entry) in off_path.iter().enumerate() {
+                        rows.set(dof, a, entry);
+                    }
+                    continue;
+                }
                 let linear = glam::Vec3::from_slice(&column[..3]);
                 let angular = glam::Vec3::from_slice(&column[3..]);
                 let point = linear - r.cross(angular);
@@ -225,9 +236,11 @@ impl Joints for MultibodyRobot {
         );
         for i in 0..n {
             for j in 0..n {
-                let w = |a: usize, b: usize| self.scratch.w(3 * i + a, 3 * j + b) as f64;
-                mobility[i * n + j] =
-                    DMat3::from_cols_array_2d(&[0, 1, 2].map(|b| [0, 1, 2].map(|a| w(a, b))));
+                let [x, y, z] = self
+                    .scratch
+                    .block(i, j)
+                    .map(|c| glam::Vec3::from_array(c).as_dvec3());
+                mobility[i * n + j] = DMat3::from_cols(x, y, z);
             }
         }
     }
