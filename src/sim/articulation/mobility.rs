@@ -12,8 +12,9 @@
 use glam::Vec4;
 use rapier3d::prelude::{NO_PARENT, TreeLu};
 
-/// Degrees of freedom of the hexapod's multibody: the free root and 18 joints (the robot loader
-/// requires six legs of three joints).
+/// Degrees of freedom of the hexapod's multibody with legs of three joints: the free root and 18
+/// joints. Redundant legs (four to six joints each, `robot::redundant`) add 6 a joint: a
+/// [`Mobility`] is sized by its `D`.
 pub const DOFS: usize = 24;
 
 /// Contact axes are lanes, in chunks of four; six contacts × three axes fit in five chunks.
@@ -28,33 +29,33 @@ type Row = [Vec4; CHUNKS];
 
 /// A group of contact axes: their Jacobian and M⁻¹ applied to it.
 #[derive(Clone)]
-struct Group {
+struct Group<const D: usize> {
     /// Aᵀ: per degree of freedom, each contact axis' Jacobian entry.
-    jacobian: [Row; DOFS],
+    jacobian: [Row; D],
     /// M⁻¹·Aᵀ, solved in place.
-    solved: [Row; DOFS],
+    solved: [Row; D],
 }
 
-impl Default for Group {
+impl<const D: usize> Default for Group<D> {
     fn default() -> Self {
         Group {
-            jacobian: [[Vec4::ZERO; CHUNKS]; DOFS],
-            solved: [[Vec4::ZERO; CHUNKS]; DOFS],
+            jacobian: [[Vec4::ZERO; CHUNKS]; D],
+            solved: [[Vec4::ZERO; CHUNKS]; D],
         }
     }
 }
 
 /// Scratch for [`Mobility::compute`], kept between steps so a step allocates nothing once it has
-/// seen its most contacts.
-pub struct Mobility {
-    groups: Vec<Group>,
+/// seen its most contacts; for a multibody of `D` degrees of freedom.
+pub struct Mobility<const D: usize = DOFS> {
+    groups: Vec<Group<D>>,
     /// W, row by contact axis, then by group of columns: `product[a·groups + h]`.
     product: Vec<Row>,
     /// Groups in use by the last [`Mobility::compute`].
     in_use: usize,
 }
 
-impl Default for Mobility {
+impl<const D: usize> Default for Mobility<D> {
     fn default() -> Self {
         Mobility {
             groups: vec![Group::default()],
@@ -64,7 +65,7 @@ impl Default for Mobility {
     }
 }
 
-impl Mobility {
+impl<const D: usize> Mobility<D> {
     /// Makes room for `axes` contact axes (allocating only the first time a step has that many).
     pub fn reserve(&mut self, axes: usize) {
         let groups = axes.div_ceil(GROUP_AXES).max(1);
@@ -85,7 +86,7 @@ impl Mobility {
     /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
     /// room made by [`Mobility::reserve`]): one lookup of its group for all its entries.
     #[inline]
-    pub fn contact(&mut self, i: usize) -> ContactAxes<'_> {
+    pub fn contact(&mut self, i: usize) -> ContactAxes<'_, D> {
         let first = 3 * i;
         ContactAxes {
             jacobian: &mut self.groups[first / GROUP_AXES].jacobian,
@@ -94,9 +95,9 @@ impl Mobility {
     }
 
     /// W = A·M⁻¹·Aᵀ for the first `axes` contact axes, given M's tree factors; `w(a, b)` then
-    /// reads an entry. Returns false if the factors are not [`DOFS`] square.
+    /// reads an entry. Returns false if the factors are not `D` square.
     pub fn compute(&mut self, factors: &TreeLu, axes: usize) -> bool {
-        if factors.dim() != DOFS {
+        if factors.dim() != D {
             return false;
         }
         self.reserve(axes);
@@ -123,14 +124,14 @@ impl Mobility {
         for g in 0..groups {
             let group = &mut self.groups[g];
             group.solved = group.jacobian;
-            solve::<CHUNKS>(&mut group.solved, factors);
+            solve::<CHUNKS, D>(&mut group.solved, factors);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
         }
         for g in 0..groups {
             let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
-            for d in 0..DOFS {
+            for d in 0..D {
                 let a_row = self.groups[g].jacobian[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
@@ -155,7 +156,7 @@ impl Mobility {
     fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
         let group = &mut self.groups[0];
         group.solved = group.jacobian;
-        solve::<C>(&mut group.solved, factors);
+        solve::<C, D>(&mut group.solved, factors);
         // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg)
         let product = &mut self.product[..axes];
         for row in product.iter_mut() {
@@ -182,12 +183,12 @@ impl Mobility {
 }
 
 /// One contact's three axes in its group's Jacobian ([`Mobility::contact`]).
-pub struct ContactAxes<'a> {
-    jacobian: &'a mut [Row; DOFS],
+pub struct ContactAxes<'a, const D: usize> {
+    jacobian: &'a mut [Row; D],
     first: usize,
 }
 
-impl ContactAxes<'_> {
+impl<const D: usize> ContactAxes<'_, D> {
     /// Sets the contact's axis `axis` (0: t₁, 1: t₂, 2: n) entry for degree of freedom `dof`.
     #[inline]
     pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
@@ -198,15 +199,15 @@ impl ContactAxes<'_> {
 
 /// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of freedom
 /// and its ancestors); `C` chunks of lanes.
-fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
+fn solve<const C: usize, const D: usize>(x: &mut [Row; D], factors: &TreeLu) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
-    for k in (0..DOFS).rev() {
+    for k in (0..D).rev() {
         let yk = x[k];
         let mut i = parents[k];
         while i != NO_PARENT {
-            let u = a[i + k * DOFS];
+            let u = a[i + k * D];
             for c in 0..C {
                 x[i][c] -= yk[c] * u;
             }
@@ -214,17 +215,17 @@ fn solve<const C: usize>(x: &mut [Row; DOFS], factors: &TreeLu) {
         }
     }
     // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
-    for k in 0..DOFS {
+    for k in 0..D {
         let mut row = x[k];
         let mut j = parents[k];
         while j != NO_PARENT {
-            let l = a[k + j * DOFS];
+            let l = a[k + j * D];
             for c in 0..C {
                 row[c] -= x[j][c] * l;
             }
             j = parents[j];
         }
-        let inverse = 1.0 / a[k + k * DOFS];
+        let inverse = 1.0 / a[k + k * D];
         for v in &mut row[..C] {
             *v *= inverse;
         }
@@ -289,7 +290,7 @@ mod tests {
                     0.0
                 }
             });
-            let mut mobility = Mobility::default();
+            let mut mobility = Mobility::<DOFS>::default();
             mobility.reserve(axes);
             for r in 0..axes {
                 for d in 0..DOFS {
@@ -318,6 +319,6 @@ mod tests {
             &na::DMatrix::<f32>::identity(6, 6),
             &[NO_PARENT, 0, 1, 2, 3, 4],
         );
-        assert!(!Mobility::default().compute(&factors, 3));
+        assert!(!Mobility::<DOFS>::default().compute(&factors, 3));
     }
 }
