@@ -292,7 +292,7 @@ fn check_size(model: &RobotModel) -> Result<(), String> {
         .fold(0.0, f64::max);
     if longest > LONGEST_LEG {
         return Err(format!(
-            "the legs are {longest:.1} m long (coxa + femur + tibia): is the URDF in millimetres? URDF lengths are in metres (and masses in kg)"
+            "the legs are {longest:.1} m long (coxa + femur + tibia, and any segments beyond): is the URDF in millimetres? URDF lengths are in metres (and masses in kg)"
         ));
     }
     Ok(())
