@@ -270,7 +270,7 @@ fn held_joints(model: &RobotModel) -> Option<String> {
     let on = list(true);
     if !on.is_empty() {
         parts.push(format!(
-            "on legs of more than {} joints, beyond the three that sweep the largest workspace: {}",
+            "on the legs, beyond the three that sweep the largest workspace (legs of up to {} joints alike are driven whole with `redundant_legs = \"driven\"` in the robot file): {}",
             hexsim::robot::kinematics::MAX_LEG_JOINTS,
             on.join(", ")
         ));

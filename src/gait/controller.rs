@@ -121,6 +121,16 @@ const STANDING_GUESSES: [[f64; 3]; 5] = [
     [0.0, 0.3, 1.2],
 ];
 
+/// For a robot whose legs have joints held still: how to drive them (they may reach what the
+/// three driven joints cannot).
+fn held_hint(model: &RobotModel) -> &'static str {
+    if model.held.iter().any(|h| h.on_leg.is_some()) {
+        "; the legs' extra joints are held still: `redundant_legs = \"driven\"` in the robot file drives them too"
+    } else {
+        ""
+    }
+}
+
 /// A centring shift smaller than this (m) is not applied (a symmetric robot's rounding).
 const CENTRING_TOLERANCE: f64 = 1e-6;
 
@@ -174,11 +184,12 @@ impl GaitController {
                     miss: guess.error,
                     angles: guess.angles,
                     message: format!(
-                        "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm",
+                        "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm{}",
                         leg.name,
                         neutral[k].to_array(),
                         spec.stance_height,
-                        guess.error * 1e3
+                        guess.error * 1e3,
+                        held_hint(model)
                     ),
                 });
             }

@@ -25,8 +25,9 @@
 //! a loop of such steps:
 //!
 //! 1. **reach** (γ = 0, the task alone, H = I: plain damped least squares): Levenberg–Marquardt
-//!    on the foot's error, λ² = μ·[`LAMBDA_SCALE`]; a step that brings the foot nearer is taken and μ lowered, else μ is
-//!    raised tenfold (a shorter step, turning towards the error's gradient), until the foot is
+//!    on the foot's error, λ² = μ·[`LAMBDA_SCALE`]; a step that brings the foot nearer is taken
+//!    and μ lowered, else μ is raised tenfold (a shorter step, turning towards the error's
+//!    gradient), until the foot is
 //!    within [`ON_TARGET`] or no step helps (a target out of reach: the closest point a local
 //!    descent finds from the guess);
 //! 2. **settle** (once the foot is within [`POSTURE_NEAR`]): the posture's step with the task's
@@ -65,7 +66,8 @@ const NULL_DAMPING: f64 = 1e-9;
 /// settled (1e-9 rad moves a 0.2 m leg's foot 0.2 nm).
 const LEAST_GAIN: f64 = 1e-6;
 const SETTLED_STEP: f64 = 1e-9;
-/// A foot this near its target (m) is on it ([`IK_TOLERANCE`]'s hundredth).
+/// A foot this near its target (m) is on it (a hundredth of
+/// [`IK_TOLERANCE`](super::kinematics::IK_TOLERANCE)).
 const ON_TARGET: f64 = super::kinematics::IK_TOLERANCE * 1e-2;
 /// Iterations at most (a warm start needs a few; a cold one some tens).
 const MOST_ITERATIONS: usize = 1000;

@@ -152,6 +152,7 @@ fn build_holding(
         feet,
         forward,
         gait: gait_hints,
+        redundant_legs,
     } = settings;
     let (forward, gait_hints) = (*forward, *gait_hints);
     let tree = parse::tree(robot)?;
@@ -212,7 +213,8 @@ fn build_holding(
         Vec::new()
     };
     if held.is_empty() {
-        let to_hold = branches::held_joints(&links, &joints, &unfound, forward)?;
+        let driven = *redundant_legs == robot_file::RedundantLegs::Driven;
+        let to_hold = branches::held_joints(&links, &joints, &unfound, forward, driven)?;
         if !to_hold.is_empty() {
             return build_holding(robot, base, settings, to_hold);
         }
