@@ -151,7 +151,8 @@ impl GaitController {
             .map(|leg| LegChain::new(model, leg))
             .collect();
         let mut neutral = [DVec3::ZERO; 6];
-        let mut last: [LegAngles; 6] = std::array::from_fn(|k| LegAngles::zeros(chains[k].len()));
+        let mut last: [LegAngles; 6] =
+            std::array::from_fn(|k| LegAngles::zeros(chains[k].joint_count()));
         // the stance is measured from the hips' plane, not from the base link's origin, which a
         // URDF may put anywhere
         let hips = model.hips_plane();

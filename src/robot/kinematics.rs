@@ -159,7 +159,7 @@ impl LegChain {
     }
 
     /// How many joints the leg has.
-    pub fn len(&self) -> usize {
+    pub fn joint_count(&self) -> usize {
         self.n
     }
 
