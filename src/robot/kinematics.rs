@@ -107,6 +107,8 @@ pub struct LegChain {
     /// Per joint, the angle a redundant joint is pulled towards (`Leg::posture`), NaN for the
     /// three that place the foot.
     pub(super) rest: [f64; MAX_LEG_JOINTS],
+    /// The rest angles with zero for the three: what a short guess is filled with.
+    fill: [f64; MAX_LEG_JOINTS],
 }
 
 /// The result of an inverse-kinematics solve.
@@ -141,6 +143,7 @@ impl LegChain {
             lower: [0.0; MAX_LEG_JOINTS],
             upper: [0.0; MAX_LEG_JOINTS],
             rest: [f64::NAN; MAX_LEG_JOINTS],
+            fill: [0.0; MAX_LEG_JOINTS],
         };
         for k in 0..n {
             let previous = if k == 0 {
@@ -153,6 +156,7 @@ impl LegChain {
             chain.upper[k] = j[k].upper;
             if let Some(Some(rest)) = leg.posture.get(k) {
                 chain.rest[k] = *rest;
+                chain.fill[k] = *rest;
             }
         }
         chain
@@ -176,8 +180,7 @@ impl LegChain {
     /// Angles for this leg from `q`: its first joints' (a shorter `q` leaves the rest at their
     /// rest angle, or zero).
     pub fn angles(&self, q: &[f64]) -> LegAngles {
-        let rest = self.rest.map(|r| if r.is_nan() { 0.0 } else { r });
-        LegAngles::fitted(q, self.n, &rest)
+        LegAngles::fitted(q, self.n, &self.fill)
     }
 
     /// Angles with `three` on the three joints that place the foot (in order from the body) and
@@ -197,13 +200,21 @@ impl LegChain {
 
     /// Foot centre in the body frame for joint angles `q`.
     pub fn foot_position(&self, q: impl AsRef<[f64]>) -> DVec3 {
-        self.frames(&self.angles(q.as_ref())).1
+        let q = self.angles(q.as_ref());
+        if self.n == 3 {
+            return self.frames3([q[0], q[1], q[2]]).1;
+        }
+        self.frames(&q).1
     }
 
     /// The foot link's orientation in the body frame for joint angles `q`, up to a constant turn
     /// (its frame turned so the last joint's axis is z): compare two of them only.
     pub fn foot_rotation(&self, q: impl AsRef<[f64]>) -> DMat3 {
-        self.frames(&self.angles(q.as_ref())).2
+        let q = self.angles(q.as_ref());
+        if self.n == 3 {
+            return self.frames3([q[0], q[1], q[2]]).2;
+        }
+        self.frames(&q).2
     }
 
     /// Joint positions and axes (body frame), the foot position, and the foot link's orientation
@@ -222,7 +233,22 @@ impl LegChain {
         (joints, frame.transform_point3(self.foot), frame.matrix3)
     }
 
-    fn jacobian_of(joints: &JointFrames, foot: DVec3) -> DMat3 {
+    /// [`Self::frames`] of a 3-joint leg, its loop of fixed length (the gait solves six legs
+    /// every step).
+    fn frames3(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3, DMat3) {
+        let mut frame = DAffine3::IDENTITY;
+        let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
+        for k in 0..3 {
+            frame *= self.origins[k];
+            let m = &mut frame.matrix3;
+            joints[k] = (frame.translation, m.z_axis);
+            let (s, c) = q[k].sin_cos();
+            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
+        }
+        (joints, frame.transform_point3(self.foot), frame.matrix3)
+    }
+
+    fn jacobian_of(joints: &[(DVec3, DVec3); 3], foot: DVec3) -> DMat3 {
         DMat3::from_cols(
             joints[0].1.cross(foot - joints[0].0),
             joints[1].1.cross(foot - joints[1].0),
@@ -255,7 +281,7 @@ impl LegChain {
             return super::redundant::solve(self, target, &guess);
         }
         let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        let (mut joints, mut foot, mut rotation) = self.frames(&q);
+        let (mut joints, mut foot, mut rotation) = self.frames3(q);
         let mut error = target - foot;
         for _ in 0..50 {
             if error.length() < IK_TOLERANCE * 0.1 {
@@ -268,7 +294,7 @@ impl LegChain {
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
             let mut next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames(&next);
+            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames3(next);
             if (target - next_foot).length() >= error.length() {
                 // no progress: try a half step once, then stop
                 next = self.clamp3([
@@ -276,7 +302,7 @@ impl LegChain {
                     q[1] + 0.5 * step.y,
                     q[2] + 0.5 * step.z,
                 ]);
-                (next_joints, next_foot, next_rotation) = self.frames(&next);
+                (next_joints, next_foot, next_rotation) = self.frames3(next);
                 if (target - next_foot).length() >= error.length() {
                     break;
                 }
