@@ -1,5 +1,6 @@
 //! Hexapods with more than six legs of three joints (issue 40): a head, an arm and eyes on the
-//! body; legs of four and five joints; passive, massless feet. Each is hex18 (robots/hex18.urdf)
+//! body; legs of four and five joints (on three, the others held; or driven whole, on redundant
+//! inverse kinematics); passive, massless feet. Each is hex18 (robots/hex18.urdf)
 //! with the trait added (tests/data/robots/hex18_*.urdf), so hex18 is the reference it is held
 //! to, and each walks 10 s on flat ground with the built-in tripod and no robot file.
 
@@ -116,6 +117,139 @@ fn legs_of_four_and_five_joints_walk_on_three() {
             "{name}: {forward:.3} m, hex18 {hex18:.3} m"
         );
     }
+}
+
+/// A copy of `tests/data/robots/NAME.urdf` in `dir` with a robot file driving its legs whole.
+fn driven(name: &str, dir: &Path) -> std::path::PathBuf {
+    let path = dir.join(format!("{name}.urdf"));
+    std::fs::copy(format!("tests/data/robots/{name}.urdf"), &path).unwrap();
+    std::fs::write(
+        dir.join(format!("{name}.toml")),
+        "redundant_legs = \"driven\"\n",
+    )
+    .unwrap();
+    path
+}
+
+/// With `redundant_legs = "driven"` in the robot file, legs of four and five joints are driven
+/// whole, on redundant inverse kinematics (`robot::redundant`): coxa, femur and tibia — the three
+/// that sweep the largest workspace — place the foot, the others pulled towards rest. Where each
+/// leg is hex18's, the three reach the built-in tripod's feet alone, the extra joints stay near
+/// zero, and they walk as far as hex18 (measured: tarsus 1.169 m, five joints 1.170 m of
+/// 1.237 m nominal; hex18 bare 1.166 m).
+#[test]
+fn driven_legs_of_four_and_five_joints_walk_on_all_their_joints() {
+    let dir = scratch("any_hexapod_joints");
+    let reference = walk(&bare_hex18(&dir), &dir, "hex18");
+    let (hex18, _) = forward_of_nominal(&reference);
+    for (name, joints, extra) in [
+        (
+            "tarsus",
+            "joints lf_coxa_joint lf_femur_joint lf_tibia_joint lf_tarsus_joint;",
+            "lf_tarsus_joint 0° driven too",
+        ),
+        (
+            "five_joint",
+            "joints lf_coxa_joint lf_roll_joint lf_femur_joint lf_tibia_joint lf_tarsus_joint;",
+            "lf_roll_joint 0°, lf_tarsus_joint 0° driven too",
+        ),
+    ] {
+        let robot = driven(&format!("hex18_{name}"), &dir);
+        let robot = robot.to_str().unwrap();
+        let text = report(robot);
+        assert!(!text.contains("held still"), "{text}");
+        assert!(text.contains(joints), "{joints}: {text}");
+        assert!(
+            text.contains("redundant: lf_coxa_joint lf_femur_joint lf_tibia_joint place the foot"),
+            "{text}"
+        );
+        assert!(text.contains(extra), "{extra}: {text}");
+        let metrics = walk(Path::new(robot), &dir, name);
+        let (forward, nominal) = forward_of_nominal(&metrics);
+        println!("{name}: {forward:.3} m of {nominal:.3} m nominal (hex18: {hex18:.3} m)");
+        assert!(
+            forward >= 0.9 * nominal,
+            "{name}: {forward:.3} m of {nominal:.3}"
+        );
+        assert!(
+            (forward - hex18).abs() < 0.02 * hex18,
+            "{name}: {forward:.3} m, hex18 {hex18:.3} m"
+        );
+        assert_eq!(metrics["clamped_ik_steps"], 0, "{name}");
+    }
+}
+
+/// A driven extra joint is used where the three cannot reach: on folded legs (stance 0.05 m
+/// high, feet 0.10 m out: tests/data/gaits/tripod_folded.toml) hex18_tarsus's coxa, femur and
+/// tibia miss the standing feet by 0.9 mm with the tarsus held at zero — the run is refused, and
+/// says how to drive it — and with the tarsus driven and bent, up to 34° in the walk, it walks
+/// 0.757 m of 0.8 m nominal with every target reached.
+#[test]
+fn a_tarsus_bends_to_reach_what_coxa_femur_and_tibia_cannot() {
+    let dir = scratch("any_hexapod_folded");
+    let gait = "tests/data/gaits/tripod_folded.toml";
+    let held = hexsim()
+        .args([
+            "run",
+            "--robot",
+            "tests/data/robots/hex18_tarsus.urdf",
+            "--gait",
+            gait,
+        ])
+        .args([
+            "--terrain",
+            "terrains/flat.toml",
+            "--duration",
+            "1",
+            "--no-record",
+        ])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&held.stderr);
+    assert_eq!(held.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("cannot reach its standing foot position")
+            && said.contains("redundant_legs = \"driven\""),
+        "{said}"
+    );
+    let robot = driven("hex18_tarsus", &dir);
+    let json = dir.join("folded.json");
+    let csv = dir.join("folded.csv");
+    let mut cmd = hexsim();
+    cmd.args(["run", "--robot"])
+        .arg(&robot)
+        .args(["--gait", gait])
+        .args(["--terrain", "terrains/flat.toml", "--duration", "10"])
+        .args(["--no-record", "--metrics"])
+        .arg(&json)
+        .arg("--trajectory")
+        .arg(&csv);
+    let metrics = metrics_of(cmd, &json, "folded");
+    let forward = metrics["forward_distance"].as_f64().unwrap();
+    println!("folded tarsus: {forward:.3} m of 0.8 m nominal");
+    assert!(forward >= 0.9 * 0.8, "{forward:.3} m of 0.8 m");
+    assert_eq!(metrics["clamped_ik_steps"], 0);
+    // the tarsus joints turn in the walk
+    let mut reader = csv::Reader::from_path(&csv).unwrap();
+    let headers = reader.headers().unwrap().clone();
+    let columns: Vec<usize> = headers
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| h.contains("tarsus") && h.ends_with("_angle"))
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(columns.len(), 6, "{headers:?}");
+    let bent = reader
+        .records()
+        .map(|r| r.unwrap())
+        .flat_map(|r| {
+            columns
+                .iter()
+                .map(move |&i| r[i].parse::<f64>().unwrap().abs())
+        })
+        .fold(0.0f64, f64::max);
+    println!("the tarsus bends up to {:.1}°", bent.to_degrees());
+    assert!(bent > 20f64.to_radians(), "tarsus bent at most {bent} rad");
 }
 
 /// Feet on massless links hung by revolute ankles fold into their tibias (the ankle held at zero,

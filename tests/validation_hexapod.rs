@@ -1108,7 +1108,7 @@ fn feet_are_found_from_the_geometry_or_named_in_a_robot_file() {
             (leg.foot.center, leg.foot.radius),
             (want.foot.center, want.foot.radius)
         );
-        assert_eq!((leg.foot_link, leg.joints), (want.foot_link, want.joints));
+        assert_eq!((leg.foot_link, &leg.joints), (want.foot_link, &want.joints));
     }
 }
 

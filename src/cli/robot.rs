@@ -270,7 +270,8 @@ fn held_joints(model: &RobotModel) -> Option<String> {
     let on = list(true);
     if !on.is_empty() {
         parts.push(format!(
-            "on the legs, beyond the three that sweep the largest workspace: {}",
+            "on the legs, beyond the three that sweep the largest workspace (legs of up to {} joints alike are driven whole with `redundant_legs = \"driven\"` in the robot file): {}",
+            hexsim::robot::kinematics::MAX_LEG_JOINTS,
             on.join(", ")
         ));
     }
@@ -278,6 +279,27 @@ fn held_joints(model: &RobotModel) -> Option<String> {
         "  {} joints held still at the angle shown (welded): {}",
         model.held.len(),
         parts.join("; ")
+    ))
+}
+
+/// For a leg of more than three joints: which three place the foot and which are redundant,
+/// pulled towards their rest by its inverse kinematics (`robot::redundant`).
+fn redundant_joints(model: &RobotModel, leg: &robot::Leg) -> Option<String> {
+    if leg.joints.len() <= 3 {
+        return None;
+    }
+    let name = |j: usize| model.joints[j].name.as_str();
+    let (mut three, mut extra) = (Vec::new(), Vec::new());
+    for (&j, rest) in leg.joints.iter().zip(&leg.posture) {
+        match rest {
+            None => three.push(name(j).to_string()),
+            Some(angle) => extra.push(format!("{} {}", name(j), deg(*angle))),
+        }
+    }
+    Some(format!(
+        "        redundant: {} place the foot, {} driven too and pulled towards rest (damped least squares with a posture term)",
+        three.join(" "),
+        extra.join(", ")
     ))
 }
 
@@ -333,20 +355,26 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
         "  legs (in hexsim's body frame: x the walking direction, z up):"
     );
     for leg in &model.legs {
-        let joints = leg.joints.map(|j| &model.joints[j]);
+        let joints: Vec<&robot::Joint> = leg.joints.iter().map(|&j| &model.joints[j]).collect();
         let hip = joints[0].origin.translation;
-        let [a, b, c] = statics::segment_lengths(model, leg);
+        let segments: Vec<String> = statics::segment_lengths(model, leg)
+            .iter()
+            .map(|s| format!("{s:.3}"))
+            .collect();
+        let names: Vec<&str> = joints.iter().map(|j| j.name.as_str()).collect();
         let _ = writeln!(
             out,
-            "    {}  hip ({}, {}, {}) m; joints {} {} {}; segments {a:.3} {b:.3} {c:.3} m",
+            "    {}  hip ({}, {}, {}) m; joints {}; segments {} m",
             leg.name,
             thousandths(hip.x),
             thousandths(hip.y),
             thousandths(hip.z),
-            joints[0].name,
-            joints[1].name,
-            joints[2].name,
+            names.join(" "),
+            segments.join(" "),
         );
+        if let Some(line) = redundant_joints(model, leg) {
+            let _ = writeln!(out, "{line}");
+        }
         let limits: Vec<String> = joints
             .iter()
             .map(|j| format!("[{}, {}]", deg(j.lower), deg(j.upper)))

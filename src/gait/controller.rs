@@ -26,7 +26,7 @@ use super::schedule::{LegPhase, leg_phase};
 use super::slew;
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
-use crate::robot::kinematics::{IkSolution, IkWarm, LegChain};
+use crate::robot::kinematics::{IkSolution, IkWarm, LegAngles, LegChain};
 use glam::{DMat3, DQuat, DVec3};
 
 /// A velocity command in the body frame.
@@ -43,7 +43,8 @@ pub struct VelocityCommand {
 /// The controller's output for one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GaitTargets {
-    pub joint_angles: [[f64; 3]; 6],
+    /// Per leg, its joints' angles from the body out.
+    pub joint_angles: [LegAngles; 6],
     /// Foot centre targets (body frame), rolling offset included.
     pub feet: [DVec3; 6],
     pub phases: [LegPhase; 6],
@@ -66,7 +67,7 @@ pub struct StanceError {
     /// Distance from the closest reachable foot position to the target (m).
     pub miss: f64,
     /// The leg's joint angles at that closest position (at a limit where one binds).
-    pub angles: [f64; 3],
+    pub angles: LegAngles,
     message: String,
 }
 
@@ -75,14 +76,14 @@ pub struct GaitController {
     offsets: [f64; 6],
     chains: Vec<LegChain>,
     neutral: [DVec3; 6],
-    last: [[f64; 3]; 6],
+    last: [LegAngles; 6],
     /// Each foot sphere's radius, and its link's orientation in the standing pose, for the
     /// rolling offset (see the module's doc).
     radius: [f64; 6],
     rest: [DMat3; 6],
     rolling: bool,
     /// The last answer on the ground per leg (a swinging foot's path without the lift).
-    grounded: [[f64; 3]; 6],
+    grounded: [LegAngles; 6],
     /// The forward kinematics of each leg's last answers (`last`, `grounded`), which its next
     /// solves start from ([`LegChain::solve_warm`]).
     warm_last: [Option<IkWarm>; 6],
@@ -105,8 +106,8 @@ pub struct GaitController {
     last_time: Option<f64>,
     /// The fastest each joint's target may move (rad/s, at the gait's nominal stride) and the
     /// last targets given ([`slew::joint_speed_limit`]).
-    joint_speed: [[f64; 3]; 6],
-    last_angles: [[f64; 3]; 6],
+    joint_speed: [LegAngles; 6],
+    last_angles: [LegAngles; 6],
 }
 
 /// The share of a leg's vertical reach from its standing target that levelling may use: the rest
@@ -114,7 +115,8 @@ pub struct GaitController {
 const LEVELLING_SHARE: f64 = 0.7;
 
 /// Starting guesses for the standing pose's inverse kinematics, tried in turn: knee bent one way,
-/// the other way, straight, and the two with the femur down.
+/// the other way, straight, and the two with the femur down (on the three joints that place the
+/// foot; a redundant leg's others at rest).
 const STANDING_GUESSES: [[f64; 3]; 5] = [
     [0.0, -0.3, 1.2],
     [0.0, 0.3, -1.2],
@@ -123,11 +125,21 @@ const STANDING_GUESSES: [[f64; 3]; 5] = [
     [0.0, 0.3, 1.2],
 ];
 
+/// For a robot whose legs have joints held still: how to drive them (they may reach what the
+/// three driven joints cannot).
+fn held_hint(model: &RobotModel) -> &'static str {
+    if model.held.iter().any(|h| h.on_leg.is_some()) {
+        "; the legs' extra joints are held still: `redundant_legs = \"driven\"` in the robot file drives them too"
+    } else {
+        ""
+    }
+}
+
 /// A centring shift smaller than this (m) is not applied (a symmetric robot's rounding).
 const CENTRING_TOLERANCE: f64 = 1e-6;
 
 /// The robot's centre of mass in the body frame with its legs at `angles`.
-fn centre_of_mass(model: &RobotModel, angles: &[[f64; 3]; 6]) -> DVec3 {
+fn centre_of_mass(model: &RobotModel, angles: &[LegAngles; 6]) -> DVec3 {
     model.centre_of_mass(&model.link_poses(&model.pose_from_legs(angles)))
 }
 
@@ -143,7 +155,8 @@ impl GaitController {
             .map(|leg| LegChain::new(model, leg))
             .collect();
         let mut neutral = [DVec3::ZERO; 6];
-        let mut last = [[0.0; 3]; 6];
+        let mut last: [LegAngles; 6] =
+            std::array::from_fn(|k| LegAngles::zeros(chains[k].joint_count()));
         // the stance is measured from the hips' plane, not from the base link's origin, which a
         // URDF may put anywhere
         let hips = model.hips_plane();
@@ -159,12 +172,12 @@ impl GaitController {
             );
             // a bent-knee guess, femur up and tibia down, so the solver finds the usual stance;
             // URDFs bend their knees either way, so the mirrored and straight guesses next
-            let mut guess = chain.solve(neutral[k], STANDING_GUESSES[0]);
+            let mut guess = chain.solve(neutral[k], chain.from_three(STANDING_GUESSES[0]));
             for &other in &STANDING_GUESSES[1..] {
                 if guess.error <= REACH_TOLERANCE {
                     break; // the first guess that reaches is kept (hex18: the first)
                 }
-                let other = chain.solve(neutral[k], other);
+                let other = chain.solve(neutral[k], chain.from_three(other));
                 if other.error < guess.error {
                     guess = other;
                 }
@@ -176,11 +189,12 @@ impl GaitController {
                     miss: guess.error,
                     angles: guess.angles,
                     message: format!(
-                        "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm",
+                        "leg {} cannot reach its standing foot position {:?} (stance_height {} m, reach {reach:.3} m): missed by {:.1} mm{}",
                         leg.name,
                         neutral[k].to_array(),
                         spec.stance_height,
-                        guess.error * 1e3
+                        guess.error * 1e3,
+                        held_hint(model)
                     ),
                 });
             }
@@ -275,7 +289,11 @@ impl GaitController {
             swinging: [false; 6],
             last_planned: [DVec3::ZERO; 6],
             last_time: None,
-            joint_speed: [[f64::INFINITY; 3]; 6],
+            joint_speed: last.map(|q| {
+                let mut infinite = q;
+                infinite.fill(f64::INFINITY);
+                infinite
+            }),
             last_angles: last,
         };
         controller.joint_speed = controller.nominal_joint_speeds();
@@ -285,7 +303,7 @@ impl GaitController {
     /// Each joint's fastest rate (rad/s) over one cycle of the gait at its nominal speed on
     /// level ground, for the bound on a joint target's rate ([`slew`]); the controller's state
     /// is as new afterwards.
-    fn nominal_joint_speeds(&mut self) -> [[f64; 3]; 6] {
+    fn nominal_joint_speeds(&mut self) -> [LegAngles; 6] {
         let (last, grounded) = (self.last, self.grounded);
         let command = VelocityCommand {
             forward: self.spec.nominal_speed(),
@@ -293,7 +311,7 @@ impl GaitController {
         };
         let samples = 400;
         let h = self.spec.period / samples as f64;
-        let mut speed = [[0.0f64; 3]; 6];
+        let mut speed = last.map(|q| LegAngles::zeros(q.len()));
         let mut before = self.targets(0.0, command, 1.0).joint_angles;
         for i in 1..=samples {
             let now = self.targets(i as f64 * h, command, 1.0).joint_angles;
@@ -342,7 +360,7 @@ impl GaitController {
     }
 
     /// Joint angles of the standing pose, per leg.
-    pub fn standing_angles(&self) -> [[f64; 3]; 6] {
+    pub fn standing_angles(&self) -> [LegAngles; 6] {
         std::array::from_fn(|k| self.chains[k].solve(self.neutral[k], self.last[k]).angles)
     }
 
@@ -385,7 +403,7 @@ impl GaitController {
 
     /// Joint angles of the standing pose with each foot lowered or raised to the ground under it
     /// (see `ground` in [`Self::targets`]): the body stands level on a slope.
-    pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [[f64; 3]; 6] {
+    pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [LegAngles; 6] {
         self.last_time = None;
         let angles = std::array::from_fn(|k| {
             let mut foot = self.neutral[k];
@@ -434,7 +452,7 @@ impl GaitController {
         let v = DVec3::new(command.forward, command.sideways, 0.0);
         let omega = DVec3::new(0.0, 0.0, command.yaw_rate);
         let mut out = GaitTargets {
-            joint_angles: [[0.0; 3]; 6],
+            joint_angles: self.last,
             feet: [DVec3::ZERO; 6],
             phases: [LegPhase::Stance(0.0); 6],
             clamped: [false; 6],
@@ -535,7 +553,7 @@ impl GaitController {
                 // pose may flip from one such pose to another: the joints are bounded too
                 let scale = (d.length() / self.spec.stride_length).max(1.0);
                 for (j, angle) in angles.iter_mut().enumerate() {
-                    let longest = slew::joint_speed_limit(self.joint_speed[k], j) * scale * dt;
+                    let longest = slew::joint_speed_limit(&self.joint_speed[k], j) * scale * dt;
                     let last = self.last_angles[k][j];
                     *angle = angle.clamp(last - longest, last + longest);
                 }

@@ -21,6 +21,7 @@ use super::controller::{GaitController, StanceError};
 use super::margins::{CycleMargins, cycle_margins, sampled_margins};
 use super::schedule::minimum_support;
 use super::spec::{Gait, GaitSpec};
+use crate::robot::kinematics::LegAngles;
 use crate::robot::{RobotModel, statics};
 
 /// The most of a servo's effort the fitted stance may need standing on the gait's fewest feet:
@@ -291,7 +292,7 @@ enum Problem {
     Cycle {
         leg: usize,
         time: f64,
-        angles: [f64; 3],
+        angles: LegAngles,
     },
     Torque(ServoLoad),
     /// The body's lowest point is this far above the ground, less than a step height.
@@ -318,12 +319,12 @@ impl Assessment {
             "stance height {:.3} m, reach {:.3} m",
             self.stance_height, self.reach
         );
-        let limits = |leg: usize, angles: [f64; 3]| {
+        let limits = |leg: usize, angles: LegAngles| {
             let leg = &model.legs[leg];
             let bound: Vec<String> = leg
                 .joints
                 .iter()
-                .zip(angles)
+                .zip(angles.iter().copied())
                 .filter_map(|(&j, q)| {
                     let joint = &model.joints[j];
                     let (which, limit) = if (q - joint.lower).abs() < 1e-6 {

@@ -28,7 +28,7 @@ pub struct Unreached {
     pub leg: usize,
     /// Seconds into the cycle.
     pub time: f64,
-    pub angles: [f64; 3],
+    pub angles: crate::robot::kinematics::LegAngles,
 }
 
 /// The margins of `gait` on `model` (an error when the standing pose or the swing apex cannot

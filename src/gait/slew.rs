@@ -34,7 +34,7 @@ pub fn speed_limit(gait: &Gait, stride: f64) -> f64 {
 /// turns in a curve). The joint targets are bounded as well as the foot's: an inverse
 /// kinematics that answers a target out of reach with the closest pose may flip between two
 /// such poses from one step to the next, however slowly the target moves.
-pub fn joint_speed_limit(nominal: [f64; 3], j: usize) -> f64 {
+pub fn joint_speed_limit(nominal: &[f64], j: usize) -> f64 {
     let fastest = nominal.iter().copied().fold(0.0, f64::max);
     if fastest > 0.0 {
         SPEED_FACTOR * nominal[j].max(0.25 * fastest)

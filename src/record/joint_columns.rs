@@ -1,7 +1,8 @@
 //! The trajectory's joint columns, named by leg and role (`lf_coxa`, `lf_femur`, `lf_tibia`, …
 //! `rr_tibia`): a tool reads the same columns for every hexapod, whatever its URDF calls the
 //! joints (Kraby's rr coxa is `servomotor_0`). `hexsim robot` prints the URDF joint each name
-//! stands for.
+//! stands for. A redundant leg's roles are its three that place the foot; its other joints (a
+//! tarsus, a hip roll) keep their URDF names.
 
 use crate::robot::RobotModel;
 use std::collections::HashSet;
@@ -15,7 +16,12 @@ pub const ROLES: [&str; 3] = ["coxa", "femur", "tibia"];
 pub fn joint_columns(model: &RobotModel) -> Vec<String> {
     let mut names: Vec<Option<String>> = vec![None; model.joints.len()];
     for leg in &model.legs {
-        for (role, &j) in ROLES.iter().zip(&leg.joints) {
+        let placing = leg
+            .joints
+            .iter()
+            .zip(&leg.posture)
+            .filter(|(_, rest)| rest.is_none());
+        for (role, (&j, _)) in ROLES.iter().zip(placing) {
             names[j] = Some(format!("{}_{role}", leg.name));
         }
     }

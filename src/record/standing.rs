@@ -64,17 +64,24 @@ pub fn workspace(model: &RobotModel, samples: usize) -> Vec<Vec<DVec3>> {
         .iter()
         .map(|leg| {
             let chain = LegChain::new(model, leg);
-            let [a, b, c] = leg.joints.map(|j| &model.joints[j]);
+            let joints: Vec<&crate::robot::Joint> =
+                leg.joints.iter().map(|&j| &model.joints[j]).collect();
+            // a redundant leg's extra joints too, with fewer angles each: as many points as
+            // a 3-joint leg's n³
+            let per = ((n as f64).powf(3.0 / joints.len() as f64).floor() as usize).max(2);
             let at = |joint: &crate::robot::Joint, k: usize| {
-                joint.lower + (joint.upper - joint.lower) * k as f64 / (n - 1) as f64
+                joint.lower + (joint.upper - joint.lower) * k as f64 / (per - 1) as f64
             };
-            let mut points = Vec::with_capacity(n * n * n);
-            for i in 0..n {
-                for j in 0..n {
-                    for k in 0..n {
-                        points.push(chain.foot_position([at(a, i), at(b, j), at(c, k)]));
-                    }
+            let count = per.pow(joints.len() as u32);
+            let mut points = Vec::with_capacity(count);
+            let mut q = vec![0.0; joints.len()];
+            for index in 0..count {
+                let mut digits = index;
+                for (angle, joint) in q.iter_mut().zip(&joints).rev() {
+                    *angle = at(joint, digits % per);
+                    digits /= per;
                 }
+                points.push(chain.foot_position(&q));
             }
             points
         })

@@ -9,9 +9,16 @@
 //!
 //! A leg of more than three joints (a tarsus, a hip roll) walks on three of them: the three that
 //! sweep the largest workspace with the others held (∫|det J| dq over their limits, the volume
-//! they cover), the others held at their zero. A leg of fewer than three cannot place its foot
-//! in space, and is refused saying so.
+//! they cover), the others held at their zero. With `redundant_legs = "driven"` in the robot file
+//! it is driven whole, up to [`MAX_LEG_JOINTS`] joints and all six legs alike: the same three
+//! place the foot and the others are servoed, pulled towards their zero by redundant inverse
+//! kinematics (`redundant`), and bent where the three cannot reach. Held is the default: it is
+//! stiffer (a servoed femur and tibia in mid-leg let the CSIRO Bullet's feet slide 0.12 m on the
+//! natural terrain, 0.07 m held), and it walks where the three reach. A leg of fewer than three
+//! cannot place its foot in space, and is refused saying so. A leg of fewer than three cannot
+//! place its foot in space, and is refused saying so.
 
+use super::kinematics::MAX_LEG_JOINTS;
 use super::legs::{chain_to, choose_forward, is_leaf, split};
 use super::model::{HeldJoint, Joint, Link};
 use glam::{DAffine3, DVec2, DVec3};
@@ -28,14 +35,16 @@ struct Candidate {
 /// At most this many candidates (the lowest-reaching) are searched for the six legs.
 const MOST_CANDIDATES: usize = 12;
 
-/// The joints to hold still so that the robot is six legs of three joints each: empty when it is
-/// already (then nothing changes). `unfound`: leaf links whose foot could not be found, with why;
-/// `forward`: the robot file's walking direction (yaw, rad), if it gives one.
+/// The joints to hold still so that the robot is six legs of three joints each, or with `driven`
+/// (the robot file's `redundant_legs = "driven"`) of three to [`MAX_LEG_JOINTS`] alike: empty
+/// when it is already (then nothing changes). `unfound`: leaf links whose foot could not be
+/// found, with why; `forward`: the robot file's walking direction (yaw, rad), if it gives one.
 pub(super) fn held_joints(
     links: &[Link],
     joints: &[Joint],
     unfound: &[(String, String)],
     forward: Option<f64>,
+    driven: bool,
 ) -> Result<Vec<HeldJoint>, String> {
     let mut candidates: Vec<Candidate> = (0..links.len())
         .filter(|&k| is_leaf(joints, k))
@@ -75,9 +84,20 @@ pub(super) fn held_joints(
     }
     let mut active = vec![false; joints.len()];
     let mut on_leg: Vec<Option<usize>> = vec![None; joints.len()];
+    // driven whole when asked, the legs alike in length and no longer than MAX_LEG_JOINTS (the
+    // multibody's contact mobility is sized per leg length); otherwise each walks on three
+    let whole = driven
+        && legs
+            .iter()
+            .all(|l| l.chain.len() == legs[0].chain.len() && l.chain.len() <= MAX_LEG_JOINTS);
     for leg in &legs {
         let foot = links[leg.leaf].foot.map_or(DVec3::ZERO, |f| f.center);
-        for j in driven_three(joints, &leg.chain, foot) {
+        let driven = if whole {
+            leg.chain.clone()
+        } else {
+            driven_three(joints, &leg.chain, foot)
+        };
+        for j in driven {
             active[j] = true;
         }
         for &j in &leg.chain {
@@ -115,8 +135,9 @@ fn too_few_joints(leaf: &str, n: usize) -> String {
     )
 }
 
-/// A held joint's angle: its zero, or the limit nearest it.
-fn hold_angle(joint: &Joint) -> f64 {
+/// A held joint's angle, and a redundant leg's extra joint's rest: its zero, or the limit
+/// nearest it.
+pub(super) fn hold_angle(joint: &Joint) -> f64 {
     0.0_f64.clamp(joint.lower, joint.upper)
 }
 
@@ -245,10 +266,10 @@ fn choose_six<'a>(
     Ok(pick.iter().map(|&i| &candidates[i]).collect())
 }
 
-/// The three joints of a leg its gait drives: all three of a 3-joint leg; of a longer one, the
-/// three that sweep the largest workspace with the others held ([`hold_angle`]): the volume
+/// The three joints of a leg that place its foot: all three of a 3-joint leg; of a longer one,
+/// the three that sweep the largest workspace with the others held ([`hold_angle`]): the volume
 /// ∫|det J| dq over their limits (7³ samples), J the foot's Jacobian in those three joints.
-fn driven_three(joints: &[Joint], chain: &[usize], foot: DVec3) -> Vec<usize> {
+pub(super) fn driven_three(joints: &[Joint], chain: &[usize], foot: DVec3) -> Vec<usize> {
     if chain.len() <= 3 {
         return chain.to_vec();
     }

@@ -1,9 +1,95 @@
-//! Leg kinematics from the URDF's geometry: forward kinematics of a 3-joint leg in the body frame,
-//! and inverse kinematics by damped Newton iterations on the analytic Jacobian — general for any
-//! three revolute joints, not only yaw-pitch-pitch legs.
+//! Leg kinematics from the URDF's geometry: forward kinematics of a leg of three to
+//! [`MAX_LEG_JOINTS`] revolute joints in the body frame, and inverse kinematics by damped Newton
+//! iterations on the analytic Jacobian — general for any three revolute joints, not only
+//! yaw-pitch-pitch legs; a leg of more joints is redundant and solved by `redundant`.
 
 use super::model::{Leg, RobotModel};
 use glam::{DAffine3, DMat3, DQuat, DVec3};
+use std::ops::{Deref, DerefMut};
+
+/// The most joints a leg may have and be driven whole (a coxa, femur, tibia and up to three more:
+/// a tarsus, a hip roll, a wrist). A longer chain walks on three (see `branches`).
+pub const MAX_LEG_JOINTS: usize = 6;
+
+/// A leg's joint angles from the body out (rad): as many as the leg has joints, 3 to
+/// [`MAX_LEG_JOINTS`]. Kept in a fixed array (no allocation: six legs are solved every step) and
+/// read as a slice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LegAngles {
+    values: [f64; MAX_LEG_JOINTS],
+    len: usize,
+}
+
+impl LegAngles {
+    /// The angles of a 3-joint leg.
+    pub const fn three(q: [f64; 3]) -> Self {
+        LegAngles {
+            values: [q[0], q[1], q[2], 0.0, 0.0, 0.0],
+            len: 3,
+        }
+    }
+
+    /// `n` zeros (`n` at most [`MAX_LEG_JOINTS`]).
+    pub fn zeros(n: usize) -> Self {
+        LegAngles {
+            values: [0.0; MAX_LEG_JOINTS],
+            len: n.min(MAX_LEG_JOINTS),
+        }
+    }
+
+    /// The angles of `q` (its first [`MAX_LEG_JOINTS`]).
+    pub fn from_slice(q: &[f64]) -> Self {
+        let mut angles = Self::zeros(q.len());
+        let len = angles.len;
+        angles.values[..len].copy_from_slice(&q[..len]);
+        angles
+    }
+
+    /// `guess` as angles of an `n`-joint leg: its first `n`, and a short one's missing joints
+    /// at `fill`'s.
+    fn fitted(guess: &[f64], n: usize, fill: &[f64]) -> Self {
+        let mut angles = Self::from_slice(fill);
+        angles.len = n;
+        let given = guess.len().min(n);
+        angles.values[..given].copy_from_slice(&guess[..given]);
+        angles
+    }
+}
+
+impl Deref for LegAngles {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+}
+
+impl DerefMut for LegAngles {
+    fn deref_mut(&mut self) -> &mut [f64] {
+        &mut self.values[..self.len]
+    }
+}
+
+impl<'a> IntoIterator for &'a LegAngles {
+    type Item = &'a f64;
+    type IntoIter = std::slice::Iter<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl IntoIterator for LegAngles {
+    type Item = f64;
+    type IntoIter = std::iter::Take<std::array::IntoIter<f64, MAX_LEG_JOINTS>>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.values.into_iter().take(self.len)
+    }
+}
+
+impl AsRef<[f64]> for LegAngles {
+    fn as_ref(&self) -> &[f64] {
+        self
+    }
+}
 
 /// One leg's chain, in the body (root link) frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -11,17 +97,24 @@ pub struct LegChain {
     /// Joint k's origin in joint k−1's frame, both frames turned so their joint axis is z
     /// (Aₖ₋₁ᵀ·Oₖ·Aₖ, Aₖ taking z onto the URDF axis): a joint's rotation is then a turn about z,
     /// which forward kinematics applies to two columns instead of composing a Rodrigues matrix.
-    origins: [DAffine3; 3],
+    origins: [DAffine3; MAX_LEG_JOINTS],
+    /// How many joints the leg has (3 to [`MAX_LEG_JOINTS`]).
+    n: usize,
     /// The foot centre in the last joint's turned frame.
     foot: DVec3,
-    lower: [f64; 3],
-    upper: [f64; 3],
+    pub(super) lower: [f64; MAX_LEG_JOINTS],
+    pub(super) upper: [f64; MAX_LEG_JOINTS],
+    /// Per joint, the angle a redundant joint is pulled towards (`Leg::posture`), NaN for the
+    /// three that place the foot.
+    pub(super) rest: [f64; MAX_LEG_JOINTS],
+    /// The rest angles with zero for the three: what a short guess is filled with.
+    fill: [f64; MAX_LEG_JOINTS],
 }
 
 /// The result of an inverse-kinematics solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkSolution {
-    pub angles: [f64; 3],
+    pub angles: LegAngles,
     /// Distance from the reached foot position to the target (m).
     pub error: f64,
     /// The foot link's orientation at `angles` ([`LegChain::foot_rotation`]'s).
@@ -42,24 +135,52 @@ type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3);
 /// The IK answer is accepted as reaching the target within this distance (m).
 pub const IK_TOLERANCE: f64 = 1e-6;
 
+/// Joint positions and axes in the body frame, as [`LegChain::frames`] gives them.
+pub(super) type JointFrames = [(DVec3, DVec3); MAX_LEG_JOINTS];
+
 impl LegChain {
     pub fn new(model: &RobotModel, leg: &Leg) -> Self {
-        let j = leg.joints.map(|k| &model.joints[k]);
+        let n = leg.joints.len().min(MAX_LEG_JOINTS);
+        let j: Vec<_> = leg.joints[..n].iter().map(|&k| &model.joints[k]).collect();
         // The first joint may hang from the body through fixed offsets only (merged into its origin).
-        let align = j.map(|j| DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Z, j.axis)));
-        LegChain {
-            origins: [0, 1, 2].map(|k| {
-                let previous = if k == 0 {
-                    DAffine3::IDENTITY
-                } else {
-                    align[k - 1].inverse()
-                };
-                previous * j[k].origin * align[k]
-            }),
-            foot: align[2].inverse().transform_point3(leg.foot.center),
-            lower: j.map(|j| j.lower),
-            upper: j.map(|j| j.upper),
+        let align: Vec<DAffine3> = j
+            .iter()
+            .map(|j| DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Z, j.axis)))
+            .collect();
+        let mut chain = LegChain {
+            origins: [DAffine3::IDENTITY; MAX_LEG_JOINTS],
+            n,
+            foot: align[n - 1].inverse().transform_point3(leg.foot.center),
+            lower: [0.0; MAX_LEG_JOINTS],
+            upper: [0.0; MAX_LEG_JOINTS],
+            rest: [f64::NAN; MAX_LEG_JOINTS],
+            fill: [0.0; MAX_LEG_JOINTS],
+        };
+        for k in 0..n {
+            let previous = if k == 0 {
+                DAffine3::IDENTITY
+            } else {
+                align[k - 1].inverse()
+            };
+            chain.origins[k] = previous * j[k].origin * align[k];
+            chain.lower[k] = j[k].lower;
+            chain.upper[k] = j[k].upper;
+            if let Some(Some(rest)) = leg.posture.get(k) {
+                chain.rest[k] = *rest;
+                chain.fill[k] = *rest;
+            }
         }
+        chain
+    }
+
+    /// How many joints the leg has.
+    pub fn joint_count(&self) -> usize {
+        self.n
+    }
+
+    /// Whether the leg has more joints than the three that place its foot.
+    pub fn is_redundant(&self) -> bool {
+        self.n > 3
     }
 
     /// Where the first joint sits in the body frame.
@@ -67,27 +188,71 @@ impl LegChain {
         self.origins[0].translation
     }
 
+    /// Angles for this leg from `q`: its first joints' (a shorter `q` leaves the rest at their
+    /// rest angle, or zero).
+    pub fn angles(&self, q: &[f64]) -> LegAngles {
+        LegAngles::fitted(q, self.n, &self.fill)
+    }
+
+    /// Angles with `three` on the three joints that place the foot (in order from the body) and
+    /// a redundant leg's other joints at rest: a starting guess stated as a 3-joint leg's.
+    pub fn from_three(&self, three: [f64; 3]) -> LegAngles {
+        let mut q = LegAngles::zeros(self.n);
+        let mut given = three.into_iter();
+        for (k, angle) in q.iter_mut().enumerate() {
+            *angle = if self.rest[k].is_nan() {
+                given.next().unwrap_or(0.0)
+            } else {
+                self.rest[k]
+            };
+        }
+        q
+    }
+
     /// Foot centre in the body frame for joint angles `q`.
-    pub fn foot_position(&self, q: [f64; 3]) -> DVec3 {
-        self.frames(q).1
+    pub fn foot_position(&self, q: impl AsRef<[f64]>) -> DVec3 {
+        let q = self.angles(q.as_ref());
+        if self.n == 3 {
+            return self.frames3([q[0], q[1], q[2]]).1;
+        }
+        self.frames(&q).1
     }
 
     /// The foot link's orientation in the body frame for joint angles `q`, up to a constant turn
     /// (its frame turned so the last joint's axis is z): compare two of them only.
-    pub fn foot_rotation(&self, q: [f64; 3]) -> DMat3 {
-        self.frames(q).2
+    pub fn foot_rotation(&self, q: impl AsRef<[f64]>) -> DMat3 {
+        let q = self.angles(q.as_ref());
+        if self.n == 3 {
+            return self.frames3([q[0], q[1], q[2]]).2;
+        }
+        self.frames(&q).2
     }
 
     /// Joint positions and axes (body frame), the foot position, and the foot link's orientation
-    /// (turned frame).
-    fn frames(&self, q: [f64; 3]) -> Frames {
+    /// (turned frame), for the leg's `q` (one angle per joint).
+    pub(super) fn frames(&self, q: &[f64]) -> (JointFrames, DVec3, DMat3) {
+        let mut frame = DAffine3::IDENTITY;
+        let mut joints = [(DVec3::ZERO, DVec3::ZERO); MAX_LEG_JOINTS];
+        for k in 0..self.n {
+            frame *= self.origins[k];
+            let m = &mut frame.matrix3;
+            joints[k] = (frame.translation, m.z_axis);
+            // turn about the (turned) joint axis z by q
+            let (s, c) = q[k].sin_cos();
+            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
+        }
+        (joints, frame.transform_point3(self.foot), frame.matrix3)
+    }
+
+    /// [`Self::frames`] of a 3-joint leg, its loop of fixed length (the gait solves six legs
+    /// every step).
+    fn frames3(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3, DMat3) {
         let mut frame = DAffine3::IDENTITY;
         let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
         for k in 0..3 {
             frame *= self.origins[k];
             let m = &mut frame.matrix3;
             joints[k] = (frame.translation, m.z_axis);
-            // turn about the (turned) joint axis z by q
             let (s, c) = q[k].sin_cos();
             (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
         }
@@ -102,32 +267,47 @@ impl LegChain {
         )
     }
 
-    pub fn clamp(&self, q: [f64; 3]) -> [f64; 3] {
+    /// `q` within the joints' limits.
+    pub fn clamp(&self, q: impl AsRef<[f64]>) -> LegAngles {
+        let mut q = self.angles(q.as_ref());
+        for (k, angle) in q.iter_mut().enumerate() {
+            *angle = angle.clamp(self.lower[k], self.upper[k]);
+        }
+        q
+    }
+
+    fn clamp3(&self, q: [f64; 3]) -> [f64; 3] {
         [0, 1, 2].map(|k| q[k].clamp(self.lower[k], self.upper[k]))
     }
 
     /// Joint angles that put the foot at `target` (body frame), starting from `guess` (use the
     /// last answer: it keeps the knee on the same side). Damped least squares, within the
     /// joints' limits; if the target is out of reach the closest reachable answer is returned
-    /// with its error. (The gait solves six legs every step: each trial's forward kinematics
-    /// also gives the next iteration's Jacobian.)
-    pub fn solve(&self, target: DVec3, guess: [f64; 3]) -> IkSolution {
+    /// with its error. A leg of more than three joints is redundant: see `redundant`, which
+    /// also keeps its extra joints near their rest angles. (The gait solves six legs every
+    /// step: each trial's forward kinematics also gives the next iteration's Jacobian.)
+    pub fn solve(&self, target: DVec3, guess: impl AsRef<[f64]>) -> IkSolution {
         self.solve_warm(target, guess, &mut None)
     }
 
-    /// [`Self::solve`], taking the forward kinematics of `guess` from `warm` when it holds them
-    /// (the last answer's, bit for bit the same as computing them again: a fifth of the gait's
-    /// instructions on hex18's walk), and leaving this answer's there for the next solve.
+    /// [`Self::solve`], taking a 3-joint leg's forward kinematics of `guess` from `warm` when it
+    /// holds them (the last answer's, bit for bit the same as computing them again: a fifth of
+    /// the gait's instructions on hex18's walk), and leaving this answer's there for the next
+    /// solve. A redundant leg's solve keeps no such state.
     pub fn solve_warm(
         &self,
         target: DVec3,
-        guess: [f64; 3],
+        guess: impl AsRef<[f64]>,
         warm: &mut Option<IkWarm>,
     ) -> IkSolution {
-        let mut q = self.clamp(guess);
+        let guess = self.angles(guess.as_ref());
+        if self.is_redundant() {
+            return super::redundant::solve(self, target, &guess);
+        }
+        let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
         let (mut joints, mut foot, mut rotation) = match warm {
             Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits) => w.frames,
-            _ => self.frames(q),
+            _ => self.frames3(q),
         };
         let mut error = target - foot;
         for _ in 0..50 {
@@ -140,16 +320,16 @@ impl LegChain {
             let step = j.transpose()
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
-            let mut next = self.clamp([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames(next);
+            let mut next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
+            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames3(next);
             if (target - next_foot).length() >= error.length() {
                 // no progress: try a half step once, then stop
-                next = self.clamp([
+                next = self.clamp3([
                     q[0] + 0.5 * step.x,
                     q[1] + 0.5 * step.y,
                     q[2] + 0.5 * step.z,
                 ]);
-                (next_joints, next_foot, next_rotation) = self.frames(next);
+                (next_joints, next_foot, next_rotation) = self.frames3(next);
                 if (target - next_foot).length() >= error.length() {
                     break;
                 }
@@ -165,7 +345,7 @@ impl LegChain {
             frames: (joints, foot, rotation),
         });
         IkSolution {
-            angles: q,
+            angles: LegAngles::three(q),
             error: error.length(),
             foot_rotation: rotation,
         }
@@ -173,13 +353,13 @@ impl LegChain {
 
     /// Heading of the leg at rest (all joints zero): the yaw of the foot seen from the hip.
     pub fn rest_yaw(&self) -> f64 {
-        let d = self.foot_position([0.0; 3]) - self.hip();
+        let d = self.foot_position(LegAngles::zeros(self.n)) - self.hip();
         d.y.atan2(d.x)
     }
 
     /// Horizontal reach of the outstretched leg (all joints zero), from the hip.
     pub fn length(&self) -> f64 {
-        (self.foot_position([0.0; 3]) - self.hip())
+        (self.foot_position(LegAngles::zeros(self.n)) - self.hip())
             .truncate()
             .length()
     }

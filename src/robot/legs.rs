@@ -1,6 +1,6 @@
 //! The six legs of a robot, whatever its outline (rectangular, round, hexagonal) and whichever
-//! way its URDF points: the chains of three joints from the body to a foot (`branches` holds
-//! any other joints still first), the walking direction,
+//! way its URDF points: the chains of three to six joints from the body to a foot (`branches`
+//! holds any other joints still first), the walking direction,
 //! and each leg's name (`lf lm lr rf rm rr`) from where it sits around the body about that
 //! direction, so every gait file works for every robot.
 //!
@@ -11,12 +11,15 @@
 //! The model is then turned about z so that its body frame's x is the walking direction.
 
 pub use super::forward::{Forward, ForwardFrom};
+use super::kinematics::MAX_LEG_JOINTS;
 use super::model::{Foot, Joint, LEG_NAMES, Leg, Link};
 use glam::{DAffine3, DMat3, DVec2};
 
-/// A leg before it is named: its joints from the body out, and its foot.
+/// A leg before it is named: its joints from the body out, their posture (`Leg::posture`), and
+/// its foot.
 struct Chain {
-    joints: [usize; 3],
+    joints: Vec<usize>,
+    posture: Vec<Option<f64>>,
     foot_link: usize,
     foot: Foot,
 }
@@ -93,7 +96,8 @@ pub(super) fn find_legs(
         .zip(LEG_NAMES)
         .map(|(k, name)| Leg {
             name,
-            joints: chains[k].joints,
+            joints: chains[k].joints.clone(),
+            posture: chains[k].posture.clone(),
             foot_link: chains[k].foot_link,
             foot: chains[k].foot,
         })
@@ -252,8 +256,8 @@ pub(super) fn footless_leg(link: &str, why: Option<&String>) -> String {
 }
 
 /// The six chains from the body to a foot: every leaf link with a foot, traced back to the root;
-/// each must hang from it by exactly three joints of its own (`branches` has held any others
-/// still). A foot on the body or on a link that is not a leaf is contact geometry, not a leg's
+/// each must hang from it by three to [`MAX_LEG_JOINTS`] joints of its own (`branches` has held
+/// any others still). A foot on the body or on a link that is not a leaf is contact geometry, not a leg's
 /// end. `unfound`: (link, why) for each leaf whose foot could not be found from its geometry.
 /// Whether link `k` ends a chain: not the root, and no joint hangs from it.
 pub(super) fn is_leaf(joints: &[Joint], k: usize) -> bool {
@@ -290,15 +294,22 @@ fn chains(
             return Err(footless_leg(&link.name, why));
         };
         let chain = chain_to(links, joints, k);
-        let [a, b, c] = chain[..] else {
+        if !(3..=MAX_LEG_JOINTS).contains(&chain.len()) {
             return Err(format!(
-                "the foot on link `{}` hangs from the body by {} joints, expected 3 (coxa, femur, tibia)",
+                "the foot on link `{}` hangs from the body by {} joints, expected 3 to {MAX_LEG_JOINTS} (coxa, femur, tibia and any tarsus, hip roll, …)",
                 link.name,
                 chain.len()
             ));
-        };
+        }
+        // the three that place the foot; the others (a redundant leg's) pulled to their rest
+        let three = super::branches::driven_three(joints, &chain, foot.center);
+        let posture = chain
+            .iter()
+            .map(|j| (!three.contains(j)).then(|| super::branches::hold_angle(&joints[*j])))
+            .collect();
         found.push(Chain {
-            joints: [a, b, c],
+            joints: chain,
+            posture,
             foot_link: k,
             foot,
         });
@@ -310,8 +321,8 @@ fn chains(
         .iter()
         .flat_map(|c| c.joints.iter())
         .collect::<std::collections::HashSet<_>>();
-    if shared.len() != 18 {
-        return Err("legs share joints: each of the six legs needs its own three joints".into());
+    if shared.len() != found.iter().map(|c| c.joints.len()).sum::<usize>() {
+        return Err("legs share joints: each of the six legs needs its own joints".into());
     }
     Ok(found)
 }

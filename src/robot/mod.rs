@@ -8,6 +8,7 @@ pub mod kinematics;
 pub mod legs;
 pub mod mesh;
 mod model;
+mod redundant;
 pub mod servo;
 pub mod statics;
 pub mod urdf;

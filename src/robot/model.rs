@@ -117,13 +117,17 @@ pub struct Joint {
 /// Where a leg sits on the body, as gait files name legs: left/right × front/middle/rear.
 pub const LEG_NAMES: [&str; 6] = ["lf", "lm", "lr", "rf", "rm", "rr"];
 
-/// A leg: three joints from the body to a foot.
+/// A leg: three to [`crate::robot::kinematics::MAX_LEG_JOINTS`] joints from the body to a foot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Leg {
     /// Canonical position name (`lf`, `lm`, …), from where the leg is mounted.
     pub name: &'static str,
     /// Joint indices from the body outwards.
-    pub joints: [usize; 3],
+    pub joints: Vec<usize>,
+    /// Per joint of `joints`: None for the three that place the foot (the three that sweep the
+    /// largest workspace), and for each further joint of a redundant leg (a tarsus, a hip roll)
+    /// the rest angle its inverse kinematics pulls it towards (see `robot::redundant`).
+    pub posture: Vec<Option<f64>>,
     /// The link that carries the foot.
     pub foot_link: usize,
     pub foot: Foot,
@@ -131,7 +135,8 @@ pub struct Leg {
 
 /// A revolute joint of the URDF that hexsim holds still at an angle (welded there: it is not in
 /// [`RobotModel::joints`]): a joint off the six legs (a head, an arm, a tail: a passive body held
-/// in its pose), or a leg's joint beyond the three its gait drives (a tarsus). See `branches`.
+/// in its pose), or a joint of a leg longer than
+/// [`crate::robot::kinematics::MAX_LEG_JOINTS`] beyond the three its gait drives. See `branches`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeldJoint {
     /// The URDF joint's name.
@@ -159,8 +164,8 @@ pub struct RobotModel {
     pub gait_hints: GaitHints,
     /// Things that were accepted with a fallback (e.g. a missing visual mesh).
     pub warnings: Vec<String>,
-    /// The URDF's revolute joints held still (welded at an angle): off the legs, or a leg's
-    /// beyond three.
+    /// The URDF's revolute joints held still (welded at an angle): off the legs, or those of a
+    /// leg longer than [`crate::robot::kinematics::MAX_LEG_JOINTS`] beyond three.
     pub held: Vec<HeldJoint>,
 }
 
@@ -207,11 +212,11 @@ impl RobotModel {
         self.links.iter().map(|l| l.mass).sum()
     }
 
-    /// Joint angles per model joint from each leg's three (in `legs` order).
-    pub fn pose_from_legs(&self, angles: &[[f64; 3]]) -> Vec<f64> {
+    /// Joint angles per model joint from each leg's (in `legs` order).
+    pub fn pose_from_legs(&self, angles: &[impl AsRef<[f64]>]) -> Vec<f64> {
         let mut pose = vec![0.0; self.joints.len()];
         for (leg, angles) in self.legs.iter().zip(angles) {
-            for (&j, &q) in leg.joints.iter().zip(angles) {
+            for (&j, &q) in leg.joints.iter().zip(angles.as_ref()) {
                 pose[j] = q;
             }
         }

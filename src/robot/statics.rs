@@ -64,17 +64,20 @@ pub fn foot_load(model: &RobotModel, gravity: f64, feet_down: usize) -> f64 {
     model.total_mass() * gravity / feet_down.max(1) as f64
 }
 
-/// A leg's segments with its joints at zero: hip to second joint, second to third, third to the
-/// foot's centre (m).
-pub fn segment_lengths(model: &RobotModel, leg: &Leg) -> [f64; 3] {
+/// A leg's segments with its joints at zero: hip to second joint, second to third, …, the last
+/// joint to the foot's centre (m): one per joint.
+pub fn segment_lengths(model: &RobotModel, leg: &Leg) -> Vec<f64> {
     let poses = model.link_poses(&vec![0.0; model.joints.len()]);
-    let at = |j: usize| {
-        let joint = &model.joints[j];
-        (poses[joint.parent] * joint.origin).translation
-    };
-    let [a, b, c] = leg.joints.map(at);
-    let foot = poses[leg.foot_link].transform_point3(leg.foot.center);
-    [a.distance(b), b.distance(c), c.distance(foot)]
+    let mut points: Vec<DVec3> = leg
+        .joints
+        .iter()
+        .map(|&j| {
+            let joint = &model.joints[j];
+            (poses[joint.parent] * joint.origin).translation
+        })
+        .collect();
+    points.push(poses[leg.foot_link].transform_point3(leg.foot.center));
+    points.windows(2).map(|w| w[0].distance(w[1])).collect()
 }
 
 /// Each foot's force (N, along −`gravity`, in `legs` order) holding the robot still on the feet in

@@ -6,6 +6,7 @@ use crate::gait::reach::ReachTally;
 use crate::gait::{
     FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand, away_from_edges,
 };
+use crate::robot::kinematics::LegAngles;
 use crate::robot::statics;
 use crate::terrain::FittedPlane;
 use glam::DVec3;
@@ -255,7 +256,7 @@ impl Walker {
 
     /// Sets the servos' targets to the legs' `angles`, held against the load of the feet in
     /// `stance` when [`Self::load_feedforward`] is on.
-    fn set_leg_targets(&mut self, angles: [[f64; 3]; 6], stance: [bool; 6]) {
+    fn set_leg_targets(&mut self, angles: [LegAngles; 6], stance: [bool; 6]) {
         for (leg, angles) in self.hexapod.model().legs.iter().zip(angles) {
             for (j, a) in leg.joints.iter().zip(angles) {
                 self.targets_by_joint[*j] = a;

@@ -97,8 +97,10 @@ impl Unstated {
             .legs
             .iter()
             .map(|leg| {
-                let [_, femur, tibia] = crate::robot::statics::segment_lengths(model, leg);
-                femur + tibia
+                // femur and tibia, and any segments beyond
+                crate::robot::statics::segment_lengths(model, leg)[1..]
+                    .iter()
+                    .sum::<f64>()
             })
             .fold(0.0, f64::max);
         let effort = weight / 3.0 * reach;

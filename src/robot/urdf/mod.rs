@@ -152,6 +152,7 @@ fn build_holding(
         feet,
         forward,
         gait: gait_hints,
+        redundant_legs,
     } = settings;
     let (forward, gait_hints) = (*forward, *gait_hints);
     let tree = parse::tree(robot)?;
@@ -212,7 +213,8 @@ fn build_holding(
         Vec::new()
     };
     if held.is_empty() {
-        let to_hold = branches::held_joints(&links, &joints, &unfound, forward)?;
+        let driven = *redundant_legs == robot_file::RedundantLegs::Driven;
+        let to_hold = branches::held_joints(&links, &joints, &unfound, forward, driven)?;
         if !to_hold.is_empty() {
             return build_holding(robot, base, settings, to_hold);
         }
@@ -292,7 +294,7 @@ fn check_size(model: &RobotModel) -> Result<(), String> {
         .fold(0.0, f64::max);
     if longest > LONGEST_LEG {
         return Err(format!(
-            "the legs are {longest:.1} m long (coxa + femur + tibia): is the URDF in millimetres? URDF lengths are in metres (and masses in kg)"
+            "the legs are {longest:.1} m long (coxa + femur + tibia, and any segments beyond): is the URDF in millimetres? URDF lengths are in metres (and masses in kg)"
         ));
     }
     Ok(())

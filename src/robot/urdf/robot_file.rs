@@ -8,6 +8,7 @@ use std::path::Path;
 ///
 /// ```toml
 /// forward = "+y"              # walking direction: "+x" (default) "-x" "+y" "-y", or degrees about z
+/// redundant_legs = "driven"   # legs of 4 to 6 joints: every joint servoed, or "held" (default)
 /// [feet]                      # for a URDF that does not mark its feet with collision spheres
 /// links = ["lf_tibia", "lm_tibia", "lr_tibia", "rf_tibia", "rm_tibia", "rr_tibia"]
 /// offset = [0.12, 0.0, 0.0]   # foot centre in each link's frame (m)
@@ -33,6 +34,19 @@ struct RobotFile {
     forward: Option<toml::Value>,
     #[serde(default)]
     gait: Option<GaitHints>,
+    #[serde(default)]
+    redundant_legs: Option<RedundantLegs>,
+}
+
+/// How a leg of more than three joints is driven (`branches`): its extra joints held still at
+/// rest, welded (the default: stiffest, and the walk it had), or every joint servoed, the foot
+/// placed by redundant inverse kinematics (`robot::redundant`: the extra joints add reach).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RedundantLegs {
+    #[default]
+    Held,
+    Driven,
 }
 
 /// The robot file's `forward` as an angle about z (rad).
@@ -66,6 +80,7 @@ pub(super) struct RobotFileSettings {
     pub(super) feet: Option<FeetConfig>,
     pub(super) forward: Option<f64>,
     pub(super) gait: GaitHints,
+    pub(super) redundant_legs: RedundantLegs,
 }
 
 pub(super) fn read(
@@ -98,5 +113,6 @@ pub(super) fn read(
         forward: file.forward.as_ref().map(forward_yaw).transpose()?,
         feet: file.feet,
         gait,
+        redundant_legs: file.redundant_legs.unwrap_or_default(),
     })
 }

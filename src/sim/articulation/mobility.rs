@@ -12,8 +12,9 @@
 use glam::{BVec4A, Vec4};
 use rapier3d::prelude::{NO_PARENT, TreeLu};
 
-/// Degrees of freedom of the hexapod's multibody: the free root and 18 joints (the robot loader
-/// requires six legs of three joints).
+/// Degrees of freedom of the hexapod's multibody with legs of three joints: the free root and 18
+/// joints. Redundant legs (four to six joints each, `robot::redundant`) add 6 a joint: a
+/// [`Mobility`] is sized by its `D`.
 pub const DOFS: usize = 24;
 
 /// Contact axes are lanes, in chunks of four; six contacts × three axes fit in five chunks.
@@ -30,33 +31,33 @@ type Row = [Vec4; CHUNKS];
 
 /// A group of contact axes: their Jacobian and M⁻¹ applied to it.
 #[derive(Clone)]
-struct Group {
+struct Group<const D: usize> {
     /// Aᵀ: per degree of freedom, each contact axis' Jacobian entry.
-    jacobian: [Row; DOFS],
+    jacobian: [Row; D],
     /// M⁻¹·Aᵀ, solved in place.
-    solved: [Row; DOFS],
+    solved: [Row; D],
 }
 
-impl Default for Group {
+impl<const D: usize> Default for Group<D> {
     fn default() -> Self {
         Group {
-            jacobian: [[Vec4::ZERO; CHUNKS]; DOFS],
-            solved: [[Vec4::ZERO; CHUNKS]; DOFS],
+            jacobian: [[Vec4::ZERO; CHUNKS]; D],
+            solved: [[Vec4::ZERO; CHUNKS]; D],
         }
     }
 }
 
 /// Scratch for [`Mobility::compute`], kept between steps so a step allocates nothing once it has
-/// seen its most contacts.
-pub struct Mobility {
-    groups: Vec<Group>,
+/// seen its most contacts; for a multibody of `D` degrees of freedom.
+pub struct Mobility<const D: usize = DOFS> {
+    groups: Vec<Group<D>>,
     /// W, row by contact axis, then by group of columns: `product[a·groups + h]`.
     product: Vec<Row>,
     /// Groups in use by the last [`Mobility::compute`].
     in_use: usize,
 }
 
-impl Default for Mobility {
+impl<const D: usize> Default for Mobility<D> {
     fn default() -> Self {
         Mobility {
             groups: vec![Group::default()],
@@ -66,7 +67,7 @@ impl Default for Mobility {
     }
 }
 
-impl Mobility {
+impl<const D: usize> Mobility<D> {
     /// Makes room for `axes` contact axes (allocating only the first time a step has that many).
     pub fn reserve(&mut self, axes: usize) {
         let groups = axes.div_ceil(GROUP_AXES).max(1);
@@ -87,7 +88,7 @@ impl Mobility {
     /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
     /// room made by [`Mobility::reserve`]): one lookup of its group for all its entries.
     #[inline]
-    pub fn contact(&mut self, i: usize) -> ContactAxes<'_> {
+    pub fn contact(&mut self, i: usize) -> ContactAxes<'_, D> {
         let first = 3 * i;
         ContactAxes {
             jacobian: &mut self.groups[first / GROUP_AXES].jacobian,
@@ -96,9 +97,9 @@ impl Mobility {
     }
 
     /// W = A·M⁻¹·Aᵀ for the first `axes` contact axes, given M's tree factors; `w(a, b)` then
-    /// reads an entry. Returns false if the factors are not [`DOFS`] square.
+    /// reads an entry. Returns false if the factors are not `D` square.
     pub fn compute(&mut self, factors: &TreeLu, axes: usize) -> bool {
-        if factors.dim() != DOFS {
+        if factors.dim() != D {
             return false;
         }
         self.reserve(axes);
@@ -127,14 +128,14 @@ impl Mobility {
             let valid = lanes(axes - g * GROUP_AXES);
             let group = &mut self.groups[g];
             group.solved = group.jacobian;
-            solve::<CHUNKS>(&mut group.solved, factors, &needed, &valid);
+            solve::<CHUNKS, D>(&mut group.solved, factors, &needed, &valid);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
         }
         for g in 0..groups {
             let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
-            for d in (0..DOFS).filter(|&d| needed[d]) {
+            for d in (0..D).filter(|&d| needed[d]) {
                 let a_row = self.groups[g].jacobian[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
@@ -160,7 +161,7 @@ impl Mobility {
         let needed = needed_rows(&self.groups[..1], axes, factors.parents());
         let group = &mut self.groups[0];
         group.solved = group.jacobian;
-        solve::<C>(&mut group.solved, factors, &needed, &lanes(axes));
+        solve::<C, D>(&mut group.solved, factors, &needed, &lanes(axes));
         // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg,
         // and a row of A without entries, not needed, adds nothing)
         let product = &mut self.product[..axes];
@@ -206,12 +207,12 @@ impl Mobility {
 }
 
 /// One contact's three axes in its group's Jacobian ([`Mobility::contact`]).
-pub struct ContactAxes<'a> {
-    jacobian: &'a mut [Row; DOFS],
+pub struct ContactAxes<'a, const D: usize> {
+    jacobian: &'a mut [Row; D],
     first: usize,
 }
 
-impl ContactAxes<'_> {
+impl<const D: usize> ContactAxes<'_, D> {
     /// Sets the contact's axis `axis` (0: t₁, 1: t₂, 2: n) entry for degree of freedom `dof`.
     #[inline]
     pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
@@ -244,15 +245,15 @@ fn has_entry<const C: usize>(row: &Row, lanes: &Lanes) -> bool {
 /// contact axes (over `groups`) has a Jacobian entry, and their ancestors, which the lower
 /// solve reads on the way down. A leg whose foot is in the air (half of them in a tripod's
 /// stance) has none.
-fn needed_rows(groups: &[Group], axes: usize, parents: &[usize]) -> [bool; DOFS] {
-    let mut needed = [false; DOFS];
+fn needed_rows<const D: usize>(groups: &[Group<D>], axes: usize, parents: &[usize]) -> [bool; D] {
+    let mut needed = [false; D];
     for (g, group) in groups.iter().enumerate() {
         let valid = lanes(axes.saturating_sub(g * GROUP_AXES));
         for (k, row) in group.jacobian.iter().enumerate() {
             needed[k] |= has_entry::<CHUNKS>(row, &valid);
         }
     }
-    for k in (0..DOFS).rev() {
+    for k in (0..D).rev() {
         if needed[k] && parents[k] != NO_PARENT {
             needed[parents[k]] = true;
         }
@@ -269,23 +270,23 @@ fn needed_rows(groups: &[Group], axes: usize, parents: &[usize]) -> [bool; DOFS]
 /// and on the way down a row feeds only its descendants, which are not needed when it is not.
 /// A leg in the air so costs the solves nothing (its three rows, each with a chain of up to
 /// eight ancestors).
-fn solve<const C: usize>(
-    x: &mut [Row; DOFS],
+fn solve<const C: usize, const D: usize>(
+    x: &mut [Row; D],
     factors: &TreeLu,
-    needed: &[bool; DOFS],
+    needed: &[bool; D],
     valid: &Lanes,
 ) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
-    for k in (0..DOFS).rev() {
+    for k in (0..D).rev() {
         let yk = x[k];
         if !has_entry::<C>(&yk, valid) {
             continue;
         }
         let mut i = parents[k];
         while i != NO_PARENT {
-            let u = a[i + k * DOFS];
+            let u = a[i + k * D];
             for c in 0..C {
                 x[i][c] -= yk[c] * u;
             }
@@ -293,20 +294,20 @@ fn solve<const C: usize>(
         }
     }
     // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
-    for k in 0..DOFS {
+    for k in 0..D {
         if !needed[k] {
             continue;
         }
         let mut row = x[k];
         let mut j = parents[k];
         while j != NO_PARENT {
-            let l = a[k + j * DOFS];
+            let l = a[k + j * D];
             for c in 0..C {
                 row[c] -= x[j][c] * l;
             }
             j = parents[j];
         }
-        let inverse = 1.0 / a[k + k * DOFS];
+        let inverse = 1.0 / a[k + k * D];
         for v in &mut row[..C] {
             *v *= inverse;
         }
@@ -371,7 +372,7 @@ mod tests {
                     0.0
                 }
             });
-            let mut mobility = Mobility::default();
+            let mut mobility = Mobility::<DOFS>::default();
             mobility.reserve(axes);
             for r in 0..axes {
                 for d in 0..DOFS {
@@ -450,6 +451,6 @@ mod tests {
             &na::DMatrix::<f32>::identity(6, 6),
             &[NO_PARENT, 0, 1, 2, 3, 4],
         );
-        assert!(!Mobility::default().compute(&factors, 3));
+        assert!(!Mobility::<DOFS>::default().compute(&factors, 3));
     }
 }

@@ -47,7 +47,7 @@ pub struct MultibodyRobot {
     gains: ServoGains,
     dt: f64,
     /// Scratch for the contact mobility.
-    scratch: Box<Mobility>,
+    scratch: Scratch,
 }
 
 impl MultibodyRobot {
@@ -80,7 +80,8 @@ impl MultibodyRobot {
             start_angles: pose.to_vec(),
             gains,
             dt: engine.dt(),
-            scratch: Box::default(),
+            // the loader gives six legs of equal length (`robot::branches`)
+            scratch: Scratch::for_joints(model.joints.len()).expect("six legs alike"),
         };
         for joint in &model.joints {
             let link = robot.multibody_link(engine, bodies[joint.child]);
@@ -104,8 +105,8 @@ impl MultibodyRobot {
         let mb = robot.multibody_mut(&mut engine.multibody_joints);
         assert_eq!(
             mb.ndofs(),
-            DOFS,
-            "the robot loader gives six legs of three joints"
+            6 + model.joints.len(),
+            "a free root and one degree of freedom per joint"
         );
         mb.forward_kinematics(&engine.bodies, true);
         mb.update_rigid_bodies(&mut engine.bodies, true);
@@ -191,57 +192,12 @@ impl Joints for MultibodyRobot {
         mobility: &mut [DMat3],
     ) {
         let mb = self.multibody(engine);
-        let n = contacts.len();
-        let q_dot = mb.generalized_velocity();
-        self.scratch.reserve(3 * n);
-        for (i, c) in contacts.iter().enumerate() {
-            let link = self.multibody_link(engine, c.body);
-            // a material point's velocity column per degree of freedom: J_v − [r]×·J_ω, with the
-            // arm r from the link's centre of mass (J the link's centre-of-mass Jacobian)
-            let jacobian = mb.body_jacobian(link);
-            let arm = c.point - c.com;
-            let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
-            let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
-            // a degree of freedom off the link's path (another leg's joint: two thirds of them)
-            // has a column of +0 (rapier clears the Jacobian before filling the path), whose
-            // point column is +0 and whose entries are these, computed once
-            let off_path = axes.map(|axis| axis.dot(glam::Vec3::ZERO));
-            let mut velocity = glam::Vec3::ZERO;
-            let mut rows = self.scratch.contact(i);
-            let columns = jacobian.as_slice().chunks_exact(6);
-            for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
-                if column.iter().all(|v| v.to_bits() == 0) {
-                    velocity += glam::Vec3::ZERO * rate;
-                    for (a, &entry) in off_path.iter().enumerate() {
-                        rows.set(dof, a, entry);
-                    }
-                    continue;
-                }
-                let linear = glam::Vec3::from_slice(&column[..3]);
-                let angular = glam::Vec3::from_slice(&column[3..]);
-                let point = linear - r.cross(angular);
-                velocity += point * rate;
-                for (a, axis) in axes.iter().enumerate() {
-                    rows.set(dof, a, axis.dot(point));
-                }
-            }
-            velocities[i] = velocity.as_dvec3();
-        }
-        if n == 0 {
-            return;
-        }
-        assert!(
-            self.scratch.compute(mb.augmented_mass_factors(), 3 * n),
-            "the mass matrix is factorised from the start, {DOFS} degrees of freedom"
-        );
-        for i in 0..n {
-            for j in 0..n {
-                let [x, y, z] = self
-                    .scratch
-                    .block(i, j)
-                    .map(|c| glam::Vec3::from_array(c).as_dvec3());
-                mobility[i * n + j] = DMat3::from_cols(x, y, z);
-            }
+        let args = (engine, mb, contacts, velocities, mobility);
+        match &mut self.scratch {
+            Scratch::Legs3(scratch) => contact_mobility_in(scratch, args),
+            Scratch::Legs4(scratch) => contact_mobility_in(scratch, args),
+            Scratch::Legs5(scratch) => contact_mobility_in(scratch, args),
+            Scratch::Legs6(scratch) => contact_mobility_in(scratch, args),
         }
     }
 
@@ -254,7 +210,7 @@ impl Joints for MultibodyRobot {
             damping: d,
         } = self.gains;
         let dt = self.dt;
-        let mut saturated_torques = [(0, DVec3::ZERO, 0.0); DOFS];
+        let mut saturated_torques = [(0, DVec3::ZERO, 0.0); DOFS + 18];
         let mut n_saturated = 0;
         let mb = self.multibody_mut(&mut engine.multibody_joints);
         for (j, joint) in model.joints.iter().enumerate() {
@@ -302,5 +258,100 @@ impl Joints for MultibodyRobot {
         // the implicit law with the step's end velocity, which rapier's spring saw
         self.gains
             .torque(target, self.start_angles[joint], qd, self.dt)
+    }
+}
+
+/// The contact mobility's scratch, sized to the multibody's degrees of freedom: the free root and
+/// six legs of three joints (hex18 and most hexapods: [`DOFS`]) to six each (redundant legs,
+/// `robot::redundant`), one monomorphised solve per size.
+enum Scratch {
+    Legs3(Box<Mobility<DOFS>>),
+    Legs4(Box<Mobility<{ DOFS + 6 }>>),
+    Legs5(Box<Mobility<{ DOFS + 12 }>>),
+    Legs6(Box<Mobility<{ DOFS + 18 }>>),
+}
+
+impl Scratch {
+    /// The scratch for `joints` joints on six legs of equal length, or why there is none.
+    fn for_joints(joints: usize) -> Result<Self, String> {
+        Ok(match joints {
+            18 => Scratch::Legs3(Box::default()),
+            24 => Scratch::Legs4(Box::default()),
+            30 => Scratch::Legs5(Box::default()),
+            36 => Scratch::Legs6(Box::default()),
+            _ => {
+                return Err(format!(
+                    "the multibody articulation takes six legs of 3, 4, 5 or 6 joints each, all alike; this robot's legs have {joints} joints in all (use --articulation impulse)"
+                ));
+            }
+        })
+    }
+}
+
+/// [`MultibodyRobot::contact_mobility`] with the scratch of `D` degrees of freedom.
+fn contact_mobility_in<const D: usize>(
+    scratch: &mut Mobility<D>,
+    (engine, mb, contacts, velocities, mobility): (
+        &Engine,
+        &Multibody,
+        &[ContactPoint],
+        &mut [DVec3],
+        &mut [DMat3],
+    ),
+) {
+    let n = contacts.len();
+    let q_dot = mb.generalized_velocity();
+    scratch.reserve(3 * n);
+    for (i, c) in contacts.iter().enumerate() {
+        let link = engine
+            .multibody_joints
+            .rigid_body_link(c.body)
+            .expect("every model link is in the multibody")
+            .id;
+        // a material point's velocity column per degree of freedom: J_v − [r]×·J_ω, with the
+        // arm r from the link's centre of mass (J the link's centre-of-mass Jacobian)
+        let jacobian = mb.body_jacobian(link);
+        let arm = c.point - c.com;
+        let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
+        let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
+        // a degree of freedom off the link's path (another leg's joint: two thirds of them)
+        // has a column of +0 (rapier clears the Jacobian before filling the path), whose
+        // point column is +0 and whose entries are these, computed once
+        let off_path = axes.map(|axis| axis.dot(glam::Vec3::ZERO));
+        let mut velocity = glam::Vec3::ZERO;
+        let mut rows = scratch.contact(i);
+        let columns = jacobian.as_slice().chunks_exact(6);
+        for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
+            if column.iter().all(|v| v.to_bits() == 0) {
+                velocity += glam::Vec3::ZERO * rate;
+                for (a, &entry) in off_path.iter().enumerate() {
+                    rows.set(dof, a, entry);
+                }
+                continue;
+            }
+            let linear = glam::Vec3::from_slice(&column[..3]);
+            let angular = glam::Vec3::from_slice(&column[3..]);
+            let point = linear - r.cross(angular);
+            velocity += point * rate;
+            for (a, axis) in axes.iter().enumerate() {
+                rows.set(dof, a, axis.dot(point));
+            }
+        }
+        velocities[i] = velocity.as_dvec3();
+    }
+    if n == 0 {
+        return;
+    }
+    assert!(
+        scratch.compute(mb.augmented_mass_factors(), 3 * n),
+        "the mass matrix is factorised from the start, {D} degrees of freedom"
+    );
+    for i in 0..n {
+        for j in 0..n {
+            let [x, y, z] = scratch
+                .block(i, j)
+                .map(|c| glam::Vec3::from_array(c).as_dvec3());
+            mobility[i * n + j] = DMat3::from_cols(x, y, z);
+        }
     }
 }
