@@ -32,6 +32,10 @@ pub struct Metadata {
     /// for a ball).
     #[serde(default)]
     pub joints: Option<BTreeMap<String, String>>,
+    /// The legs in the order of every per-foot array and column (`lf lm lr rf rm rr`; walks,
+    /// null for a ball): a file read alone says whose each entry is.
+    #[serde(default)]
+    pub legs: Option<Vec<String>>,
 }
 
 /// Where a run's metrics are written, and the metadata they end with.
@@ -84,6 +88,7 @@ mod tests {
             dt: 1e-3,
             articulation: None,
             joints: None,
+            legs: None,
         };
         let file = MetricsFile {
             path: path.clone(),

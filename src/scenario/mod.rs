@@ -386,6 +386,7 @@ impl Scenario {
                 let urdf = w.robot.joints.iter().map(|j| j.name.clone());
                 columns.into_iter().zip(urdf).collect()
             }),
+            legs: walk.map(|w| w.robot.legs.iter().map(|l| l.name.to_string()).collect()),
         }
     }
 
