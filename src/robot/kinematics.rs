@@ -231,28 +231,30 @@ impl LegChain {
     /// Joint positions and axes (body frame), the foot position, and the foot link's orientation
     /// (turned frame), for the leg's `q` (one angle per joint).
     pub(super) fn frames(&self, q: &[f64]) -> (JointFrames, DVec3, DMat3) {
-        let mut frame = DAffine3::IDENTITY;
-        let mut joints = [(DVec3::ZERO, DVec3::ZERO); MAX_LEG_JOINTS];
-        for k in 0..self.n {
-            frame *= self.origins[k];
-            let m = &mut frame.matrix3;
-            joints[k] = (frame.translation, m.z_axis);
-            // turn about the (turned) joint axis z by q
-            let (s, c) = q[k].sin_cos();
-            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
-        }
-        (joints, frame.transform_point3(self.foot), frame.matrix3)
+        self.frames_of::<MAX_LEG_JOINTS>(q, self.n)
     }
 
     /// [`Self::frames`] of a 3-joint leg, its loop of fixed length (the gait solves six legs
     /// every step).
-    fn frames3(&self, q: [f64; 3]) -> ([(DVec3, DVec3); 3], DVec3, DMat3) {
+    fn frames3(&self, q: [f64; 3]) -> Frames {
+        self.frames_of::<3>(&q, 3)
+    }
+
+    /// The first `n` joints' frames (at most `N`), in storage of `N`: one loop for
+    /// [`Self::frames`] and [`Self::frames3`], monomorphised so the 3-joint one is of fixed length.
+    #[inline]
+    fn frames_of<const N: usize>(
+        &self,
+        q: &[f64],
+        n: usize,
+    ) -> ([(DVec3, DVec3); N], DVec3, DMat3) {
         let mut frame = DAffine3::IDENTITY;
-        let mut joints = [(DVec3::ZERO, DVec3::ZERO); 3];
-        for k in 0..3 {
+        let mut joints = [(DVec3::ZERO, DVec3::ZERO); N];
+        for k in 0..n {
             frame *= self.origins[k];
             let m = &mut frame.matrix3;
             joints[k] = (frame.translation, m.z_axis);
+            // turn about the (turned) joint axis z by q
             let (s, c) = q[k].sin_cos();
             (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
         }
