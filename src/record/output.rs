@@ -75,18 +75,10 @@ pub fn commit(path: &Path) -> Result<()> {
         .with_context(|| format!("cannot move the finished file to {}", path.display()))
 }
 
-/// Writes `contents` to `path` through the temporary name; a write that fails (a full disk)
-/// names the file and leaves no temporary behind.
+/// Writes `contents` to `path` through the temporary name ([`write_streamed`]); a write that
+/// fails (a full disk) names the file and leaves no temporary behind.
 pub fn write_atomically(path: &Path, contents: &[u8]) -> Result<()> {
-    let partial = partial_path(path);
-    let written = std::fs::write(&partial, contents);
-    if let Err(e) = written {
-        if !is_special(&partial) {
-            std::fs::remove_file(&partial).ok();
-        }
-        return Err(e).with_context(|| format!("cannot write {}", path.display()));
-    }
-    commit(path)
+    write_streamed(path, |out| Ok(std::io::Write::write_all(out, contents)?))
 }
 
 /// Streams a file to `path` through the temporary name: `write` fills a buffered writer, which

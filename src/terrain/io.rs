@@ -236,15 +236,6 @@ pub fn png_to(
     Ok((lo, scale))
 }
 
-/// [`png_to`] a file (in place); returns (offset, scale).
-pub fn write_png(grid: &HeightGrid, path: &Path) -> Result<(f64, f64), HeightFileError> {
-    let mut out =
-        std::io::BufWriter::new(std::fs::File::create(path).map_err(HeightFileError::Write)?);
-    let read_back = png_to(grid, &mut out).map_err(HeightFileError::Write)?;
-    std::io::Write::flush(&mut out).map_err(HeightFileError::Write)?;
-    Ok(read_back)
-}
-
 /// The grid as a triangle mesh: vertices (x, y, z) row-major and two triangles per cell, wound
 /// counter-clockwise seen from above (normals point up).
 pub fn mesh(grid: &HeightGrid) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
@@ -294,12 +285,6 @@ pub fn stl_to(grid: &HeightGrid, out: &mut impl std::io::Write) -> std::io::Resu
         }
     });
     stl_io::write_stl(out, stl_triangles)
-}
-
-/// [`stl_to`] a file (in place).
-pub fn write_stl(grid: &HeightGrid, path: &Path) -> Result<(), HeightFileError> {
-    let mut out = std::fs::File::create(path).map_err(HeightFileError::Write)?;
-    stl_to(grid, &mut out).map_err(HeightFileError::Write)
 }
 
 /// Reads an STL surface and rasterises it to a grid with the given cell size (metres): each grid
@@ -417,7 +402,7 @@ mod tests {
     fn stl_round_trip_reproduces_the_grid() {
         let g = sample_grid();
         let (_dir, p) = tmp("g.stl");
-        write_stl(&g, &p).unwrap();
+        stl_to(&g, &mut std::fs::File::create(&p).unwrap()).unwrap();
         let (dx, _) = g.spacing();
         let back = read_stl(&p, dx).unwrap();
         assert_eq!((back.rows(), back.cols()), (g.rows(), g.cols()));
@@ -430,7 +415,7 @@ mod tests {
     fn png_round_trip_within_16_bit_quantisation() {
         let g = sample_grid();
         let (_dir, p) = tmp("g.png");
-        let (offset, scale) = write_png(&g, &p).unwrap();
+        let (offset, scale) = png_to(&g, &mut std::fs::File::create(&p).unwrap()).unwrap();
         let (rows, cols, h) = read_png(&p, scale, offset).unwrap();
         assert_eq!((rows, cols), (g.rows(), g.cols()));
         for (a, b) in g.samples().iter().zip(&h) {
