@@ -484,15 +484,10 @@ fn contact_spheres(model: &RobotModel) -> String {
         .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
             (lo.min(r), hi.max(r))
         });
-    let soles: usize = model
-        .legs
-        .iter()
-        .map(|leg| {
-            let link = &model.links[leg.foot_link];
-            let in_sole = |c: &&robot::ContactSphere| robot::contact_set::in_sole(c, &leg.foot);
-            link.contacts.iter().filter(in_sole).count()
-        })
-        .sum();
+    let soles = (0..model.links.len())
+        .flat_map(|link| robot::contact_set::soles(model, link))
+        .flatten()
+        .count();
     let soles = if soles > 0 {
         format!(
             "; {soles} of them at the feet's tips, reported as the feet's contact (a sole wider than its foot sphere)"

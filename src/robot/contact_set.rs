@@ -92,6 +92,16 @@ pub fn in_sole(sphere: &ContactSphere, foot: &super::model::Foot) -> bool {
     sphere.center.length() + sphere.radius >= reach - SOLE_DEPTH * foot.radius
 }
 
+/// For each contact sphere of link `link`, the leg whose foot's sole it is part of
+/// ([`in_sole`]): what the ground contact reports it as, and `hexsim robot` counts.
+pub fn soles(model: &super::RobotModel, link: usize) -> impl Iterator<Item = Option<usize>> + '_ {
+    let leg = model.legs.iter().position(|leg| leg.foot_link == link);
+    model.links[link]
+        .contacts
+        .iter()
+        .map(move |sphere| leg.filter(|&leg| in_sole(sphere, &model.legs[leg].foot)))
+}
+
 /// The sphere around a set of spheres (not the least one, but one that costs nothing to test):
 /// centred on their box's centre. None for an empty set.
 pub fn bound(spheres: &[ContactSphere]) -> Option<ContactSphere> {

@@ -76,7 +76,7 @@ pub(super) struct GroundContacts {
     links: Vec<LinkSpheres>,
     spheres: Vec<ContactSphere>,
     /// Per sphere in `spheres`: the leg whose foot's sole it is part of (see
-    /// `contact_set::in_sole`), whose contact it is reported as.
+    /// `contact_set::soles`), whose contact it is reported as.
     soles: Vec<Option<usize>>,
     /// The highest the terrain's surface reaches anywhere.
     ceiling: f64,
@@ -114,10 +114,7 @@ impl GroundContacts {
                     touched: false,
                 });
                 spheres.extend_from_slice(&link.contacts);
-                let leg = model.legs.iter().position(|leg| leg.foot_link == k);
-                soles.extend(link.contacts.iter().map(|sphere| {
-                    leg.filter(|&leg| contact_set::in_sole(sphere, &model.legs[leg].foot))
-                }));
+                soles.extend(contact_set::soles(model, k));
             }
         }
         let [x0, x1] = terrain.x_range();
