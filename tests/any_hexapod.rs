@@ -105,18 +105,25 @@ fn legs_of_four_and_five_joints_walk_on_three() {
             text.contains("joints lf_coxa_joint lf_femur_joint lf_tibia_joint"),
             "{text}"
         );
-        let metrics = walk(Path::new(&robot), &dir, name);
-        let (forward, nominal) = forward_of_nominal(&metrics);
-        println!("{name}: {forward:.3} m of {nominal:.3} m nominal (hex18: {hex18:.3} m)");
-        assert!(
-            forward >= 0.9 * nominal,
-            "{name}: {forward:.3} m of {nominal:.3}"
-        );
-        assert!(
-            (forward - hex18).abs() < 0.02 * hex18,
-            "{name}: {forward:.3} m, hex18 {hex18:.3} m"
-        );
+        walks_as_far_as_hex18(Path::new(&robot), &dir, name, hex18);
     }
+}
+
+/// Walks `robot` (see [`walk`]) and checks it goes at least 90 % of its nominal distance and
+/// within 2 % of bare hex18's `hex18`; returns its metrics.
+fn walks_as_far_as_hex18(robot: &Path, dir: &Path, name: &str, hex18: f64) -> serde_json::Value {
+    let metrics = walk(robot, dir, name);
+    let (forward, nominal) = forward_of_nominal(&metrics);
+    println!("{name}: {forward:.3} m of {nominal:.3} m nominal (hex18: {hex18:.3} m)");
+    assert!(
+        forward >= 0.9 * nominal,
+        "{name}: {forward:.3} m of {nominal:.3}"
+    );
+    assert!(
+        (forward - hex18).abs() < 0.02 * hex18,
+        "{name}: {forward:.3} m, hex18 {hex18:.3} m"
+    );
+    metrics
 }
 
 /// A copy of `tests/data/robots/NAME.urdf` in `dir` with a robot file driving its legs whole.
@@ -164,17 +171,7 @@ fn driven_legs_of_four_and_five_joints_walk_on_all_their_joints() {
             "{text}"
         );
         assert!(text.contains(extra), "{extra}: {text}");
-        let metrics = walk(Path::new(robot), &dir, name);
-        let (forward, nominal) = forward_of_nominal(&metrics);
-        println!("{name}: {forward:.3} m of {nominal:.3} m nominal (hex18: {hex18:.3} m)");
-        assert!(
-            forward >= 0.9 * nominal,
-            "{name}: {forward:.3} m of {nominal:.3}"
-        );
-        assert!(
-            (forward - hex18).abs() < 0.02 * hex18,
-            "{name}: {forward:.3} m, hex18 {hex18:.3} m"
-        );
+        let metrics = walks_as_far_as_hex18(Path::new(robot), &dir, name, hex18);
         assert_eq!(metrics["clamped_ik_steps"], 0, "{name}");
     }
 }
