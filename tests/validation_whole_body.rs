@@ -230,3 +230,49 @@ fn a_foot_wedged_in_a_crack_its_own_width_stays_in_the_physics() {
         assert!(foot < 5e-3 && link < 5e-3, "{name}: {foot} {link}");
     }
 }
+
+/// Legs that give way (`gait::compliance`): perceptive on stepping stones 2 cm apart, a foot of
+/// hex18 goes into a pit its own width and its leg, stiff, presses it into the walls with
+/// 100–300 N (4–12 weights) until it is deeper than its radius: "diverged" at 16.46 s, 10.1 mm.
+/// A leg that gives way past 3 weights keeps it out: the run goes on, no foot deeper than 5 mm.
+#[test]
+fn a_leg_pressing_into_a_pit_gives_way() {
+    let dir = scratch("give-way");
+    let terrain = dir.join("stones.toml");
+    std::fs::write(
+        &terrain,
+        "[source]\nkind = \"stepping_stones\"\nstone = 0.15\ngap = 0.02\ndepth = 0.1\n\
+         platform = 1.0\nsize = [6.0, 6.0]\ncell = 0.01\n",
+    )
+    .unwrap();
+    let run = |stiff: bool| {
+        let metrics = dir.join(format!("stiff-{stiff}.json"));
+        let mut command = hexsim();
+        command
+            .arg("run")
+            .arg("--terrain")
+            .arg(&terrain)
+            .args(["--start", "0", "0", "--duration", "17", "--follow-terrain"])
+            .args(["--allow-flags", "--no-record", "--metrics"])
+            .arg(&metrics);
+        if stiff {
+            command.arg("--stiff-legs");
+        }
+        let out = command.output().unwrap();
+        let text = String::from_utf8_lossy(&out.stderr).into_owned();
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&metrics).unwrap()).unwrap();
+        (text, m["max_penetration"].as_f64().unwrap())
+    };
+    let (stiff, stiff_depth) = run(true);
+    assert!(stiff.contains("diverged"), "{stiff}");
+    assert!(stiff_depth > 0.010, "stiff legs: {stiff_depth}");
+    let (compliant, depth) = run(false);
+    println!(
+        "deepest foot: stiff {:.2} mm, giving way {:.2} mm",
+        stiff_depth * 1e3,
+        depth * 1e3
+    );
+    assert!(!compliant.contains("diverged"), "{compliant}");
+    assert!(depth < 5e-3, "giving way: {depth}");
+}

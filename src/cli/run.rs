@@ -51,6 +51,11 @@ pub struct RunArgs {
     /// ground it does not find, lifts higher when a swing is blocked; the body follows the feet.
     #[arg(long)]
     reactive: bool,
+    /// Stiff legs: the servos press their targets to their effort, however hard the ground
+    /// pushes back (default: a leg pressing with more than three times the robot's weight gives
+    /// way along the force, as a force-controlled leg does).
+    #[arg(long)]
+    stiff_legs: bool,
     /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo, the contact
     /// spring or the landing feet need a smaller step (a warning says so). A step given is
     /// refused past the servo's bound and warned past the others, naming the step hexsim would
@@ -196,6 +201,7 @@ fn spec(args: &RunArgs) -> ScenarioSpec {
         follow_terrain: Some(args.follow_terrain),
         rolling_feet: args.no_rolling.then_some(false),
         reactive_gait: Some(args.reactive),
+        compliant_legs: args.stiff_legs.then_some(false),
         articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),
         pgs_iterations: args.pgs_iterations,

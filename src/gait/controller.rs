@@ -20,6 +20,7 @@
 //! the offset is millimetres, an execution detail like the servos' load feed-forward.
 
 use super::clearance::{self, SwingGround};
+use super::compliance::Compliance;
 use super::foothold;
 use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
@@ -93,6 +94,9 @@ pub struct GaitController {
     vertical_room: [(f64, f64); 6],
     /// The reactive gait's state, when on (see [`super::reactive`]).
     reactive: Option<Reactive>,
+    /// How far each leg's target gives way to the force it feels, when on (see
+    /// [`super::compliance`]).
+    compliance: Option<Compliance>,
     /// Perceptive planning per leg ([`Self::targets_on`]): the foothold shift (body frame,
     /// horizontal) of its stance, the one chosen for the swing under way, the ground its foot
     /// lifted off (in `ground`'s units; NaN before the first stance), and whether it swings.
@@ -283,6 +287,7 @@ impl GaitController {
             warm_grounded: [None; 6],
             vertical_room,
             reactive: None,
+            compliance: None,
             foothold: [DVec3::ZERO; 6],
             next_foothold: [DVec3::ZERO; 6],
             stance_ground: [f64::NAN; 6],
@@ -338,6 +343,23 @@ impl GaitController {
     /// Turns the reactive gait on (`Some`: its state from the start) or off.
     pub fn set_reactive(&mut self, reactive: Option<Reactive>) {
         self.reactive = reactive;
+    }
+
+    /// Turns leg compliance on (`Some`: its state from the start) or off.
+    pub fn set_compliance(&mut self, compliance: Option<Compliance>) {
+        self.compliance = compliance;
+    }
+
+    /// Each leg's ground force over the last step (body frame), for leg compliance (ignored
+    /// when it is off).
+    pub fn feel_forces(&mut self, forces: &[DVec3; 6], dt: f64) {
+        if let Some(compliance) = &mut self.compliance {
+            compliance.feel(forces, dt);
+        }
+    }
+
+    pub fn is_compliant(&self) -> bool {
+        self.compliance.is_some()
     }
 
     pub fn is_reactive(&self) -> bool {
@@ -545,6 +567,9 @@ impl GaitController {
                 foot = slew::limited(self.last_planned[k], foot, longest);
             }
             self.last_planned[k] = foot;
+            if let Some(compliance) = &self.compliance {
+                foot += compliance.offset(k);
+            }
             let (foot, solution) = self.place(k, foot, lift);
             self.last[k] = solution.angles;
             let mut angles = solution.angles;

@@ -3,6 +3,7 @@
 
 mod clearance;
 mod command;
+mod compliance;
 mod controller;
 mod fit;
 mod foothold;
@@ -14,6 +15,7 @@ mod slew;
 mod spec;
 
 pub use command::{CommandChange, CommandSchedule};
+pub use compliance::Compliance;
 pub use controller::{GaitController, GaitTargets, REACH_TOLERANCE, StanceError, VelocityCommand};
 pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
 pub use foothold::away_from_edges;

@@ -52,6 +52,9 @@ pub struct WalkSwitches {
     pub rolling_feet: bool,
     /// The reactive gait (see [`crate::gait`]'s `reactive`).
     pub reactive_gait: bool,
+    /// Legs give way to more than three times the robot's weight (see [`crate::gait`]'s
+    /// `compliance`).
+    pub compliant_legs: bool,
     /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
     pub feedforward: bool,
 }
@@ -125,6 +128,7 @@ impl WalkRun {
         walker.terrain_following = self.switches.follow_terrain;
         walker.load_feedforward = self.switches.feedforward;
         walker.reactive = self.switches.reactive_gait;
+        walker.compliant = self.switches.compliant_legs;
         let every = decimation(self.log_rate, dt);
 
         let name = match self.settings.articulation {

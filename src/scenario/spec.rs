@@ -122,6 +122,11 @@ pub struct ScenarioSpec {
     /// follows the feet that are down (default false; see `gait::reactive`).
     #[serde(default)]
     pub reactive_gait: Option<bool>,
+    /// Leg compliance: a leg pressing the ground with more than three times the robot's weight
+    /// gives way along the force (default true; see `gait::compliance`); false: the servos
+    /// press their targets to their effort.
+    #[serde(default)]
+    pub compliant_legs: Option<bool>,
     /// How the links are joined: `multibody` (default) or `impulse` (faster; joints drift a little).
     #[serde(default)]
     pub articulation: Option<crate::sim::Articulation>,
@@ -157,7 +162,7 @@ pub const DEFAULT_DT: f64 = crate::setup::time_step::DEFAULT_DT;
 
 impl ScenarioSpec {
     /// A walk's fields, each with whether it is set: a ball scenario must set none.
-    pub fn walk_fields(&self) -> [(&'static str, bool); 12] {
+    pub fn walk_fields(&self) -> [(&'static str, bool); 13] {
         [
             ("robot", self.robot.is_some()),
             ("gait", self.gait.is_some()),
@@ -165,6 +170,7 @@ impl ScenarioSpec {
             ("follow_terrain", self.follow_terrain.is_some()),
             ("rolling_feet", self.rolling_feet.is_some()),
             ("reactive_gait", self.reactive_gait.is_some()),
+            ("compliant_legs", self.compliant_legs.is_some()),
             ("articulation", self.articulation.is_some()),
             ("solver_iterations", self.solver_iterations.is_some()),
             ("pgs_iterations", self.pgs_iterations.is_some()),
@@ -180,6 +186,7 @@ impl ScenarioSpec {
             follow_terrain: self.follow_terrain.unwrap_or(false),
             rolling_feet: self.rolling_feet.unwrap_or(true),
             reactive_gait: self.reactive_gait.unwrap_or(false),
+            compliant_legs: self.compliant_legs.unwrap_or(true),
             feedforward: self.servo.and_then(|s| s.feedforward).unwrap_or(true),
         }
     }

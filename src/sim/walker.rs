@@ -4,7 +4,7 @@ use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
 use crate::gait::reach::ReachTally;
 use crate::gait::{
-    FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand, away_from_edges,
+    Compliance, FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand, away_from_edges,
 };
 use crate::robot::kinematics::LegAngles;
 use crate::robot::statics;
@@ -33,8 +33,15 @@ pub struct Walker {
     /// The reactive gait (`gait::reactive`): feet find the ground by touch; off: the
     /// schedule's heights.
     pub reactive: bool,
+    /// Leg compliance (`gait::compliance`): a leg pressing the ground with more than three
+    /// times the robot's weight gives way; off: the servos press their targets to their effort.
+    pub compliant: bool,
     /// What each foot felt in the last step (normal force, ground force in the body frame).
     feel: [FootFeel; 6],
+    /// Each leg's ground force in the last step, its foot's and its links' (body frame).
+    leg_forces: [DVec3; 6],
+    /// The leg each model link belongs to (None: the body, a link off the legs).
+    leg_of_link: Vec<Option<usize>>,
     /// Joint targets given from outside (rad, by model joint), in place of the gait's.
     given_targets: Option<Vec<f64>>,
     /// The feed-forward's link poses and holding torques, kept between steps (no allocation).
@@ -111,6 +118,14 @@ impl Walker {
         let n = hexapod.model().joints.len();
         // more than 1° off vertical
         let tilted_start = hexapod.body_frame().matrix3.z_axis.z < 1f64.to_radians().cos();
+        let model = hexapod.model();
+        let mut leg_of_link = vec![None; model.links.len()];
+        for (k, leg) in model.legs.iter().enumerate() {
+            for &j in &leg.joints {
+                leg_of_link[model.joints[j].child] = Some(k);
+            }
+            leg_of_link[leg.foot_link] = Some(k);
+        }
         Walker {
             hexapod,
             controller,
@@ -122,7 +137,10 @@ impl Walker {
             terrain_following: false,
             load_feedforward: true,
             reactive: false,
+            compliant: true,
             feel: [FootFeel::default(); 6],
+            leg_forces: [DVec3::ZERO; 6],
+            leg_of_link,
             given_targets: None,
             poses: Vec::new(),
             joint_frames: Vec::new(),
@@ -353,7 +371,15 @@ impl Walker {
                 self.controller
                     .set_reactive(self.reactive.then_some(reactive));
             }
+            if self.compliant != self.controller.is_compliant() {
+                let weight = self.hexapod.model().total_mass() * STANDARD_GRAVITY;
+                let longest = 2.0 * self.controller.gait().step_height;
+                self.controller
+                    .set_compliance(self.compliant.then(|| Compliance::new(weight, longest)));
+            }
             self.controller.feel(self.feel);
+            self.controller
+                .feel_forces(&self.leg_forces, self.hexapod.dt());
             let targets = if self.terrain_following {
                 let plane = self.ground_reference();
                 let ground = Self::ground_within_reach(
@@ -386,6 +412,14 @@ impl Walker {
         }
         let robot = self.hexapod.step();
         let to_body = robot.body.matrix3.transpose();
+        self.leg_forces = robot
+            .foot_contacts
+            .map(|c| c.map_or(DVec3::ZERO, |c| to_body * c.force));
+        for contact in &robot.link_contacts {
+            if let Some(k) = self.leg_of_link[contact.link] {
+                self.leg_forces[k] += to_body * contact.force.force;
+            }
+        }
         self.feel = robot.foot_contacts.map(|c| {
             c.map_or(FootFeel::default(), |c| FootFeel {
                 normal_force: c.normal_force,

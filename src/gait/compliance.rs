@@ -1,0 +1,115 @@
+//! Leg compliance: a leg that presses the ground with more than three times its robot's weight
+//! gives way.
+//!
+//! The servos are stiff position servos, and a foot target the ground does not let the foot reach
+//! — a foot wedged in a pit, a shin against a stone's edge, a stance foot on a step its plan did
+//! not know — is pressed towards up to the servos' effort. Through a leg folded to a short lever
+//! that is many times the robot's weight (hex18 on stepping stones: 100–170 N on one foot, 4–7×
+//! its weight), and the ground, a spring, gives way by F/k: 5–10 mm, past the foot's radius
+//! (a "divergence"). Legged robots' controllers bound what a leg presses by force feedback
+//! (Syropod's impedance control; an admittance on a foot's force sensor). Here each leg's ground
+//! force — its foot's and its links' — past [`CAP`] × the robot's weight moves the leg's foot
+//! target along that force, at a rate proportional to the excess (an integral admittance:
+//! ẏ = γ·(|F| − F_cap)·F̂), and the displacement returns to the plan over [`RELEASE_TIME`] once
+//! the force is below the cap. A walk whose legs stay under the cap is not touched: the default
+//! walk's feet peak at 2.7 weights as they land, and it is the same bit for bit with or without.
+
+use glam::DVec3;
+
+/// The force a leg may press the ground with, in robot weights: above the default walk's
+/// landing peaks (2.7), below the 4 at which the reference ground (2·10⁴ N/m under hex18's
+/// 24.7 N) gives way by 5 mm.
+pub const CAP: f64 = 3.0;
+/// How fast a leg gives way per unit of excess force: the excess, in robot weights, moves the
+/// foot target at this speed (m/s). With the ground's stiffness fitted to the weight (the
+/// reference's 2·10⁴ N/m for hex18's 24.7 N: 810 weights per metre) the excess decays at about
+/// 80/s on the ground alone, slower through a leg softer than it.
+pub const SPEED_PER_WEIGHT: f64 = 0.1;
+/// The time over which a leg's displacement goes back to its plan once under the cap (s).
+pub const RELEASE_TIME: f64 = 0.1;
+
+/// Per leg, how far its foot target has given way (body frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Compliance {
+    offset: [DVec3; 6],
+    weight: f64,
+    /// The most a target gives way (m).
+    longest: f64,
+}
+
+impl Compliance {
+    /// `weight`: the robot's weight (N); `longest`: the most a foot target may be moved (m).
+    pub fn new(weight: f64, longest: f64) -> Self {
+        Compliance {
+            offset: [DVec3::ZERO; 6],
+            weight,
+            longest,
+        }
+    }
+
+    /// Each leg's ground force over the last step (`forces`, body frame; its foot's and its
+    /// links' summed) moves its displacement on by `dt`.
+    pub fn feel(&mut self, forces: &[DVec3; 6], dt: f64) {
+        let cap = CAP * self.weight;
+        let decay = (-dt / RELEASE_TIME).exp();
+        for (offset, force) in self.offset.iter_mut().zip(forces) {
+            let magnitude = force.length();
+            if magnitude > cap {
+                let rate = SPEED_PER_WEIGHT * (magnitude - cap) / self.weight;
+                *offset += *force / magnitude * (rate * dt);
+                *offset = offset.clamp_length_max(self.longest);
+            } else if *offset != DVec3::ZERO {
+                *offset *= decay;
+                if offset.length() < 1e-7 {
+                    *offset = DVec3::ZERO;
+                }
+            }
+        }
+    }
+
+    /// How far leg `k`'s foot target gives way (body frame).
+    pub fn offset(&self, k: usize) -> DVec3 {
+        self.offset[k]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_leg_under_the_cap_is_not_moved() {
+        let mut c = Compliance::new(10.0, 0.05);
+        let forces = [DVec3::new(3.0, -2.0, 29.7); 6];
+        for _ in 0..1000 {
+            c.feel(&forces, 1e-3);
+        }
+        assert!((0..6).all(|k| c.offset(k) == DVec3::ZERO));
+    }
+
+    #[test]
+    fn a_leg_over_the_cap_gives_way_along_its_force_and_comes_back() {
+        let mut c = Compliance::new(10.0, 0.05);
+        let mut forces = [DVec3::ZERO; 6];
+        // 2 weights over the cap along +x: 0.2 m/s
+        forces[2] = DVec3::new(50.0, 0.0, 0.0);
+        for _ in 0..100 {
+            c.feel(&forces, 1e-3);
+        }
+        let o = c.offset(2);
+        assert!((o.x - 0.02).abs() < 1e-9 && o.y == 0.0 && o.z == 0.0, "{o}");
+        assert_eq!(c.offset(0), DVec3::ZERO);
+        // bounded
+        for _ in 0..1000 {
+            c.feel(&forces, 1e-3);
+        }
+        assert!((c.offset(2).length() - 0.05).abs() < 1e-12);
+        // released over RELEASE_TIME
+        forces[2] = DVec3::ZERO;
+        for _ in 0..100 {
+            c.feel(&forces, 1e-3);
+        }
+        let expected = 0.05 * (-1.0f64).exp();
+        assert!((c.offset(2).length() - expected).abs() < 1e-9);
+    }
+}
