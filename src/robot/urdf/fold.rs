@@ -32,9 +32,9 @@ pub(super) struct Bodies<'a> {
     pub(super) unstated: Unstated,
     /// Prismatic joints of negligible travel read as fixed ([`SLIDE_AS_FIXED`]), by name.
     pub(super) slides_welded: Vec<String>,
-    /// URDF links with a mass but a zero inertia tensor, by name: named if a body then has no
-    /// inertia about some axis.
-    pub(super) point_masses: Vec<String>,
+    /// URDF links with a mass but a zero inertia tensor, by name, with their mass (kg): named if a
+    /// body then has no inertia about some axis.
+    pub(super) point_masses: Vec<(String, f64)>,
     /// The joints held still (`branches`), by name, at their angle: welded like fixed joints.
     pub(super) held: &'a HashMap<&'a str, f64>,
     /// Per URDF link: whether a held joint lies between it and its body. Its collision sphere is
@@ -198,7 +198,7 @@ impl<'a> Bodies<'a> {
         let urdf_link = &self.robot.links[k];
         let (mass, com, inertia) = check_inertial(urdf_link)?;
         if mass > 0.0 && inertia == DMat3::ZERO {
-            self.point_masses.push(urdf_link.name.clone());
+            self.point_masses.push((urdf_link.name.clone(), mass));
         }
         let frame = self.in_body[k];
         let body = &mut self.links[self.body_of[k]];
