@@ -250,24 +250,39 @@ fn a_tarsus_bends_to_reach_what_coxa_femur_and_tibia_cannot() {
 }
 
 /// Feet on massless links hung by revolute ankles fold into their tibias (the ankle held at zero,
-/// with a warning): the robot is then hex18, and walks bit for bit as hex18 does.
+/// with a warning): the robot is then hex18, and walks bit for bit as hex18 does. So does a
+/// ball-joint foot written as two revolute joints (roll, pitch) between massless links with the
+/// sphere on a massless frame below them (Lynxmotion's LSS hexapod's feet; issue 40): before, its
+/// roll link, not a leaf, was refused as a moving link without mass.
 #[test]
 fn passive_massless_feet_fold_into_their_legs() {
     let dir = scratch("any_hexapod_passive");
     let reference = walk(&bare_hex18(&dir), &dir, "hex18");
-    let robot = Path::new("tests/data/robots/hex18_passive_feet.urdf");
-    let text = report("tests/data/robots/hex18_passive_feet.urdf");
-    assert!(
-        text.contains("6 revolute joints carry a massless link") && text.contains("lf_ankle_joint"),
-        "{text}"
-    );
-    let metrics = walk(robot, &dir, "passive");
-    for key in [
-        "forward_distance",
-        "sideways_distance",
-        "heading_change_deg",
-        "servo_energy",
+    for (file, warned, joint) in [
+        (
+            "tests/data/robots/hex18_passive_feet.urdf",
+            "6 revolute joints carry a massless link",
+            "lf_ankle_joint",
+        ),
+        (
+            "tests/data/robots/hex18_ball_feet.urdf",
+            "12 revolute joints carry a massless link",
+            "lf_ankle_pitch_joint",
+        ),
     ] {
-        assert_eq!(metrics[key], reference[key], "{key}");
+        let text = report(file);
+        assert!(
+            text.contains(warned) && text.contains(joint) && text.contains("18 joints, 6 legs"),
+            "{text}"
+        );
+        let metrics = walk(Path::new(file), &dir, "passive");
+        for key in [
+            "forward_distance",
+            "sideways_distance",
+            "heading_change_deg",
+            "servo_energy",
+        ] {
+            assert_eq!(metrics[key], reference[key], "{file}: {key}");
+        }
     }
 }

@@ -94,7 +94,10 @@ fn feet_carry(metrics: &serde_json::Value, name: &str) {
 /// one leg design turned to each place, whose 15.5 mm round feet scrubbed 0.17 / 0.18 m on the
 /// natural terrain until the feet's targets rolled with them (`gait::controller`); nikita1323's,
 /// xacro around a SolidWorks export, tried unseen and walked at once; CSIRO's Bullet, legs of five
-/// joints, walked on the three that sweep the largest workspace (issue 40).
+/// joints, walked on the three that sweep the largest workspace (issue 40); and three that carry
+/// more than legs (issue 40): 3urdparty's, a camera on a three-joint arm, and SteinRobotics' NOX
+/// and NIRA, each a pan-tilt head — the arm and heads held at their zero, riding on the body
+/// (NIRA's feet are massless frames at its toes, found at the tips of its tibia boxes).
 #[test]
 fn third_party_hexapods_walk_with_the_built_in_tripod() {
     for (name, robot) in [
@@ -158,6 +161,18 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
         (
             "bullet",
             "tests/data/third_party/bullet_syropod/robot/bullet.urdf",
+        ),
+        (
+            "arm",
+            "tests/data/third_party/arm_hexapod/hexapod_description/robots/hexapod.urdf",
+        ),
+        (
+            "nox",
+            "tests/data/third_party/nox_hexapod/rumblex_description/urdf/nox.urdf",
+        ),
+        (
+            "nira",
+            "tests/data/third_party/nira_hexapod/rumblex_description/urdf/nira.urdf",
         ),
     ] {
         let flat = walk(robot, "terrains/flat.toml", &format!("{name}_flat"));
@@ -227,6 +242,75 @@ fn third_party_hexapods_walk_with_the_built_in_tripod() {
             forward >= 0.6 * nominal,
             "{name} walked {forward:.3} m of {nominal:.3} on the natural terrain"
         );
+    }
+}
+
+/// Published hexapods that carry more than legs (issue 40): the legs are the six branches whose
+/// feet reach lowest, and the rest — 3urdparty's three-joint camera arm (its camera case a
+/// collision mesh), SteinRobotics' two-joint pan-tilt heads (their leaves collision boxes) — is
+/// held at its zero and rides on the body; `hexsim robot` says which joints it holds and why.
+/// They walk in [`third_party_hexapods_walk_with_the_built_in_tripod`].
+#[test]
+fn heads_and_arms_of_published_hexapods_ride_on_the_body() {
+    for (robot, held) in [
+        (
+            "tests/data/third_party/arm_hexapod/hexapod_description/robots/hexapod.urdf",
+            "3 joints held still at the angle shown (welded): off the legs (a head, an arm, a tail: carried as part of the body): arm_rotator_joint 0°, arm_abductor_joint 0°, arm_retractor_joint 0°",
+        ),
+        (
+            "tests/data/third_party/nox_hexapod/rumblex_description/urdf/nox.urdf",
+            "2 joints held still at the angle shown (welded): off the legs (a head, an arm, a tail: carried as part of the body): head_yaw_joint 0°, head_pitch_joint 0°",
+        ),
+        (
+            "tests/data/third_party/nira_hexapod/rumblex_description/urdf/nira.urdf",
+            "2 joints held still at the angle shown (welded): off the legs (a head, an arm, a tail: carried as part of the body): head_yaw_joint 0°, head_pitch_joint 0°",
+        ),
+    ] {
+        let out = hexsim().args(["robot", robot]).output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{robot}: {stdout}");
+        for expected in [held, "18 joints, 6 legs", "every foot target reached"] {
+            assert!(
+                stdout.contains(expected),
+                "{robot}: no {expected:?} in {stdout}"
+            );
+        }
+        let model = hexsim::robot::load(&common::project_file(robot)).unwrap();
+        assert!(
+            model
+                .legs
+                .iter()
+                .all(|leg| !model.links[leg.foot_link].name.contains("head")
+                    && !model.links[leg.foot_link].name.contains("arm")),
+            "{robot}: a head or an arm taken for a leg"
+        );
+    }
+}
+
+/// Lynxmotion's LSS hexapod as published gives 38 links the same placeholder 0.355 kg with a zero
+/// inertia tensor (13.5 kg of point masses on a hexapod of 1.37 N·m servos): refused with exit 2
+/// by `robot` and `run`, naming the physical cause (point masses cannot turn) and the sign of a
+/// placeholder (one mass copied to every part), not walked.
+#[test]
+fn a_published_hexapod_of_point_masses_is_refused() {
+    let robot = "tests/data/third_party/lss_hexapod/lss_hexapod/urdf/lss_hexapod.urdf";
+    for args in [
+        &["robot", robot][..],
+        &["run", "--robot", robot, "--duration", "1", "--no-record"][..],
+    ] {
+        let out = hexsim().args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        for expected in [
+            "the inertia tensor is not positive definite",
+            "the URDF gives 38 links a mass but a zero inertia tensor",
+            "point masses that cannot turn (every one of them states the same 0.355 kg: placeholder inertials?)",
+        ] {
+            assert!(
+                stderr.contains(expected),
+                "{args:?}: no {expected:?} in {stderr}"
+            );
+        }
     }
 }
 

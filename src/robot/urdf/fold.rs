@@ -32,9 +32,9 @@ pub(super) struct Bodies<'a> {
     pub(super) unstated: Unstated,
     /// Prismatic joints of negligible travel read as fixed ([`SLIDE_AS_FIXED`]), by name.
     pub(super) slides_welded: Vec<String>,
-    /// URDF links with a mass but a zero inertia tensor, by name: named if a body then has no
-    /// inertia about some axis.
-    pub(super) point_masses: Vec<String>,
+    /// URDF links with a mass but a zero inertia tensor, by name, with their mass (kg): named if a
+    /// body then has no inertia about some axis.
+    pub(super) point_masses: Vec<(String, f64)>,
     /// The joints held still (`branches`), by name, at their angle: welded like fixed joints.
     pub(super) held: &'a HashMap<&'a str, f64>,
     /// Per URDF link: whether a held joint lies between it and its body. Its collision sphere is
@@ -112,13 +112,14 @@ impl<'a> Bodies<'a> {
             urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous
         );
         let held_at = self.held.get(joint.name.as_str()).copied();
-        // a passive foot: a massless leaf beyond a leg's three joints (a massless tibia is a
-        // mistake, refused by the mass check)
+        // a passive foot: massless links beyond a leg's three joints, a leaf or a chain of them
+        // (a ball joint written as two revolute joints, roll and pitch, between massless links,
+        // often ending in a massless frame); a massless tibia is a mistake, refused by the mass
+        // check
         let passive = revolute_joint
             && held_at.is_none()
             && self.depth[parent] >= 3
-            && tree.children[k].is_empty()
-            && massless(urdf_link);
+            && massless_subtree(self.robot, tree, k);
         if revolute_joint && (held_at.is_some() || passive) {
             let (axis, lower, upper, _) = revolute(joint, &mut Unstated::default())?;
             let angle = held_at.unwrap_or_else(|| 0.0_f64.clamp(lower, upper));
@@ -198,7 +199,7 @@ impl<'a> Bodies<'a> {
         let urdf_link = &self.robot.links[k];
         let (mass, com, inertia) = check_inertial(urdf_link)?;
         if mass > 0.0 && inertia == DMat3::ZERO {
-            self.point_masses.push(urdf_link.name.clone());
+            self.point_masses.push((urdf_link.name.clone(), mass));
         }
         let frame = self.in_body[k];
         let body = &mut self.links[self.body_of[k]];
@@ -280,6 +281,16 @@ impl<'a> Bodies<'a> {
         }
         Ok(())
     }
+}
+
+/// Whether URDF link `k` and every link below it carry neither mass nor inertia: a passive foot
+/// however many joints it hangs by.
+fn massless_subtree(robot: &urdf_rs::Robot, tree: &Tree, k: usize) -> bool {
+    massless(&robot.links[k])
+        && tree.children[k].iter().all(|&j| {
+            let child = tree.index[robot.joints[j].child.link.as_str()];
+            massless_subtree(robot, tree, child)
+        })
 }
 
 pub(in crate::robot) fn empty_link(name: &str, parent_joint: Option<usize>) -> Link {

@@ -70,9 +70,13 @@ pub(super) fn massless(link: &urdf_rs::Link) -> bool {
 
 /// Every body needs a mass and a positive-definite inertia; a URDF with none at all is a
 /// description for drawing, and is refused as such rather than by its first link. A body whose
-/// tensor is singular because its URDF links are point masses (`point_masses`: a mass, every
-/// moment zero) is refused naming that cause, not only the merged tensor it leads to.
-pub(super) fn check_masses(links: &[Link], point_masses: &[String]) -> Result<(), String> {
+/// tensor is singular because its URDF links are point masses (`point_masses`: name and mass,
+/// every moment zero) is refused naming that cause, not only the merged tensor it leads to; when
+/// at least [`PLACEHOLDER_COUNT`] of them state one and the same mass, that is said too: parts of
+/// a real robot do not all weigh the same to the last digit (Lynxmotion's LSS hexapod gives 38
+/// brackets, plates and feet 0.355132365146695 kg each, 13.5 kg of a robot its servos hold at 1.4
+/// N·m), a placeholder copied from link to link.
+pub(super) fn check_masses(links: &[Link], point_masses: &[(String, f64)]) -> Result<(), String> {
     if links.iter().all(|l| l.mass <= 0.0) {
         return Err(
             "no link has a mass: the URDF has no <inertial> elements (a description for drawing, as RViz reads it); hexsim needs each link's <mass> and <inertia>".into(),
@@ -94,13 +98,23 @@ pub(super) fn check_masses(links: &[Link], point_masses: &[String]) -> Result<()
             let cause = if point_masses.is_empty() {
                 String::new()
             } else {
-                let shown: Vec<&str> = point_masses.iter().take(4).map(String::as_str).collect();
+                let shown: Vec<&str> = point_masses
+                    .iter()
+                    .take(4)
+                    .map(|(name, _)| name.as_str())
+                    .collect();
                 format!(
-                    "; the URDF gives {} link{} a mass but a zero inertia tensor (ixx = iyy = izz = 0: {}{}), point masses that cannot turn: give each link its inertia (kg·m²)",
+                    "; the URDF gives {} link{} a mass but a zero inertia tensor (ixx = iyy = izz = 0: {}{}), point masses that cannot turn{}: give each link its inertia (kg·m²)",
                     point_masses.len(),
                     plural(point_masses.len()),
                     shown.join(", "),
-                    if point_masses.len() > 4 { ", …" } else { "" }
+                    if point_masses.len() > 4 { ", …" } else { "" },
+                    placeholder_mass(point_masses)
+                        .map(|mass| format!(
+                            " (every one of them states the same {}: placeholder inertials?)",
+                            weight(mass)
+                        ))
+                        .unwrap_or_default()
                 )
             };
             return Err(format!(
@@ -111,6 +125,29 @@ pub(super) fn check_masses(links: &[Link], point_masses: &[String]) -> Result<()
         }
     }
     Ok(())
+}
+
+/// At least this many point-mass links of one and the same mass read as a placeholder.
+pub const PLACEHOLDER_COUNT: usize = 3;
+
+/// The mass every point-mass link states, if there are [`PLACEHOLDER_COUNT`] or more of them and
+/// they all state the same (to a relative 10⁻⁹: a value copied, not measured).
+fn placeholder_mass(point_masses: &[(String, f64)]) -> Option<f64> {
+    let (_, first) = point_masses.first()?;
+    (point_masses.len() >= PLACEHOLDER_COUNT
+        && point_masses
+            .iter()
+            .all(|(_, m)| (m - first).abs() <= 1e-9 * first))
+    .then_some(*first)
+}
+
+/// A mass as a person reads it: grams under 0.1 kg, else kilograms.
+fn weight(mass: f64) -> String {
+    if mass < 0.1 {
+        format!("{:.2} g", mass * 1e3)
+    } else {
+        format!("{mass:.3} kg")
+    }
 }
 
 /// One warning naming the bodies whose principal moments break the triangle inequality.
@@ -187,12 +224,7 @@ pub(super) fn warn_implausible_inertias(model: &mut RobotModel) -> Result<(), St
         .filter(|(_, k)| *k > IMPOSSIBLE_SPREAD * size)
         .max_by(|a, b| a.1.total_cmp(&b.1))
     {
-        let mass = model.total_mass();
-        let weighs = if mass < 0.1 {
-            format!("{:.2} g", mass * 1e3)
-        } else {
-            format!("{mass:.3} kg")
-        };
+        let weighs = weight(model.total_mass());
         let ratio = (k / size).powi(2);
         let count = wide
             .iter()
