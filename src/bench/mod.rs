@@ -351,6 +351,9 @@ pub const RAPIER_PATCHES: &[(&str, &[u8])] = &[
     patch!("0007-multibody-skip-forward-kinematics-when-nothing-it-re.patch"),
     patch!("0008-multibody-keep-update_acceleration-s-vectors-between.patch"),
     patch!("0009-multibody-write-the-tree-s-parents-portably-re-mint-.patch"),
+    patch!("0010-bodies-add-and-clear-forces-without-marking-the-body.patch"),
+    patch!("0011-multibody-skip-the-start-of-step-writeback-when-noth.patch"),
+    patch!("0012-multibody-factorise-along-the-tree-without-re-listin.patch"),
 ];
 
 /// The patch series in a line: how many, the first and last number, and the first 12 hex digits

@@ -219,15 +219,15 @@ impl BallSim {
                 )
                 .map(|c| (c, DVec3::ZERO))
         };
-        let body = &mut self.engine.bodies[self.ball];
-        body.reset_forces(false);
-        body.reset_torques(false);
+        // through the set, not `bodies[ball]`: a body indexed mutably is marked modified, which
+        // costs rapier work in the step
+        let bodies = &mut self.engine.bodies;
+        bodies.reset_forces_and_torques(self.ball);
         if let Some((c, rolling)) = &response {
             // Force and torque about our own centre: rapier's `add_force_at_point` measures the arm
             // from its world centre of mass, which is not computed until the first step.
-            body.add_force(c.force.as_vec3(), true);
             let torque = (c.point - center).cross(c.force) + *rolling;
-            body.add_torque(torque.as_vec3(), true);
+            bodies.add_force_and_torque(self.ball, c.force.as_vec3(), torque.as_vec3(), true);
         }
         self.engine.step();
         self.step += 1;

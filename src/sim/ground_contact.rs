@@ -260,9 +260,13 @@ impl GroundContacts {
             self.slots[id].state = self.scratch_states[i];
             let Some(c) = self.forces[i] else { continue };
             let point = &self.points[i];
-            let body = &mut engine.bodies[point.body];
-            body.add_force(c.force.as_vec3(), true);
-            body.add_torque((c.point - point.com).cross(c.force).as_vec3(), true);
+            let torque = (c.point - point.com).cross(c.force);
+            engine.bodies.add_force_and_torque(
+                point.body,
+                c.force.as_vec3(),
+                torque.as_vec3(),
+                true,
+            );
             let sphere = id / MAX_FACES;
             let foot = match sphere {
                 0..6 => Some(sphere),

@@ -401,9 +401,9 @@ impl Hexapod {
     /// Computes each foot's ground force, applies it with the servos', and advances one step.
     pub fn step(&mut self) -> HexapodSample {
         for &h in &self.bodies {
-            let body = &mut self.engine.bodies[h];
-            body.reset_forces(false);
-            body.reset_torques(false);
+            // not `bodies[h]`: a body indexed mutably is marked modified, and rapier then redoes
+            // its island, mass and (impulse joints) joint layout work in the step
+            self.engine.bodies.reset_forces_and_torques(h);
         }
         self.joints
             .drive(&mut self.engine, &self.targets, &self.angles, &self.rates);

@@ -13,7 +13,7 @@ mod multibody;
 use super::engine::Engine;
 use crate::robot::{Joint, RobotModel};
 use crate::terrain::GroundFrame;
-use glam::{DAffine3, DMat3, DQuat, DVec3};
+use glam::{DAffine3, DMat3, DQuat, DVec3, Vec3};
 use rapier3d::math::Pose;
 use rapier3d::prelude::{GenericJoint, GenericJointBuilder, JointAxesMask, RigidBodyHandle};
 use serde::{Deserialize, Serialize};
@@ -205,8 +205,9 @@ fn apply_joint_torque(
     torque: f64,
 ) {
     let t = (axis * torque).as_vec3();
-    engine.bodies[bodies[joint.child]].add_torque(t, false);
-    engine.bodies[bodies[joint.parent]].add_torque(-t, false);
+    let set = &mut engine.bodies;
+    set.add_force_and_torque(bodies[joint.child], Vec3::ZERO, t, false);
+    set.add_force_and_torque(bodies[joint.parent], Vec3::ZERO, -t, false);
 }
 
 /// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.

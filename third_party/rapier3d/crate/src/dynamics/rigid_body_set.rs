@@ -4,6 +4,7 @@ use crate::dynamics::{
     RigidBodyChanges, RigidBodyHandle, SoftBodySet,
 };
 use crate::geometry::ColliderSet;
+use crate::math::{AngVector, Vector};
 use core::ops::{Index, IndexMut};
 
 #[cfg(doc)]
@@ -347,6 +348,49 @@ impl RigidBodySet {
             }
             (rb1, rb2)
         }
+    }
+
+    /// Adds a force and a torque (both at the centre of mass) to a body, as
+    /// [`RigidBody::add_force`] and [`RigidBody::add_torque`] do, without putting the body in
+    /// the set of modified bodies unless it must wake up.
+    ///
+    /// Forces are read afresh by every step, so a change to them needs none of the work the
+    /// pipeline does for a modified body (its islands, colliders, mass properties, and the
+    /// impulse joints' cached constraint layout, rebuilt whenever a body with joints is
+    /// modified). Use this instead of [`Self::get_mut`] to push bodies every step.
+    ///
+    /// Returns `false` if the handle is invalid.
+    pub fn add_force_and_torque(
+        &mut self,
+        handle: RigidBodyHandle,
+        force: Vector,
+        torque: AngVector,
+        wake_up: bool,
+    ) -> bool {
+        let Some(rb) = self.bodies.get_mut(handle.0) else {
+            return false;
+        };
+        rb.add_force(force, wake_up);
+        rb.add_torque(torque, wake_up);
+        // Waking a sleeping body is a change the pipeline must see.
+        if rb.changes.contains(RigidBodyChanges::SLEEP) {
+            self.modified_bodies.push_once(handle, rb);
+        }
+        true
+    }
+
+    /// Clears the forces and torques added to a body, as [`RigidBody::reset_forces`] and
+    /// [`RigidBody::reset_torques`] do (without waking it up), without putting the body in the
+    /// set of modified bodies (see [`Self::add_force_and_torque`]).
+    ///
+    /// Returns `false` if the handle is invalid.
+    pub fn reset_forces_and_torques(&mut self, handle: RigidBodyHandle) -> bool {
+        let Some(rb) = self.bodies.get_mut(handle.0) else {
+            return false;
+        };
+        rb.reset_forces(false);
+        rb.reset_torques(false);
+        true
     }
 
     pub(crate) fn get_mut_internal(&mut self, handle: RigidBodyHandle) -> Option<&mut RigidBody> {

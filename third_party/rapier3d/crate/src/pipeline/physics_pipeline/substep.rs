@@ -433,13 +433,17 @@ impl PhysicsPipeline {
         soft_bodies.island_events = sb_events;
         self.counters.stages.user_changes.pause();
 
-        // TODO: do this only on user-change.
         // TODO: do we want some kind of automatic inverse kinematics?
         for multibody in &mut multibody_joints.multibodies {
-            multibody.1.forward_kinematics(bodies, true);
-            multibody
-                .1
-                .update_rigid_bodies_internal(bodies, true, false, false);
+            let computed = multibody.1.forward_kinematics_if_changed(bodies, true);
+            // When nothing changed since the last step, the links' bodies still hold the poses
+            // and world mass properties the last step's end gave them: writing them again
+            // changes nothing.
+            if computed || !multibody.1.rigid_bodies_hold_link_poses(bodies) {
+                multibody
+                    .1
+                    .update_rigid_bodies_internal(bodies, true, false, false);
+            }
         }
 
         // The soft meshes' vertex caches, read by the soft contact passes.

@@ -5,7 +5,8 @@ use crate::alloc_prelude::*;
 use crate::dynamics::integration_parameters::SpringCoefficients;
 use crate::dynamics::solver::{GenericJointConstraint, WritebackId};
 use crate::dynamics::{
-    IntegrationParameters, RigidBodyHandle, RigidBodySet, RigidBodyType, RigidBodyVelocity,
+    IntegrationParameters, RigidBodyChanges, RigidBodyHandle, RigidBodySet, RigidBodyType,
+    RigidBodyVelocity,
 };
 use crate::math::{
     ANG_DIM, AngVector, DIM, DVector, Jacobian, Pose, Real, SPATIAL_DIM, SimdAngVector, Vector,
@@ -1599,6 +1600,16 @@ impl Multibody {
         bodies: &RigidBodySet,
         read_root_pose_from_rigid_body: bool,
     ) {
+        self.forward_kinematics_if_changed(bodies, read_root_pose_from_rigid_body);
+    }
+
+    /// [`Self::forward_kinematics`], telling whether it computed anything: `false` when
+    /// nothing it reads changed since its last call, whose results stand.
+    pub(crate) fn forward_kinematics_if_changed(
+        &mut self,
+        bodies: &RigidBodySet,
+        read_root_pose_from_rigid_body: bool,
+    ) -> bool {
         // Be sure the degrees of freedom match and take the root position if needed.
         self.update_root_type(bodies, read_root_pose_from_rigid_body);
 
@@ -1606,7 +1617,7 @@ impl Multibody {
         // right after the previous step ended with its own forward kinematics): its results
         // stand, bit for bit.
         if self.kinematic_inputs_unchanged(bodies) {
-            return;
+            return false;
         }
 
         // Special case for the root, which has no parent.
@@ -1645,6 +1656,24 @@ impl Multibody {
          * Compute body jacobians.
          */
         self.update_body_jacobians();
+        true
+    }
+
+    /// Whether every link's rigid-body already holds what
+    /// [`Self::update_rigid_bodies_internal`] would write with `update_mass_properties` and
+    /// not `update_next_positions_only`: its position and next position are its link's pose,
+    /// and the user changed nothing of it since the last step (so its world mass properties
+    /// were last computed at that pose, by the last step's end or the user-changes handler).
+    pub(crate) fn rigid_bodies_hold_link_poses(&self, bodies: &RigidBodySet) -> bool {
+        self.links.iter().all(|link| {
+            bodies.get(link.rigid_body).is_none_or(|rb| {
+                rb.changes
+                    .difference(RigidBodyChanges::IN_MODIFIED_SET)
+                    .is_empty()
+                    && rb.pos.position == link.local_to_world
+                    && rb.pos.next_position == link.local_to_world
+            })
+        })
     }
 
     /// Records what [`Self::forward_kinematics`] reads, after the root's pose is taken, and tells

@@ -31,6 +31,10 @@ pub struct TreeLu {
     /// `ancestors[ancestor_start[k]..ancestor_start[k + 1]]` are `k`'s.
     ancestors: Vec<usize>,
     ancestor_start: Vec<usize>,
+    /// Whether `factorize` built `ancestors` from `parents` (not read from a snapshot, whose
+    /// lists it does not trust for its unchecked indexing: they are built again).
+    #[cfg_attr(feature = "serde-serialize", serde(skip))]
+    ancestors_built: bool,
     factors: DMatrix<Real>,
     singular: bool,
 }
@@ -73,6 +77,7 @@ impl Default for TreeLu {
             parents: Vec::new(),
             ancestors: Vec::new(),
             ancestor_start: Vec::new(),
+            ancestors_built: false,
             factors: DMatrix::zeros(0, 0),
             singular: false,
         }
@@ -85,8 +90,13 @@ impl TreeLu {
     /// before their children). Allocates only when the size changes.
     pub fn factorize(&mut self, matrix: &DMatrix<Real>, parents: &[usize]) {
         let n = parents.len();
-        self.parents.clear();
-        self.parents.extend_from_slice(parents);
+        // The ancestor lists depend on the tree only: listed again only when it changed (a
+        // multibody's usually never does).
+        let same_tree = self.ancestors_built && self.parents == parents;
+        if !same_tree {
+            self.parents.clear();
+            self.parents.extend_from_slice(parents);
+        }
         if self.factors.nrows() != n {
             self.factors = DMatrix::zeros(n, n);
         }
@@ -98,16 +108,20 @@ impl TreeLu {
             a[j * n..(j + 1) * n].copy_from_slice(&source[j * rows..j * rows + n]);
         }
 
-        self.ancestors.clear();
-        self.ancestor_start.clear();
-        self.ancestor_start.push(0);
-        for &parent in parents {
-            if parent != NO_PARENT {
-                self.ancestors.push(parent);
-                let (start, end) = (self.ancestor_start[parent], self.ancestor_start[parent + 1]);
-                self.ancestors.extend_from_within(start..end);
+        if !same_tree {
+            self.ancestors.clear();
+            self.ancestor_start.clear();
+            self.ancestor_start.push(0);
+            for &parent in parents {
+                if parent != NO_PARENT {
+                    self.ancestors.push(parent);
+                    let (start, end) =
+                        (self.ancestor_start[parent], self.ancestor_start[parent + 1]);
+                    self.ancestors.extend_from_within(start..end);
+                }
+                self.ancestor_start.push(self.ancestors.len());
             }
-            self.ancestor_start.push(self.ancestors.len());
+            self.ancestors_built = true;
         }
 
         self.singular = false;
@@ -125,16 +139,26 @@ impl TreeLu {
             // row_k` on each ancestor `i` of `k`: row `k` has non-zeros only on `k`'s ancestors
             // by now (its descendants, eliminated before it, cleared the rest), so only entries
             // between ancestors change.
+            //
+            // The ancestors are indexed without bounds checks: this is the bulk of the
+            // factorisation (`Σ depth²` entries), and a checked index is most of each entry's
+            // work. SAFETY: each of `k`'s ancestors is less than `k`, itself less than `n`, the
+            // length of `column_k` and `column_j`: the lists are built above from `parents` (by
+            // this call or an earlier one on the same `parents`, never read from a snapshot),
+            // where `ancestor_start[parent + 1]` exists only for a parent listed before its child.
             let inv_pivot = 1.0 / pivot;
             for &i in ancestors {
-                column_k[i] *= inv_pivot;
+                debug_assert!(i < k);
+                unsafe { *column_k.get_unchecked_mut(i) *= inv_pivot };
             }
             for &j in ancestors {
                 let column_j = &mut before[j * n..(j + 1) * n];
                 let akj = column_j[k];
                 if akj != 0.0 {
                     for &i in ancestors {
-                        column_j[i] -= column_k[i] * akj;
+                        unsafe {
+                            *column_j.get_unchecked_mut(i) -= *column_k.get_unchecked(i) * akj;
+                        }
                     }
                 }
             }
