@@ -38,7 +38,8 @@ pub struct Walker {
     pub compliant: bool,
     /// What each foot felt in the last step (normal force, ground force in the body frame).
     feel: [FootFeel; 6],
-    /// Each leg's ground force in the last step, its foot's and its links' (body frame).
+    /// Each leg's ground force in the last step, its foot's and its links' (body frame);
+    /// summed only for leg compliance, the one that reads it.
     leg_forces: [DVec3; 6],
     /// The leg each model link belongs to (None: the body, a link off the legs).
     leg_of_link: Vec<Option<usize>>,
@@ -412,12 +413,14 @@ impl Walker {
         }
         let robot = self.hexapod.step();
         let to_body = robot.body.matrix3.transpose();
-        self.leg_forces = robot
-            .foot_contacts
-            .map(|c| c.map_or(DVec3::ZERO, |c| to_body * c.force));
-        for contact in &robot.link_contacts {
-            if let Some(k) = self.leg_of_link[contact.link] {
-                self.leg_forces[k] += to_body * contact.force.force;
+        if self.compliant {
+            self.leg_forces = robot
+                .foot_contacts
+                .map(|c| c.map_or(DVec3::ZERO, |c| to_body * c.force));
+            for contact in &robot.link_contacts {
+                if let Some(k) = self.leg_of_link[contact.link] {
+                    self.leg_forces[k] += to_body * contact.force.force;
+                }
             }
         }
         self.feel = robot.foot_contacts.map(|c| {
