@@ -42,7 +42,7 @@ fn foot_slip(metrics: &serde_json::Value) -> Vec<f64> {
 /// How far a foot may slide in contact over a 10 s walk: 0.1 m (issue 40's bar), but 0.4 m for
 /// WORMS, whose soles are rigid pads 23 cm across planned as a point at their foot sphere: as
 /// its coxa swings a stance leg ±18°, the pad turns with it and its rim, where it stands on a
-/// leaning shin, scrubs some 70 mm a step (measured flat: 0.05–0.30 m per foot in 10 s). Before
+/// leaning shin, scrubs some 70 mm a step (measured flat: 0.04–0.33 m per foot in 10 s). Before
 /// the soles counted as the feet, its feet never touched and the bar held for nothing.
 fn slip_bar(name: &str) -> f64 {
     if name == "worms" { 0.4 } else { 0.1 }
