@@ -1,5 +1,6 @@
 //! `hexsim ladder`: a robot over each terrain family at rising difficulty, blind and perceptive;
-//! the highest level crossed per family as a table and JSON (see `hexsim::ladder`).
+//! the highest level crossed per family, and the highest crossed as the walk commanded (no
+//! skating, drift or turn), as a table and JSON (see `hexsim::ladder`).
 
 use anyhow::Result;
 use clap::Args;

@@ -55,7 +55,8 @@ pub enum Command {
     /// and one recording with every setting superposed (exit 1: some diverged).
     Compare(compare::CompareArgs),
     /// Walk a robot over each terrain family at rising difficulty (stairs, slopes, rough ground,
-    /// …), blind and perceptive, and report the highest level it crossed in each.
+    /// …), blind and perceptive, and report the highest level it crossed in each, and the
+    /// highest it crossed as the walk commanded (a crossing whose feet skated is a scramble).
     Ladder(ladder::LadderArgs),
     /// Join the results of a batch's shards (`batch --shard I/N`) into one file.
     Merge(merge::MergeArgs),

@@ -18,6 +18,7 @@ const MARGIN: f64 = 12.0;
 fn colour(outcome: Outcome) -> (&'static str, &'static str) {
     match outcome {
         Outcome::Crossed => ("#66bb6a", "#000"),
+        Outcome::Scrambled => ("#c5e1a5", "#000"),
         Outcome::Stalled => ("#ffca28", "#000"),
         Outcome::SlidBack => ("#ab47bc", "#fff"),
         Outcome::Fell => ("#e53935", "#fff"),
@@ -130,6 +131,7 @@ pub fn svg(result: &LadderResult) -> String {
     let mut x = MARGIN;
     for outcome in [
         Outcome::Crossed,
+        Outcome::Scrambled,
         Outcome::Stalled,
         Outcome::SlidBack,
         Outcome::Fell,
@@ -172,6 +174,7 @@ mod tests {
             max_tilt_deg: Some(1.0),
             max_penetration: Some(deep),
             max_link_penetration: None,
+            walk_flags: Vec::new(),
             message: None,
         };
         let result = LadderResult {
@@ -184,19 +187,24 @@ mod tests {
                 perceptive: Some(0.04),
                 blind_stopped_by: Some((0.04, Outcome::Stalled)),
                 perceptive_stopped_by: None,
+                blind_as_commanded: Some(0.02),
+                perceptive_as_commanded: Some(0.02),
+                blind_as_commanded_stopped_by: Some((0.04, Outcome::Stalled)),
+                perceptive_as_commanded_stopped_by: Some((0.04, Outcome::Scrambled)),
             }],
             runs: vec![
                 run(0.02, false, Outcome::Crossed, 1e-3),
                 run(0.04, false, Outcome::Stalled, 1e-3),
                 run(0.02, true, Outcome::Crossed, 1e-3),
-                run(0.04, true, Outcome::Fell, 6e-3),
+                run(0.04, true, Outcome::Scrambled, 6e-3),
             ],
         };
         let svg = svg(&result);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert_eq!(svg.matches("<title>").count(), 4);
         assert_eq!(svg.matches(colour(Outcome::Crossed).0).count(), 2 + 1);
-        assert_eq!(svg.matches(colour(Outcome::Fell).0).count(), 1 + 1);
+        assert_eq!(svg.matches(colour(Outcome::Scrambled).0).count(), 1 + 1);
+        assert_eq!(svg.matches(colour(Outcome::Fell).0).count(), 1);
         assert!(svg.contains("0.40 ▾"), "{svg}");
         assert!(svg.contains("stairs &lt;up&gt;") && !svg.contains("stairs <up>"));
         assert!(svg.contains(">step_height<"));

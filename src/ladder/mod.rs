@@ -10,7 +10,9 @@
 //! files walks them rigid). The ladder is a client of the batch engine: it expands the families
 //! (for another robot, with that robot and a duration fitted to its speed), runs them as one
 //! batch and reads each run's record into an [`Outcome`]. A stall, a slide back, a fall or a
-//! divergence is a result, said as such.
+//! divergence is a result, said as such; and a crossing that was not the walk commanded (its feet
+//! skated, it drifted or turned: the metrics' `walk_flags`) is a scramble, counted as crossed but
+//! told apart, with each family's highest level crossed as commanded beside its highest crossed.
 
 pub mod chart;
 
@@ -51,8 +53,12 @@ pub struct Rung {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Outcome {
-    /// Got the distance past the start without falling.
+    /// Got the distance past the start without falling, as the walk commanded.
     Crossed,
+    /// Got the distance past the start without falling, but not as the walk commanded: its feet
+    /// skated, or it drifted sideways or turned off its heading (the metrics' `walk_flags`,
+    /// issue 40's bars) — across, but scrambling.
+    Scrambled,
     /// Stopped short, neither falling nor sliding back.
     Stalled,
     /// Ended behind where it started.
@@ -69,6 +75,7 @@ impl Outcome {
     pub fn word(self) -> &'static str {
         match self {
             Outcome::Crossed => "crossed",
+            Outcome::Scrambled => "scrambled",
             Outcome::Stalled => "stalled",
             Outcome::SlidBack => "slid back",
             Outcome::Fell => "fell",
@@ -77,13 +84,17 @@ impl Outcome {
         }
     }
 
-    /// What a run's record says happened: crossing needs every expectation met.
+    /// What a run's record says happened: crossing needs every expectation met, and crossing as
+    /// commanded no walk flag as well.
     pub fn of(record: &Record) -> Outcome {
         let metric = |name: &str| record.metrics.get(name).and_then(|v| v.as_f64());
         match record.status {
             Status::Error => return Outcome::Error,
             Status::Diverged => return Outcome::Diverged,
-            Status::Passed | Status::Regressed => return Outcome::Crossed,
+            Status::Passed | Status::Regressed if walk_flags(record).is_empty() => {
+                return Outcome::Crossed;
+            }
+            Status::Passed | Status::Regressed => return Outcome::Scrambled,
             Status::Failed => {}
         }
         if metric("fell_at").is_some() {
@@ -94,6 +105,26 @@ impl Outcome {
             Outcome::Stalled
         }
     }
+
+    /// Got across, as commanded or scrambling.
+    pub fn crossed(self) -> bool {
+        matches!(self, Outcome::Crossed | Outcome::Scrambled)
+    }
+}
+
+/// A run's walk flags (`metrics::walk`: skated, went backwards, drifted, turned), as sentences.
+fn walk_flags(record: &Record) -> Vec<String> {
+    record
+        .metrics
+        .get("walk_flags")
+        .and_then(|v| v.as_array())
+        .map(|flags| {
+            flags
+                .iter()
+                .filter_map(|f| f.as_str().map(str::to_string))
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// A run's result as the ladder's JSON lists it.
@@ -109,12 +140,16 @@ pub struct RungResult {
     /// Deepest penetration of a foot and of any other link (m).
     pub max_penetration: Option<f64>,
     pub max_link_penetration: Option<f64>,
+    /// How the walk was not the one commanded (a scramble's, or a failed run's), if it was not.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub walk_flags: Vec<String>,
     /// The divergence's or the error's message.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub message: Option<String>,
 }
 
-/// A family's summary: the highest level crossed blind and perceptive, and what stopped it.
+/// A family's summary: the highest level crossed blind and perceptive, and what stopped it; and
+/// the highest crossed as the walk commanded (no scramble on the way up), and what stopped that.
 #[derive(Debug, Clone, Serialize)]
 pub struct FamilySummary {
     pub family: String,
@@ -126,6 +161,11 @@ pub struct FamilySummary {
     /// The first level not crossed, and how it ended.
     pub blind_stopped_by: Option<(f64, Outcome)>,
     pub perceptive_stopped_by: Option<(f64, Outcome)>,
+    /// The highest level crossed as commanded with every level below it so too.
+    pub blind_as_commanded: Option<f64>,
+    pub perceptive_as_commanded: Option<f64>,
+    pub blind_as_commanded_stopped_by: Option<(f64, Outcome)>,
+    pub perceptive_as_commanded_stopped_by: Option<(f64, Outcome)>,
 }
 
 /// The whole ladder's result (its JSON).
@@ -323,6 +363,7 @@ pub fn summarise(
             }),
             max_penetration: metric("max_penetration"),
             max_link_penetration: metric("max_link_penetration"),
+            walk_flags: record.map(walk_flags).unwrap_or_default(),
             message: record.and_then(|r| r.message.clone()),
         });
     }
@@ -330,7 +371,8 @@ pub fn summarise(
         .iter()
         .enumerate()
         .map(|(f, family)| {
-            let climb = |perceptive: bool| {
+            // the highest level whose run and every easier one's `counts`
+            let climb = |perceptive: bool, counts: fn(Outcome) -> bool| {
                 let mut highest = None;
                 for (level, value) in family.levels.iter().enumerate() {
                     let outcome = outcomes
@@ -338,15 +380,19 @@ pub fn summarise(
                         .find(|o| o.0 == f && o.1 == level && o.2 == perceptive)
                         .map(|o| o.3);
                     match outcome {
-                        Some(Outcome::Crossed) => highest = Some(*value),
+                        Some(o) if counts(o) => highest = Some(*value),
                         Some(other) => return (highest, Some((*value, other))),
                         None => {}
                     }
                 }
                 (highest, None)
             };
-            let (blind, blind_stopped_by) = climb(false);
-            let (perceptive, perceptive_stopped_by) = climb(true);
+            let as_commanded = |o: Outcome| o == Outcome::Crossed;
+            let (blind, blind_stopped_by) = climb(false, Outcome::crossed);
+            let (perceptive, perceptive_stopped_by) = climb(true, Outcome::crossed);
+            let (blind_as_commanded, blind_as_commanded_stopped_by) = climb(false, as_commanded);
+            let (perceptive_as_commanded, perceptive_as_commanded_stopped_by) =
+                climb(true, as_commanded);
             FamilySummary {
                 family: family.name.clone(),
                 parameter: family.parameter.clone(),
@@ -355,6 +401,10 @@ pub fn summarise(
                 perceptive,
                 blind_stopped_by,
                 perceptive_stopped_by,
+                blind_as_commanded,
+                perceptive_as_commanded,
+                blind_as_commanded_stopped_by,
+                perceptive_as_commanded_stopped_by,
             }
         })
         .collect();
@@ -367,7 +417,8 @@ pub fn summarise(
 
 impl LadderResult {
     /// The table a person reads: per family, the highest level crossed blind and perceptive, and
-    /// what stopped the robot at the next (Markdown, as docs/ holds it).
+    /// what stopped the robot at the next; then, where it differs, the highest crossed as the
+    /// walk commanded (Markdown, as docs/ holds it).
     pub fn table(&self, families: &[Family]) -> String {
         let mut out = format!(
             "| family ({}) | levels | blind | perceptive |\n|---|---|---|---|\n",
@@ -379,11 +430,19 @@ impl LadderResult {
                 .rsplit('.')
                 .next()
                 .unwrap_or(&family.parameter);
-            let cell = |highest: Option<f64>, stopped: Option<(f64, Outcome)>| {
+            let part = |highest: Option<f64>, stopped: Option<(f64, Outcome)>| {
                 let reached = highest.map_or("none".to_string(), |v| format!("{v}"));
                 match stopped {
                     Some((level, outcome)) => format!("{reached} ({} at {level})", outcome.word()),
                     None => format!("{reached} (all)"),
+                }
+            };
+            let cell = |highest, stopped, clean, clean_stopped| {
+                let crossed = part(highest, stopped);
+                if clean == highest {
+                    crossed
+                } else {
+                    format!("{crossed}; as commanded {}", part(clean, clean_stopped))
                 }
             };
             out.push_str(&format!(
@@ -395,8 +454,18 @@ impl LadderResult {
                     .map(|l| format!("{l}"))
                     .collect::<Vec<_>>()
                     .join(", "),
-                cell(summary.blind, summary.blind_stopped_by),
-                cell(summary.perceptive, summary.perceptive_stopped_by),
+                cell(
+                    summary.blind,
+                    summary.blind_stopped_by,
+                    summary.blind_as_commanded,
+                    summary.blind_as_commanded_stopped_by
+                ),
+                cell(
+                    summary.perceptive,
+                    summary.perceptive_stopped_by,
+                    summary.perceptive_as_commanded,
+                    summary.perceptive_as_commanded_stopped_by
+                ),
             ));
         }
         out
@@ -406,6 +475,76 @@ impl LadderResult {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A batch record of `name` that ended `status` with `flags` in its metrics.
+    fn record(name: &str, status: &str, forward: f64, flags: &[&str]) -> Record {
+        serde_json::from_value(serde_json::json!({
+            "name": name, "file": "f.toml", "hash": "0", "kind": "walk", "seed": null,
+            "index": 0, "total": 1, "shard": [0, 1], "hexsim_version": "0", "status": status,
+            "wall_time_s": 0.0, "steps": 1, "steps_per_second": 0.0, "expectations": [],
+            "metrics": { "forward_distance": forward, "walk_flags": flags },
+        }))
+        .unwrap()
+    }
+
+    /// A crossing whose feet skated is a scramble: it counts towards the highest level crossed,
+    /// not towards the highest crossed as commanded, and the table says both.
+    #[test]
+    fn a_scrambled_crossing_is_crossed_but_not_as_commanded() {
+        let family = Family {
+            name: "stairs".into(),
+            description: String::new(),
+            file: "stairs.toml".into(),
+            parameter: "terrain.source.step_height".into(),
+            levels: vec![0.02, 0.04, 0.06],
+            distance: 1.5,
+        };
+        let rung = |level, perceptive, name: &str| Rung {
+            family: 0,
+            level,
+            perceptive,
+            name: name.into(),
+        };
+        let rungs = [
+            rung(0, false, "b2"),
+            rung(1, false, "b4"),
+            rung(2, false, "b6"),
+            rung(0, true, "p2"),
+            rung(1, true, "p4"),
+            rung(2, true, "p6"),
+        ];
+        let skated = ["skated: its worst foot slid 0.8 m in contact, 46 % of the 1.7 m"];
+        let records = [
+            record("b2", "passed", 2.8, &[]),
+            record("b4", "passed", 2.6, &skated),
+            record("b6", "failed", 0.5, &[]),
+            record("p2", "passed", 2.9, &[]),
+            record("p4", "passed", 2.9, &[]),
+            record("p6", "passed", 2.9, &[]),
+        ];
+        let result = summarise("hex18", std::slice::from_ref(&family), &rungs, &records);
+        let outcomes: Vec<Outcome> = result.runs.iter().map(|r| r.outcome).collect();
+        assert_eq!(outcomes[1], Outcome::Scrambled);
+        assert_eq!(result.runs[1].walk_flags, skated);
+        assert!(result.runs[0].walk_flags.is_empty());
+        let summary = &result.families[0];
+        assert_eq!(summary.blind, Some(0.04));
+        assert_eq!(summary.blind_stopped_by, Some((0.06, Outcome::Stalled)));
+        assert_eq!(summary.blind_as_commanded, Some(0.02));
+        assert_eq!(
+            summary.blind_as_commanded_stopped_by,
+            Some((0.04, Outcome::Scrambled))
+        );
+        assert_eq!(summary.perceptive, Some(0.06));
+        assert_eq!(summary.perceptive_as_commanded, Some(0.06));
+        let table = result.table(&[family]);
+        assert!(
+            table.contains(
+                "| 0.04 (stalled at 0.06); as commanded 0.02 (scrambled at 0.04) | 0.06 (all) |"
+            ),
+            "{table}"
+        );
+    }
 
     #[test]
     fn a_family_sweeps_one_rising_difficulty() {
