@@ -25,6 +25,7 @@ pub struct RunArgs {
             "speed", "sideways", "turn", "start", "heading", "on_ground", "seed",
             "servo_stiffness", "servo_damping", "no_feedforward", "no_rolling", "articulation",
             "solver_iterations", "pgs_iterations", "log_rate", "allow_unstable_dt",
+            "stiff_legs", "hold_heading",
         ]
     )]
     scenario: Option<PathBuf>,
@@ -56,6 +57,11 @@ pub struct RunArgs {
     /// way along the force, as a force-controlled leg does).
     #[arg(long)]
     stiff_legs: bool,
+    /// Hold the heading: the commanded turn is corrected by the body's heading error (0.5 /s,
+    /// bounded), as a robot with a gyro walks (default: the gait turns open loop, and a slipping
+    /// foot turns the body for good).
+    #[arg(long)]
+    hold_heading: bool,
     /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo, the contact
     /// spring or the landing feet need a smaller step (a warning says so). A step given is
     /// refused past the servo's bound and warned past the others, naming the step hexsim would
@@ -202,6 +208,7 @@ fn spec(args: &RunArgs) -> ScenarioSpec {
         rolling_feet: args.no_rolling.then_some(false),
         reactive_gait: Some(args.reactive),
         compliant_legs: args.stiff_legs.then_some(false),
+        hold_heading: args.hold_heading.then_some(true),
         articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),
         pgs_iterations: args.pgs_iterations,

@@ -377,6 +377,15 @@ impl GaitController {
         &self.spec
     }
 
+    /// The farthest standing foot's horizontal distance from the body's vertical axis (m): the
+    /// lever a turn moves the feet by.
+    pub fn turn_radius(&self) -> f64 {
+        self.neutral
+            .iter()
+            .map(|n| n.truncate().length())
+            .fold(0.0, f64::max)
+    }
+
     pub fn chains(&self) -> &[LegChain] {
         &self.chains
     }

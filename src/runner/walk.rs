@@ -55,6 +55,9 @@ pub struct WalkSwitches {
     /// Legs give way to more than three times the robot's weight (see [`crate::gait`]'s
     /// `compliance`).
     pub compliant_legs: bool,
+    /// Hold the commanded heading against what turns the body (see [`crate::gait`]'s
+    /// `heading`).
+    pub hold_heading: bool,
     /// Hold the servo targets against the load (see [`Walker::load_feedforward`]).
     pub feedforward: bool,
 }
@@ -129,6 +132,7 @@ impl WalkRun {
         walker.load_feedforward = self.switches.feedforward;
         walker.reactive = self.switches.reactive_gait;
         walker.compliant = self.switches.compliant_legs;
+        walker.hold_heading = self.switches.hold_heading;
         let every = decimation(self.log_rate, dt);
 
         let name = match self.settings.articulation {

@@ -127,6 +127,10 @@ pub struct ScenarioSpec {
     /// press their targets to their effort.
     #[serde(default)]
     pub compliant_legs: Option<bool>,
+    /// Heading hold: the commanded turn corrected by the heading's error, as a robot with a gyro
+    /// walks (default false: the gait turns open loop; see `gait::heading`).
+    #[serde(default)]
+    pub hold_heading: Option<bool>,
     /// How the links are joined: `multibody` (default) or `impulse` (faster; joints drift a little).
     #[serde(default)]
     pub articulation: Option<crate::sim::Articulation>,
@@ -162,7 +166,7 @@ pub const DEFAULT_DT: f64 = crate::setup::time_step::DEFAULT_DT;
 
 impl ScenarioSpec {
     /// A walk's fields, each with whether it is set: a ball scenario must set none.
-    pub fn walk_fields(&self) -> [(&'static str, bool); 13] {
+    pub fn walk_fields(&self) -> [(&'static str, bool); 14] {
         [
             ("robot", self.robot.is_some()),
             ("gait", self.gait.is_some()),
@@ -171,6 +175,7 @@ impl ScenarioSpec {
             ("rolling_feet", self.rolling_feet.is_some()),
             ("reactive_gait", self.reactive_gait.is_some()),
             ("compliant_legs", self.compliant_legs.is_some()),
+            ("hold_heading", self.hold_heading.is_some()),
             ("articulation", self.articulation.is_some()),
             ("solver_iterations", self.solver_iterations.is_some()),
             ("pgs_iterations", self.pgs_iterations.is_some()),
@@ -187,6 +192,7 @@ impl ScenarioSpec {
             rolling_feet: self.rolling_feet.unwrap_or(true),
             reactive_gait: self.reactive_gait.unwrap_or(false),
             compliant_legs: self.compliant_legs.unwrap_or(true),
+            hold_heading: self.hold_heading.unwrap_or(false),
             feedforward: self.servo.and_then(|s| s.feedforward).unwrap_or(true),
         }
     }

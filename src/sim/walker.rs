@@ -4,7 +4,8 @@ use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
 use crate::gait::reach::ReachTally;
 use crate::gait::{
-    Compliance, FootFeel, GaitController, GaitTargets, Reactive, VelocityCommand, away_from_edges,
+    Compliance, FootFeel, GaitController, GaitTargets, HeadingHold, Reactive, VelocityCommand,
+    away_from_edges,
 };
 use crate::robot::kinematics::LegAngles;
 use crate::robot::statics;
@@ -36,6 +37,10 @@ pub struct Walker {
     /// Leg compliance (`gait::compliance`): a leg pressing the ground with more than three
     /// times the robot's weight gives way; off: the servos press their targets to their effort.
     pub compliant: bool,
+    /// Heading hold (`gait::heading`): the command's turn corrected by the heading error; off:
+    /// the gait turns open loop.
+    pub hold_heading: bool,
+    heading: Option<HeadingHold>,
     /// What each foot felt in the last step (normal force, ground force in the body frame).
     feel: [FootFeel; 6],
     /// Each leg's ground force in the last step, its foot's and its links' (body frame);
@@ -139,6 +144,8 @@ impl Walker {
             load_feedforward: true,
             reactive: false,
             compliant: true,
+            hold_heading: false,
+            heading: None,
             feel: [FootFeel::default(); 6],
             leg_forces: [DVec3::ZERO; 6],
             leg_of_link,
@@ -381,6 +388,16 @@ impl Walker {
             self.controller.feel(self.feel);
             self.controller
                 .feel_forces(&self.leg_forces, self.hexapod.dt());
+            let command = if self.hold_heading {
+                let hold = self.heading.get_or_insert_with(|| {
+                    let gait = self.controller.gait();
+                    HeadingHold::new(gait.nominal_speed(), self.controller.turn_radius())
+                });
+                let x = self.hexapod.body_frame().matrix3.x_axis;
+                hold.steer(self.command, x.y.atan2(x.x), self.hexapod.dt())
+            } else {
+                self.command
+            };
             let targets = if self.terrain_following {
                 let plane = self.ground_reference();
                 let ground = Self::ground_within_reach(
@@ -389,9 +406,9 @@ impl Walker {
                     plane,
                     self.tilted_start,
                 );
-                self.controller.targets_on(t, self.command, blend, ground)
+                self.controller.targets_on(t, command, blend, ground)
             } else {
-                self.controller.targets(t, self.command, blend)
+                self.controller.targets(t, command, blend)
             };
             self.set_leg_targets(targets.joint_angles, targets.grounded);
             self.reach.record(t, &targets);
