@@ -354,6 +354,7 @@ pub const RAPIER_PATCHES: &[(&str, &[u8])] = &[
     patch!("0010-bodies-add-and-clear-forces-without-marking-the-body.patch"),
     patch!("0011-multibody-skip-the-start-of-step-writeback-when-noth.patch"),
     patch!("0012-multibody-factorise-along-the-tree-without-re-listin.patch"),
+    patch!("0013-multibody-optionally-integrate-the-Coriolis-forces-e.patch"),
 ];
 
 /// The patch series in a line: how many, the first and last number, and the first 12 hex digits

@@ -161,8 +161,14 @@ pub struct Multibody {
     // freedoms to the end of the generalized coordinates vector.
     augmented_mass_indices: IndexSequence,
 
+    /// The matrix of the semi-implicit velocity update (`augmented_mass` plus `dt` times the
+    /// derivatives of the Coriolis and gyroscopic forces) and its factors; neither is assembled
+    /// when `explicit_coriolis` is set.
     acc_augmented_mass: DMatrix<Real>,
     acc_mass_factors: TreeLu,
+    /// Whether the Coriolis, centrifugal and gyroscopic forces are integrated explicitly (the
+    /// velocity update solves with `augmented_mass`) instead of semi-implicitly (the default).
+    explicit_coriolis: bool,
 
     ndofs: usize,
     pub(crate) root_is_dynamic: bool,
@@ -204,6 +210,7 @@ impl Multibody {
             inv_augmented_mass: LazyLu::default(),
             acc_augmented_mass: DMatrix::zeros(0, 0),
             acc_mass_factors: TreeLu::default(),
+            explicit_coriolis: false,
             augmented_mass_indices: IndexSequence::new(),
             ndofs: 0,
             solver_id: 0,
@@ -242,7 +249,9 @@ impl Multibody {
                 continue;
             } else if is_new_root {
                 link2mb[i] = result.len();
-                result.push(Multibody::with_self_contacts(self.self_contacts_enabled));
+                let mut mb = Multibody::with_self_contacts(self.self_contacts_enabled);
+                mb.explicit_coriolis = self.explicit_coriolis;
+                result.push(mb);
             } else {
                 link2mb[i] = link2mb[link.parent_internal_id]
             }
@@ -385,6 +394,8 @@ impl Multibody {
         );
         // Self-contacts stay disabled for the links of a multibody that had them disabled.
         self.self_contacts_enabled &= rhs.self_contacts_enabled;
+        // The explicit Coriolis forces only if both parts had them (the default otherwise).
+        self.explicit_coriolis &= rhs.explicit_coriolis;
     }
 
     /// Whether self-contacts are enabled on this multibody.
@@ -401,6 +412,30 @@ impl Multibody {
     /// if the contact is enabled on the individual joint with [`GenericJoint::contacts_enabled`].
     pub fn set_self_contacts_enabled(&mut self, enabled: bool) {
         self.self_contacts_enabled = enabled;
+    }
+
+    /// Whether the Coriolis, centrifugal and gyroscopic forces are integrated explicitly; see
+    /// [`Self::set_explicit_coriolis`].
+    pub fn explicit_coriolis(&self) -> bool {
+        self.explicit_coriolis
+    }
+
+    /// Sets whether the Coriolis, centrifugal and gyroscopic forces are integrated explicitly.
+    ///
+    /// By default (`false`) the velocity update is semi-implicit in them: each step assembles,
+    /// besides the augmented mass matrix `M`, a second matrix `M + dt·∂c/∂q̇` (`c` those forces)
+    /// and factorises it, and an energy check solves again with `M` alone when the semi-implicit
+    /// update would add energy. Explicit (`true`) solves `M·q̈ = f − c(q, q̇)` with the factors of
+    /// `M` that the constraints use, as MuJoCo's default Euler integrator does: the second
+    /// matrix, its factorisation and the energy check are skipped, which roughly halves the
+    /// mass matrix update's cost. The velocity update is then the same as the energy check's
+    /// fallback. It suits a multibody whose links turn slowly compared with `1 / dt` (a robot
+    /// at a millisecond step); a fast spinning link can gain energy.
+    ///
+    /// A multibody split off this one keeps the setting; one made by joining two has it only if
+    /// both had it.
+    pub fn set_explicit_coriolis(&mut self, explicit: bool) {
+        self.explicit_coriolis = explicit;
     }
 
     /// The inverse augmented mass matrix of this multibody, as a dense LU factorisation.
@@ -603,8 +638,10 @@ impl Multibody {
         // If there is significant movement, the semi-implicit coriolis term
         // occasionally cause instabilities due to the matrix being near singular.
         // To prevent that, we enable a check that verifies the result and fallbacks
-        // to the explicit term if needed
-        let check_implicit_coriolis_divergence = dt * self.velocities.amax() >= 1.0e-3;
+        // to the explicit term if needed. With explicit Coriolis forces there is nothing to check:
+        // the solve below is with the plain mass matrix already.
+        let check_implicit_coriolis_divergence =
+            !self.explicit_coriolis && dt * self.velocities.amax() >= 1.0e-3;
         // Generalized forces that derive from positions or external inputs
         // (gravity, user forces, spring position terms). The workspace keeps the vector between
         // steps (taken out meanwhile: the loop below borrows the workspace's paths).
@@ -720,9 +757,14 @@ impl Multibody {
             copied(&mut gen_forces, &self.accelerations);
         }
 
+        let factors = if self.explicit_coriolis {
+            &self.mass_factors
+        } else {
+            &self.acc_mass_factors
+        };
         self.augmented_mass_indices
             .with_rearranged_rows_mut(&mut self.accelerations, |accs| {
-                self.acc_mass_factors.solve_mut(accs);
+                factors.solve_mut(accs);
             });
 
         if check_implicit_coriolis_divergence {
@@ -910,7 +952,8 @@ impl Multibody {
 
     /// Assembles the mass matrix `M = Σᵢ Jᵢᵀ·Mᵢ·Jᵢ` (`augmented_mass`) and the matrix of the
     /// semi-implicit velocity update (`acc_augmented_mass`: `M` plus `dt` times the derivatives
-    /// of the gyroscopic and Coriolis forces), then factorises both.
+    /// of the gyroscopic and Coriolis forces), then factorises both; with explicit Coriolis forces
+    /// ([`Self::set_explicit_coriolis`]) only `M`, without the Coriolis terms.
     ///
     /// A link's velocity depends only on the degrees of freedom of the joints between it and the
     /// root, so its body Jacobian `Jᵢ` is zero outside those columns (a leg's foot on a
@@ -932,13 +975,20 @@ impl Multibody {
             return; // Nothing to do.
         }
 
+        // The semi-implicit update's matrix, unless the Coriolis forces are explicit.
+        let semi_implicit = !self.explicit_coriolis;
         if self.augmented_mass.ncols() != self.ndofs {
             // TODO: do a resize instead of a full reallocation.
             self.augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
-            self.acc_augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
         } else {
             self.augmented_mass.as_mut_slice().fill(0.0);
-            self.acc_augmented_mass.as_mut_slice().fill(0.0);
+        }
+        if semi_implicit {
+            if self.acc_augmented_mass.ncols() != self.ndofs {
+                self.acc_augmented_mass = DMatrix::zeros(self.ndofs, self.ndofs);
+            } else {
+                self.acc_augmented_mass.as_mut_slice().fill(0.0);
+            }
         }
 
         self.augmented_mass_indices.clear();
@@ -990,86 +1040,6 @@ impl Multibody {
                 }
             }
 
-            /*
-             *
-             * Coriolis matrix (the columns of `JDot + JDot/u * qdot` on the path).
-             *
-             */
-            if i != 0 {
-                let parent_id = link.parent_internal_id;
-                let parent_link = &self.links[parent_id];
-                let parent_rb = &bodies[parent_link.rigid_body];
-                let parent_w = SimdAngVector::<Real>::from(parent_rb.vels.angvel).gcross_matrix();
-                let parent_path = ws.path_start[parent_id]..ws.path_start[parent_id + 1];
-                let parent_len = parent_path.len();
-
-                // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
-                let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
-                // JDot (but the 2.0 originates from the sum of two identical terms in JDot and
-                // JDot/u * gdot), JDot/u * qdot, and the parent's rotation of the shift: all
-                // multiply the parent's angular Jacobian.
-                let parent_j_w_coeff = vect_to_na(
-                    rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
-                )
-                .gcross_matrix_tr()
-                    + vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr()
-                    + parent_w * shift_cross_tr;
-                #[cfg(feature = "dim3")]
-                let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
-
-                for k in 0..parent_len {
-                    let parent_j_w =
-                        ws.path_jacobians[parent_path.start + k].fixed_rows::<ANG_DIM>(DIM);
-                    let parent_coriolis_w = ws.path_coriolis_w[parent_path.start + k];
-                    ws.path_coriolis_v[path.start + k] = ws.path_coriolis_v[parent_path.start + k]
-                        + shift_cross_tr * parent_coriolis_w
-                        + parent_j_w_coeff * parent_j_w;
-                    #[cfg(feature = "dim3")]
-                    {
-                        ws.path_coriolis_w[path.start + k] =
-                            parent_coriolis_w - vel_wrt_joint_w * parent_j_w;
-                    }
-                    #[cfg(feature = "dim2")]
-                    {
-                        ws.path_coriolis_w[path.start + k] = parent_coriolis_w;
-                    }
-                }
-
-                // The link's own degrees of freedom end its path.
-                let own = path.start + parent_len..path.end;
-                for k in own.clone() {
-                    ws.path_coriolis_v[k].fill(0.0);
-                    ws.path_coriolis_w[k].fill(0.0);
-                }
-
-                // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
-                if !link.joint.kinematic {
-                    let mut tmp1 = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
-                    let mut rb_joint_j = tmp1.columns_mut(0, ndofs);
-                    link.joint.jacobian(
-                        &(parent_link.local_to_world.rotation
-                            * link.joint.data.local_frame1.rotation),
-                        &mut rb_joint_j,
-                    );
-
-                    for (j, k) in own.enumerate() {
-                        let rb_joint_j_v = tmp1.fixed_view::<DIM, 1>(0, j);
-                        ws.path_coriolis_v[k] += parent_w * rb_joint_j_v * 2.0;
-
-                        #[cfg(feature = "dim3")]
-                        {
-                            let rb_joint_j_w = tmp1.fixed_view::<ANG_DIM, 1>(DIM, j);
-                            ws.path_coriolis_w[k] += parent_w * rb_joint_j_w;
-                        }
-                    }
-                }
-            } else {
-                for k in path.clone() {
-                    ws.path_coriolis_v[k].fill(0.0);
-                    ws.path_coriolis_w[k].fill(0.0);
-                }
-            }
-
             // This link's centre of mass from the root's, the reference point of the wrenches and
             // twists below: the Jacobians' points follow one another by `shift02` and `shift23`.
             let point = if i == 0 {
@@ -1080,18 +1050,104 @@ impl Multibody {
             ws.link_points[i] = point;
             let point = vect_to_na(point);
 
-            {
-                // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
-                let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
-                // JDot and JDot/u * qdot: both multiply the link's angular Jacobian.
-                let rb_j_w_coeff = vect_to_na(rb.vels.angvel.gcross(link.shift23))
-                    .gcross_matrix_tr()
-                    + SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix() * shift_cross_tr;
+            if semi_implicit {
+                /*
+                 *
+                 * Coriolis matrix (the columns of `JDot + JDot/u * qdot` on the path).
+                 *
+                 */
+                if i != 0 {
+                    let parent_id = link.parent_internal_id;
+                    let parent_link = &self.links[parent_id];
+                    let parent_rb = &bodies[parent_link.rigid_body];
+                    let parent_w =
+                        SimdAngVector::<Real>::from(parent_rb.vels.angvel).gcross_matrix();
+                    let parent_path = ws.path_start[parent_id]..ws.path_start[parent_id + 1];
+                    let parent_len = parent_path.len();
 
-                for k in path.clone() {
-                    let rb_j_w = ws.path_jacobians[k].fixed_rows::<ANG_DIM>(DIM);
-                    let coriolis_w = ws.path_coriolis_w[k];
-                    ws.path_coriolis_v[k] += shift_cross_tr * coriolis_w + rb_j_w_coeff * rb_j_w;
+                    // [c1 - c0].gcross() * (JDot + JDot/u * qdot)"
+                    let shift_cross_tr = vect_to_na(link.shift02).gcross_matrix_tr();
+                    // JDot (but the 2.0 originates from the sum of two identical terms in JDot and
+                    // JDot/u * gdot), JDot/u * qdot, and the parent's rotation of the shift: all
+                    // multiply the parent's angular Jacobian.
+                    let parent_j_w_coeff = vect_to_na(
+                        rb.vels.angvel.gcross(link.shift02) + 2.0 * link.joint_velocity.linvel,
+                    )
+                    .gcross_matrix_tr()
+                        + vect_to_na(link.joint_velocity.linvel).gcross_matrix_tr()
+                        + parent_w * shift_cross_tr;
+                    #[cfg(feature = "dim3")]
+                    let vel_wrt_joint_w = vect_to_na(link.joint_velocity.angvel).gcross_matrix();
+
+                    for k in 0..parent_len {
+                        let parent_j_w =
+                            ws.path_jacobians[parent_path.start + k].fixed_rows::<ANG_DIM>(DIM);
+                        let parent_coriolis_w = ws.path_coriolis_w[parent_path.start + k];
+                        ws.path_coriolis_v[path.start + k] = ws.path_coriolis_v
+                            [parent_path.start + k]
+                            + shift_cross_tr * parent_coriolis_w
+                            + parent_j_w_coeff * parent_j_w;
+                        #[cfg(feature = "dim3")]
+                        {
+                            ws.path_coriolis_w[path.start + k] =
+                                parent_coriolis_w - vel_wrt_joint_w * parent_j_w;
+                        }
+                        #[cfg(feature = "dim2")]
+                        {
+                            ws.path_coriolis_w[path.start + k] = parent_coriolis_w;
+                        }
+                    }
+
+                    // The link's own degrees of freedom end its path.
+                    let own = path.start + parent_len..path.end;
+                    for k in own.clone() {
+                        ws.path_coriolis_v[k].fill(0.0);
+                        ws.path_coriolis_w[k].fill(0.0);
+                    }
+
+                    // JDot (but the 2.0 originates from the sum of two identical terms in JDot and JDot/u * gdot)
+                    if !link.joint.kinematic {
+                        let mut tmp1 = SMatrix::<Real, SPATIAL_DIM, SPATIAL_DIM>::zeros();
+                        let mut rb_joint_j = tmp1.columns_mut(0, ndofs);
+                        link.joint.jacobian(
+                            &(parent_link.local_to_world.rotation
+                                * link.joint.data.local_frame1.rotation),
+                            &mut rb_joint_j,
+                        );
+
+                        for (j, k) in own.enumerate() {
+                            let rb_joint_j_v = tmp1.fixed_view::<DIM, 1>(0, j);
+                            ws.path_coriolis_v[k] += parent_w * rb_joint_j_v * 2.0;
+
+                            #[cfg(feature = "dim3")]
+                            {
+                                let rb_joint_j_w = tmp1.fixed_view::<ANG_DIM, 1>(DIM, j);
+                                ws.path_coriolis_w[k] += parent_w * rb_joint_j_w;
+                            }
+                        }
+                    }
+                } else {
+                    for k in path.clone() {
+                        ws.path_coriolis_v[k].fill(0.0);
+                        ws.path_coriolis_w[k].fill(0.0);
+                    }
+                }
+
+                {
+                    // [c3 - c2].gcross() * (JDot + JDot/u * qdot)
+                    let shift_cross_tr = vect_to_na(link.shift23).gcross_matrix_tr();
+                    // JDot and JDot/u * qdot: both multiply the link's angular Jacobian.
+                    let rb_j_w_coeff = vect_to_na(rb.vels.angvel.gcross(link.shift23))
+                        .gcross_matrix_tr()
+                        + SimdAngVector::<Real>::from(rb.vels.angvel).gcross_matrix()
+                            * shift_cross_tr;
+
+                    for k in path.clone() {
+                        let rb_j_w = ws.path_jacobians[k].fixed_rows::<ANG_DIM>(DIM);
+                        let coriolis_w = ws.path_coriolis_w[k];
+                        ws.path_coriolis_v[k] +=
+                            shift_cross_tr * coriolis_w + rb_j_w_coeff * rb_j_w;
+                    }
                 }
             }
 
@@ -1101,50 +1157,73 @@ impl Multibody {
              * the reference point.
              */
             let rb_mass_na = vect_to_na(rb_mass);
-            let rb_mass_dt = vect_to_na(rb_mass * dt);
-            #[cfg(feature = "dim3")]
-            let (rb_inertia_na, gyroscopic_dt) = {
-                // Derivative of gyroscopic forces.
-                let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
-                    - (rb_inertia * rb.vels.angvel).gcross_matrix();
-                (mat_to_na(rb_inertia), mat_to_na(gyroscopic_matrix * dt))
-            };
-
-            for k in path.clone() {
-                let j = &ws.path_jacobians[k];
-                let j_v = j.fixed_rows::<DIM>(0);
-                let j_w = j.fixed_rows::<ANG_DIM>(DIM);
-                let coriolis_v = &ws.path_coriolis_v[k];
-                let coriolis_w = &ws.path_coriolis_w[k];
-                let mut mass_col = SVector::<Real, SPATIAL_DIM>::zeros();
-                let mut acc_col = SVector::<Real, SPATIAL_DIM>::zeros();
-
-                mass_col
-                    .fixed_rows_mut::<DIM>(0)
-                    .copy_from(&j_v.component_mul(&rb_mass_na));
-                acc_col.fixed_rows_mut::<DIM>(0).copy_from(
-                    &(j_v.component_mul(&rb_mass_na) + coriolis_v.component_mul(&rb_mass_dt)),
-                );
-
+            if semi_implicit {
+                let rb_mass_dt = vect_to_na(rb_mass * dt);
                 #[cfg(feature = "dim3")]
-                {
-                    let i_j_w = rb_inertia_na * j_w;
-                    mass_col.fixed_rows_mut::<ANG_DIM>(DIM).copy_from(&i_j_w);
-                    acc_col.fixed_rows_mut::<ANG_DIM>(DIM).copy_from(
-                        &(i_j_w + gyroscopic_dt * j_w + rb_inertia_na * coriolis_w * dt),
-                    );
-                }
-                #[cfg(feature = "dim2")]
-                {
-                    let i_j_w = j_w * rb_inertia;
-                    mass_col.fixed_rows_mut::<ANG_DIM>(DIM).copy_from(&i_j_w);
-                    acc_col
-                        .fixed_rows_mut::<ANG_DIM>(DIM)
-                        .copy_from(&(i_j_w + coriolis_w * (dt * rb_inertia)));
-                }
+                let (rb_inertia_na, gyroscopic_dt) = {
+                    // Derivative of gyroscopic forces.
+                    let gyroscopic_matrix = rb.vels.angvel.gcross_matrix() * rb_inertia
+                        - (rb_inertia * rb.vels.angvel).gcross_matrix();
+                    (mat_to_na(rb_inertia), mat_to_na(gyroscopic_matrix * dt))
+                };
 
-                ws.path_mass_wrenches[k] = wrench_at_reference(&mass_col, &point);
-                ws.path_acc_wrenches[k] = wrench_at_reference(&acc_col, &point);
+                for k in path.clone() {
+                    let j = &ws.path_jacobians[k];
+                    let j_v = j.fixed_rows::<DIM>(0);
+                    let j_w = j.fixed_rows::<ANG_DIM>(DIM);
+                    let coriolis_v = &ws.path_coriolis_v[k];
+                    let coriolis_w = &ws.path_coriolis_w[k];
+                    let mut mass_col = SVector::<Real, SPATIAL_DIM>::zeros();
+                    let mut acc_col = SVector::<Real, SPATIAL_DIM>::zeros();
+
+                    mass_col
+                        .fixed_rows_mut::<DIM>(0)
+                        .copy_from(&j_v.component_mul(&rb_mass_na));
+                    acc_col.fixed_rows_mut::<DIM>(0).copy_from(
+                        &(j_v.component_mul(&rb_mass_na) + coriolis_v.component_mul(&rb_mass_dt)),
+                    );
+
+                    #[cfg(feature = "dim3")]
+                    {
+                        let i_j_w = rb_inertia_na * j_w;
+                        mass_col.fixed_rows_mut::<ANG_DIM>(DIM).copy_from(&i_j_w);
+                        acc_col.fixed_rows_mut::<ANG_DIM>(DIM).copy_from(
+                            &(i_j_w + gyroscopic_dt * j_w + rb_inertia_na * coriolis_w * dt),
+                        );
+                    }
+                    #[cfg(feature = "dim2")]
+                    {
+                        let i_j_w = j_w * rb_inertia;
+                        mass_col.fixed_rows_mut::<ANG_DIM>(DIM).copy_from(&i_j_w);
+                        acc_col
+                            .fixed_rows_mut::<ANG_DIM>(DIM)
+                            .copy_from(&(i_j_w + coriolis_w * (dt * rb_inertia)));
+                    }
+
+                    ws.path_mass_wrenches[k] = wrench_at_reference(&mass_col, &point);
+                    ws.path_acc_wrenches[k] = wrench_at_reference(&acc_col, &point);
+                }
+            } else {
+                #[cfg(feature = "dim3")]
+                let rb_inertia_na = mat_to_na(rb_inertia);
+                for k in path.clone() {
+                    let j = &ws.path_jacobians[k];
+                    let j_v = j.fixed_rows::<DIM>(0);
+                    let j_w = j.fixed_rows::<ANG_DIM>(DIM);
+                    let mut mass_col = SVector::<Real, SPATIAL_DIM>::zeros();
+                    mass_col
+                        .fixed_rows_mut::<DIM>(0)
+                        .copy_from(&j_v.component_mul(&rb_mass_na));
+                    #[cfg(feature = "dim3")]
+                    mass_col
+                        .fixed_rows_mut::<ANG_DIM>(DIM)
+                        .copy_from(&(rb_inertia_na * j_w));
+                    #[cfg(feature = "dim2")]
+                    mass_col
+                        .fixed_rows_mut::<ANG_DIM>(DIM)
+                        .copy_from(&(j_w * rb_inertia));
+                    ws.path_mass_wrenches[k] = wrench_at_reference(&mass_col, &point);
+                }
             }
 
             // The twists of the link's own degrees of freedom about the reference point.
@@ -1168,9 +1247,11 @@ impl Multibody {
             let start = ws.path_start[i];
             for k in 0..parent_len {
                 let mass_wrench = ws.path_mass_wrenches[start + k];
-                let acc_wrench = ws.path_acc_wrenches[start + k];
                 ws.path_mass_wrenches[parent_start + k] += mass_wrench;
-                ws.path_acc_wrenches[parent_start + k] += acc_wrench;
+                if semi_implicit {
+                    let acc_wrench = ws.path_acc_wrenches[start + k];
+                    ws.path_acc_wrenches[parent_start + k] += acc_wrench;
+                }
             }
         }
 
@@ -1189,10 +1270,12 @@ impl Multibody {
                     let m = dot_spatial(motion_a, &ws.path_mass_wrenches[kb]);
                     mass[a + b * n] = m;
                     mass[b + a * n] = m;
-                    acc_mass[a + b * n] = dot_spatial(motion_a, &ws.path_acc_wrenches[kb]);
-                    if kb < ka {
-                        acc_mass[b + a * n] =
-                            dot_spatial(&ws.dof_motions[b], &ws.path_acc_wrenches[ka]);
+                    if semi_implicit {
+                        acc_mass[a + b * n] = dot_spatial(motion_a, &ws.path_acc_wrenches[kb]);
+                        if kb < ka {
+                            acc_mass[b + a * n] =
+                                dot_spatial(&ws.dof_motions[b], &ws.path_acc_wrenches[ka]);
+                        }
                     }
                 }
             }
@@ -1208,7 +1291,9 @@ impl Multibody {
          */
         for i in 0..self.ndofs {
             let diag = self.damping[i] * dt + self.armature[i];
-            self.acc_augmented_mass[(i, i)] += diag;
+            if semi_implicit {
+                self.acc_augmented_mass[(i, i)] += diag;
+            }
             self.augmented_mass[(i, i)] += diag;
         }
 
@@ -1224,7 +1309,9 @@ impl Multibody {
                     let k = self.links[li].joint.spring_stiffness[a];
                     if k != 0.0 {
                         let d = k * dt2;
-                        self.acc_augmented_mass[(idx, idx)] += d;
+                        if semi_implicit {
+                            self.acc_augmented_mass[(idx, idx)] += d;
+                        }
                         self.augmented_mass[(idx, idx)] += d;
                     }
                     idx += 1;
@@ -1234,17 +1321,21 @@ impl Multibody {
 
         let effective_dim = self
             .augmented_mass_indices
-            .dim_after_removal(self.acc_augmented_mass.nrows());
+            .dim_after_removal(self.augmented_mass.nrows());
 
         // PERF: since we clone the matrix anyway for LU, should be directly output
         //       a new matrix instead of applying permutations?
-        self.augmented_mass_indices
-            .rearrange_columns(&mut self.acc_augmented_mass, true);
+        if semi_implicit {
+            self.augmented_mass_indices
+                .rearrange_columns(&mut self.acc_augmented_mass, true);
+        }
         self.augmented_mass_indices
             .rearrange_columns(&mut self.augmented_mass, true);
 
-        self.augmented_mass_indices
-            .rearrange_rows(&mut self.acc_augmented_mass, true);
+        if semi_implicit {
+            self.augmented_mass_indices
+                .rearrange_rows(&mut self.acc_augmented_mass, true);
+        }
         self.augmented_mass_indices
             .rearrange_rows(&mut self.augmented_mass, true);
 
@@ -1252,8 +1343,10 @@ impl Multibody {
         // sized); the dense LU of the public `inv_augmented_mass` waits until it is asked for.
         self.workspace.update_dof_parents(&self.links);
         debug_assert_eq!(self.workspace.dof_parents.len(), effective_dim);
-        self.acc_mass_factors
-            .factorize(&self.acc_augmented_mass, &self.workspace.dof_parents);
+        if semi_implicit {
+            self.acc_mass_factors
+                .factorize(&self.acc_augmented_mass, &self.workspace.dof_parents);
+        }
         self.mass_factors
             .factorize(&self.augmented_mass, &self.workspace.dof_parents);
         self.inv_augmented_mass.take();
