@@ -22,8 +22,17 @@ pub struct SphereGeometry {
 /// 10 mm foot needs three. Stopping early leaves the contact point off the normal through the
 /// centre: the normal force then has a lever about the normal and spins the ball up (measured:
 /// 1.9 mm off at 3 iterations, 1.5 rad/s² of spin, the held ball creeping downhill).
+///
+/// The tolerance, 1 nm, is far below every physical scale of a contact (a foot's 0.1–1 mm of
+/// penetration, a terrain's features of centimetres; the gap is stationary at the closest
+/// point, so the depth is off by far less), and keeps the ball in the hollow's bottom, where
+/// d·κ ≈ 0.8, within 1 nm of the normal through its centre. It was 0.1 nm, one surface
+/// evaluation more for some feet: 1.1k instructions of a walk's step; the walk's 20 s forward
+/// distance moved by 10⁻⁷ of itself. (0.1 µm would save 3.4k, and leave the ball's contact
+/// 40 nm off the normal: harmless against the 1.9 mm that spun it, but not the convergence
+/// `converges_in_a_hollow_nearly_as_tight_as_the_ball` holds the search to.)
 const CLOSEST_POINT_ITERATIONS: usize = 64;
-const CLOSEST_POINT_TOLERANCE: f64 = 1e-10;
+const CLOSEST_POINT_TOLERANCE: f64 = 1e-9;
 
 /// Finds the closest surface point to the sphere's centre: start below the centre, take the tangent
 /// plane there, drop the perpendicular from the centre onto it, and repeat at the foot of that

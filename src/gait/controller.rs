@@ -27,7 +27,7 @@ use super::schedule::{LegPhase, leg_phase};
 use super::slew;
 use super::spec::{Gait, SwingShape};
 use crate::robot::RobotModel;
-use crate::robot::kinematics::{IkSolution, IkWarm, LegAngles, LegChain};
+use crate::robot::kinematics::{IkSolution, IkWarm, LegAngles, LegChain, LegStatics};
 use glam::{DMat3, DQuat, DVec3};
 
 /// A velocity command in the body frame.
@@ -628,6 +628,12 @@ impl GaitController {
             }
             _ => {}
         }
+    }
+
+    /// Leg `k`'s pose at `angles` for the load feed-forward, from its last solve's forward
+    /// kinematics when `angles` are that solve's answer ([`LegChain::statics`]).
+    pub fn leg_statics(&self, k: usize, angles: &[f64]) -> Option<LegStatics> {
+        self.chains[k].statics(self.warm_last[k].as_ref()?, angles)
     }
 
     /// Leg `k`'s foot centre target and joint angles for the planned point `planned`, `lift`

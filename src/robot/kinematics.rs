@@ -109,6 +109,8 @@ pub struct LegChain {
     pub(super) rest: [f64; MAX_LEG_JOINTS],
     /// The rest angles with zero for the three: what a short guess is filled with.
     fill: [f64; MAX_LEG_JOINTS],
+    /// Each joint's child link's centre of mass in the joint's turned frame.
+    coms: [DVec3; MAX_LEG_JOINTS],
 }
 
 /// The result of an inverse-kinematics solve.
@@ -131,6 +133,16 @@ pub struct IkWarm {
 
 /// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]).
 type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3);
+
+/// A 3-joint leg's pose as the servos' load feed-forward reads it ([`LegChain::statics`]), body
+/// frame: each joint's position and unit axis, the centre of mass of each joint's child link,
+/// and the foot centre.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LegStatics {
+    pub joints: [(DVec3, DVec3); 3],
+    pub coms: [DVec3; 3],
+    pub foot: DVec3,
+}
 
 /// The IK answer is accepted as reaching the target within this distance (m).
 pub const IK_TOLERANCE: f64 = 1e-6;
@@ -155,6 +167,7 @@ impl LegChain {
             upper: [0.0; MAX_LEG_JOINTS],
             rest: [f64::NAN; MAX_LEG_JOINTS],
             fill: [0.0; MAX_LEG_JOINTS],
+            coms: [DVec3::ZERO; MAX_LEG_JOINTS],
         };
         for k in 0..n {
             let previous = if k == 0 {
@@ -163,6 +176,9 @@ impl LegChain {
                 align[k - 1].inverse()
             };
             chain.origins[k] = previous * j[k].origin * align[k];
+            chain.coms[k] = align[k]
+                .inverse()
+                .transform_point3(model.links[j[k].child].com);
             chain.lower[k] = j[k].lower;
             chain.upper[k] = j[k].upper;
             if let Some(Some(rest)) = leg.posture.get(k) {
@@ -351,6 +367,36 @@ impl LegChain {
             error: error.length(),
             foot_rotation: rotation,
         }
+    }
+
+    /// The leg's pose for the load feed-forward at `q`, from the forward kinematics of the solve
+    /// that left `warm`, when `q` is its answer bit for bit (None otherwise, or for a leg of
+    /// more than three joints): the gait's targets are that answer nearly always, and the
+    /// feed-forward so poses the legs with two link turns each instead of forward kinematics of
+    /// all the links. The first two links' orientations are turned as [`Self::frames`] turns
+    /// them (the last is the answer's foot rotation).
+    pub fn statics(&self, warm: &IkWarm, q: &[f64]) -> Option<LegStatics> {
+        if self.n != 3 || q.len() != 3 {
+            return None;
+        }
+        if warm.angles.map(f64::to_bits) != [q[0], q[1], q[2]].map(f64::to_bits) {
+            return None;
+        }
+        let (joints, foot, rotation) = warm.frames;
+        let mut links = [rotation; 3];
+        let mut frame = DAffine3::IDENTITY;
+        for (k, link) in links.iter_mut().take(2).enumerate() {
+            frame *= self.origins[k];
+            let m = &mut frame.matrix3;
+            let (s, c) = q[k].sin_cos();
+            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
+            *link = *m;
+        }
+        Some(LegStatics {
+            joints,
+            coms: [0, 1, 2].map(|k| links[k] * self.coms[k] + joints[k].0),
+            foot,
+        })
     }
 
     /// Heading of the leg at rest (all joints zero): the yaw of the foot seen from the hip.

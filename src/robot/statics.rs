@@ -2,6 +2,7 @@
 //! the torque each joint's servo must hold (statics of each leg: the moment about the joint axis
 //! of the leg's outboard weights and of its foot's ground force), and each leg's segment lengths.
 
+use super::kinematics::LegStatics;
 use super::model::{Leg, RobotModel};
 use glam::{DAffine3, DMat3, DVec2, DVec3};
 
@@ -91,15 +92,67 @@ pub fn stance_loads_under(
     gravity: DVec3,
     stance: [bool; 6],
 ) -> [f64; 6] {
+    let feet: [DVec3; 6] = std::array::from_fn(|k| {
+        let leg = &model.legs[k];
+        poses[leg.foot_link].transform_point3(leg.foot.center)
+    });
+    stance_loads_at(model, model.centre_of_mass(poses), &feet, gravity, stance)
+}
+
+/// [`stance_loads_under`] with the legs posed by their IK answers ([`LegStatics`]): the centre
+/// of mass is the root link's and the legs' links', which must be all of the model's
+/// ([`legs_hold_every_link`]).
+pub fn stance_loads_of_legs(
+    model: &RobotModel,
+    legs: &[LegStatics; 6],
+    gravity: DVec3,
+    stance: [bool; 6],
+) -> [f64; 6] {
+    let root = &model.links[0];
+    let mut weighted = root.com * root.mass;
+    for (leg, posed) in model.legs.iter().zip(legs) {
+        for (&j, &com) in leg.joints.iter().zip(&posed.coms) {
+            weighted += com * model.links[model.joints[j].child].mass;
+        }
+    }
+    let com = weighted / model.total_mass();
+    stance_loads_at(model, com, &legs.map(|l| l.foot), gravity, stance)
+}
+
+/// Whether every link of `model` is its root or the child of a joint of a leg of three joints
+/// in a chain from the root, the leg's foot on its last: what [`stance_loads_of_legs`] and
+/// [`holding_torques_of_legs`] take for the whole robot.
+pub fn legs_hold_every_link(model: &RobotModel) -> bool {
+    let on_legs: usize = model.legs.iter().map(|l| l.joints.len()).sum();
+    model.legs.len() == 6
+        && on_legs == model.joints.len()
+        && model.links.len() == 1 + model.joints.len()
+        && model.legs.iter().all(|leg| {
+            leg.joints.len() == 3
+                && model.joints[leg.joints[0]].parent == 0
+                && leg
+                    .joints
+                    .windows(2)
+                    .all(|w| model.joints[w[1]].parent == model.joints[w[0]].child)
+                && leg.foot_link == model.joints[leg.joints[2]].child
+        })
+}
+
+/// [`stance_loads_under`] of the feet at `feet` (body frame) with the centre of mass at `com`.
+fn stance_loads_at(
+    model: &RobotModel,
+    com: DVec3,
+    feet: &[DVec3; 6],
+    gravity: DVec3,
+    stance: [bool; 6],
+) -> [f64; 6] {
     let weight = model.total_mass() * gravity.length();
     let down = gravity.normalize_or(DVec3::NEG_Z);
     // two axes across gravity: the body's x and y when it stands level
     let across_y = down.cross(DVec3::X).normalize_or(DVec3::Y) * -1.0;
     let across_x = across_y.cross(-down);
-    let com = model.centre_of_mass(poses);
     let feet: [DVec2; 6] = std::array::from_fn(|k| {
-        let leg = &model.legs[k];
-        let p = poses[leg.foot_link].transform_point3(leg.foot.center) - com;
+        let p = feet[k] - com;
         DVec2::new(p.dot(across_x), p.dot(across_y))
     });
     let count = stance.iter().filter(|&&s| s).count();
@@ -177,6 +230,31 @@ pub fn holding_torques_at(
     holding_torques_by(model, poses, joint_axis, gravity, loads, torques);
 }
 
+/// [`holding_torques_under`] with the legs posed by their IK answers ([`LegStatics`]; the
+/// model's links as [`legs_hold_every_link`] asks).
+pub fn holding_torques_of_legs(
+    model: &RobotModel,
+    legs: &[LegStatics; 6],
+    gravity: DVec3,
+    loads: &[f64; 6],
+    torques: &mut [f64],
+) {
+    let up = -gravity.normalize_or(DVec3::NEG_Z);
+    torques.fill(0.0);
+    for ((leg, posed), &load) in model.legs.iter().zip(legs).zip(loads) {
+        let ground_force = up * load;
+        for (i, &j) in leg.joints.iter().enumerate() {
+            let (origin, axis) = posed.joints[i];
+            let mut moment = (posed.foot - origin).cross(ground_force);
+            for (&outboard, &com) in leg.joints[i..].iter().zip(&posed.coms[i..]) {
+                let mass = model.links[model.joints[outboard].child].mass;
+                moment += (com - origin).cross(gravity * mass);
+            }
+            torques[j] = -axis.dot(moment);
+        }
+    }
+}
+
 /// [`holding_torques_under`], each joint's origin and axis from `joint_axis`.
 fn holding_torques_by(
     model: &RobotModel,
@@ -215,6 +293,58 @@ mod tests {
             Path::new("robots/hex18.urdf"),
         )
         .unwrap()
+    }
+
+    /// The legs posed by their IK answers' own forward kinematics (the walk's feed-forward)
+    /// hold the loads and torques the model's forward kinematics give, to rounding.
+    #[test]
+    fn legs_posed_by_their_ik_answers_hold_what_the_model_holds() {
+        use crate::robot::kinematics::LegChain;
+        let model = hex18();
+        assert!(legs_hold_every_link(&model));
+        let mut pose = vec![0.0; model.joints.len()];
+        let mut legs = [LegStatics::default(); 6];
+        for (k, leg) in model.legs.iter().enumerate() {
+            let chain = LegChain::new(&model, leg);
+            let target = chain.foot_position(chain.from_three([0.2, -0.4, 1.1]))
+                + DVec3::new(0.01, -0.005, 0.003 * k as f64);
+            let mut warm = None;
+            let answer = chain.solve_warm(target, chain.from_three([0.0, -0.3, 1.2]), &mut warm);
+            assert!(answer.error < 1e-6);
+            for (i, &j) in leg.joints.iter().enumerate() {
+                pose[j] = answer.angles[i];
+            }
+            legs[k] = chain
+                .statics(warm.as_ref().unwrap(), &answer.angles)
+                .unwrap();
+            // not the answer's angles: no pose
+            let mut other = answer.angles;
+            other[1] += 1e-9;
+            assert!(chain.statics(warm.as_ref().unwrap(), &other).is_none());
+        }
+        let poses = model.link_poses(&pose);
+        let gravity = DVec3::new(0.5, -0.3, -9.7);
+        let stance = [true, false, true, false, true, true];
+        let loads = stance_loads_under(&model, &poses, gravity, stance);
+        let posed = stance_loads_of_legs(&model, &legs, gravity, stance);
+        for k in 0..6 {
+            assert!(
+                (loads[k] - posed[k]).abs() < 1e-9,
+                "foot {k}: {loads:?} {posed:?}"
+            );
+        }
+        let n = model.joints.len();
+        let (mut by_model, mut by_legs) = (vec![0.0; n], vec![0.0; n]);
+        holding_torques_under(&model, &poses, gravity, &loads, &mut by_model);
+        holding_torques_of_legs(&model, &legs, gravity, &loads, &mut by_legs);
+        for j in 0..n {
+            assert!(
+                (by_model[j] - by_legs[j]).abs() < 1e-12,
+                "joint {j}: {} against {}",
+                by_model[j],
+                by_legs[j]
+            );
+        }
     }
 
     /// Virtual work, an independent route: holding still, τ_j = ∂/∂q_j [Σ_k m_k·g·z_k − F·z_foot]
