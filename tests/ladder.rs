@@ -78,52 +78,42 @@ fn a_family_of_two_difficulties_is_refused() {
     );
 }
 
-/// Heading hold (`hold_heading`, docs/rough-ground.md): over the ladder's trenches, 4 cm wide,
-/// perceptive, feet slipping on the edges turn the open-loop tripod off its course (measured:
-/// −55° in 25 s); holding its heading, it ends within a few degrees of it (1.4°).
+/// Heading hold (`hold_heading`, docs/rough-ground.md): commanded to turn at 15°/s for 4 s and
+/// then to walk straight (60° in all, the ramps included), the open-loop tripod on flat ground
+/// turns only as far as its feet grip and falls short (measured 56.6°); holding its heading it
+/// ends on the heading commanded (59.95°). On flat ground the walk is regular, not chaotic: over
+/// the ladder's trenches the open loop turned −55° in one build and −15° in the next.
 #[test]
-fn a_walk_that_holds_its_heading_is_not_turned_by_slipping_feet() {
+fn a_walk_that_holds_its_heading_turns_as_far_as_commanded() {
     let dir = scratch("heading");
-    let family = std::fs::read_to_string(project_file("ladder/gaps.toml")).unwrap();
-    let base = family
-        .split("[sweep]")
-        .next()
-        .unwrap()
-        .replace(
-            "../gaits/tripod.toml",
-            &project_file("gaits/tripod.toml").display().to_string(),
-        )
-        .replace("duration = 25.0", "duration = 25.0\nfollow_terrain = true");
-    let base = with_width(&base, "0.04");
     let heading = |hold: bool| {
-        let file = dir.join(format!("gaps_{hold}.toml"));
-        std::fs::write(&file, format!("hold_heading = {hold}\n{base}")).unwrap();
-        let json = dir.join(format!("gaps_{hold}.json"));
+        let file = dir.join(format!("turn_{hold}.toml"));
+        std::fs::write(
+            &file,
+            format!(
+                "terrain = {:?}\ngait = {:?}\nduration = 8.0\nhold_heading = {hold}\n\
+                 [[command]]\nforward = 0.1\nturn_deg_s = 15.0\n\
+                 [[command]]\nat = 4.0\nforward = 0.1\nturn_deg_s = 0.0\n",
+                project_file("terrains/flat.toml"),
+                project_file("gaits/tripod.toml")
+            ),
+        )
+        .unwrap();
+        let json = dir.join(format!("turn_{hold}.json"));
         let mut cmd = hexsim();
         cmd.arg("run")
             .arg(&file)
             .args(["--no-record", "--allow-flags", "--metrics"])
             .arg(&json);
-        metrics_of(cmd, &json, "gaps")["heading_change_deg"]
+        metrics_of(cmd, &json, "turn")["heading_change_deg"]
             .as_f64()
             .unwrap()
     };
     let open_loop = heading(false);
     let held = heading(true);
-    assert!(open_loop.abs() > 30.0, "open loop turned {open_loop:.1}°");
-    assert!(held.abs() < 5.0, "held, it turned {held:.1}°");
-}
-
-/// The family file's trench width set to `width`.
-fn with_width(text: &str, width: &str) -> String {
-    text.lines()
-        .map(|l| {
-            if l.trim_start().starts_with("width =") {
-                format!("width = {width}")
-            } else {
-                l.to_string()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
+    assert!(
+        (open_loop - 60.0).abs() > 2.0,
+        "open loop turned {open_loop:.2}°"
+    );
+    assert!((held - 60.0).abs() < 0.5, "held, it turned {held:.2}°");
 }

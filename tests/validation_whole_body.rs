@@ -235,11 +235,13 @@ fn a_foot_wedged_in_a_crack_its_own_width_stays_in_the_physics() {
 /// hex18 goes into a pit its own width and its leg, stiff, presses it into the walls with
 /// 100–300 N (4–12 weights) until it is deeper than its radius: "diverged" at 16.46 s, 10.1 mm.
 /// A leg that gives way past 3 weights keeps it out: the run goes on, no foot deeper than 5 mm.
-/// This pins one chaotic trajectory, not a property: from this start and seven 0.4–1.4 mm from
-/// it the stiff run diverged twice and the compliant once (12.3 mm), its others 3.4–6.7 mm deep
-/// (docs/rough-ground.md, *Legs that give way*). A change within rounding can fail it; it is to
-/// be replaced by a press that is not chaotic or a claim over many starts.
+/// That held for one chaotic trajectory, not as a property: from this start and seven 0.4–1.4 mm
+/// from it the stiff run diverged twice and the compliant once (12.3 mm), its others 3.4–6.7 mm
+/// deep (docs/rough-ground.md, *Legs that give way*); with the Coriolis forces explicit (rapier
+/// patch 0013, on since) the stiff run from this start stays at 5.9 mm. Kept as a measurement;
+/// a claim about legs that give way needs a press that is not chaotic or many starts.
 #[test]
+#[ignore = "measured: one chaotic trajectory; explicit Coriolis: stiff 5.9 mm (not diverged), giving way 4.95 mm; over 16 nearby starts stiff diverges 0, giving way misses 5 mm in 7"]
 fn a_leg_pressing_into_a_pit_gives_way() {
     let dir = scratch("give-way");
     let terrain = dir.join("stones.toml");

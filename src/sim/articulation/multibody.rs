@@ -97,6 +97,11 @@ impl MultibodyRobot {
         // rapier's default damping of 0.1 on every degree of freedom is not part of the model:
         // air drag on the body is not modelled, and joint damping is the servo's
         mb.damping_mut().fill(0.0);
+        // the Coriolis, centrifugal and gyroscopic forces explicit, as MuJoCo's Euler integrator
+        // takes them: rapier then factorises only the mass matrix M (patch 0013), the matrix
+        // the constraints and the contact mobility (`mobility.rs`) solve with, so the free motion
+        // and the contact forces' effect are computed with one matrix
+        mb.set_explicit_coriolis(true);
         for (j, &angle) in pose.iter().enumerate() {
             robot
                 .joint_mut(engine, j)
