@@ -193,8 +193,7 @@ impl Walker {
     fn terrain_under(hexapod: &Hexapod) -> impl Fn(DVec3) -> f64 + '_ {
         let body = hexapod.body_frame();
         let terrain = hexapod.terrain();
-        let heading =
-            glam::DMat3::from_rotation_z(body.matrix3.x_axis.y.atan2(body.matrix3.x_axis.x));
+        let heading = glam::DMat3::from_rotation_z(heading_of(&body.matrix3));
         let center = body.translation;
         move |p: DVec3| {
             let w = center + heading * p;
@@ -225,7 +224,7 @@ impl Walker {
         // slope's own fit would lag behind the body's turns (hex18 standing levelled on 30°
         // crept 5.5 mm in 10 s against 1.9 mm)
         let body = self.hexapod.body_frame().matrix3;
-        let heading = glam::DMat2::from_angle(body.x_axis.y.atan2(body.x_axis.x));
+        let heading = glam::DMat2::from_angle(heading_of(&body));
         let world_slope = heading * fit.slope;
         let dt = self.hexapod.dt();
         let tau = 0.25 * self.controller.gait().period;
@@ -416,8 +415,8 @@ impl Walker {
                     let gait = self.controller.gait();
                     HeadingHold::new(gait.nominal_speed(), self.controller.turn_radius())
                 });
-                let x = self.hexapod.body_frame().matrix3.x_axis;
-                hold.steer(self.command, x.y.atan2(x.x), self.hexapod.dt())
+                let yaw = heading_of(&self.hexapod.body_frame().matrix3);
+                hold.steer(self.command, yaw, self.hexapod.dt())
             } else {
                 self.command
             };
@@ -453,26 +452,29 @@ impl Walker {
         }
         let robot = self.hexapod.step();
         let to_body = robot.body.matrix3.transpose();
-        if self.compliant {
-            self.leg_forces = robot
-                .foot_contacts
-                .map(|c| c.map_or(DVec3::ZERO, |c| to_body * c.force));
-            for contact in &robot.link_contacts {
-                if let Some(k) = self.leg_of_link[contact.link] {
-                    self.leg_forces[k] += to_body * contact.force.force;
-                }
-            }
-        }
         self.feel = robot.foot_contacts.map(|c| {
             c.map_or(FootFeel::default(), |c| FootFeel {
                 normal_force: c.normal_force,
                 force: to_body * c.force,
             })
         });
+        if self.compliant {
+            self.leg_forces = self.feel.map(|f| f.force);
+            for contact in &robot.link_contacts {
+                if let Some(k) = self.leg_of_link[contact.link] {
+                    self.leg_forces[k] += to_body * contact.force.force;
+                }
+            }
+        }
         WalkSample {
             robot,
             gait: self.last_targets,
             settling: t < 0.0,
         }
     }
+}
+
+/// The body's heading: the yaw of its x axis seen from above (rad, in (−π, π]).
+fn heading_of(body: &glam::DMat3) -> f64 {
+    body.x_axis.y.atan2(body.x_axis.x)
 }
