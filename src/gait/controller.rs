@@ -532,7 +532,9 @@ impl GaitController {
                     -d.normalize_or_zero(),
                     self.vertical_room[k],
                 );
-                foot = base + DVec3::Z * height + d.normalize_or_zero() * reactive.back_off(k);
+                let shift = reactive.shift(k, phase, progress, d, stance_time);
+                foot =
+                    base + DVec3::Z * height + shift + d.normalize_or_zero() * reactive.back_off(k);
                 out.grounded[k] = reactive.grounded(k, phase);
                 lift = if out.grounded[k] {
                     0.0

@@ -1,14 +1,24 @@
 //! The reactive gait (blind): each foot's height found by touch, as in Walknet and Syropod.
 //!
 //! The schedule still says when a leg swings and where its foot goes across the ground; what the
-//! feet feel says how high. Every foot's target carries a vertical offset from the planned path:
+//! feet feel says how high, and where a foot stops. Every foot's target carries an offset from the
+//! planned path:
 //! - **touch-down**: a swinging foot that meets the ground in the second half of its swing (its
 //!   normal force past [`TOUCH_SHARE`] of its standing share) stops descending there and stays at
-//!   that height through its stance — early, on a step up;
+//!   that height through its stance — early, on a step up. From then on it moves with the ground,
+//!   not along the rest of its swing: a foot that touched a tread and went on forward at the
+//!   swing's speed slid across it (hex18 on 6 cm stairs, 30–40 mm at every touch-down). The
+//!   foot's shift from the planned path is kept through the stance and given back in the air
+//!   over the next swing, as its height is;
 //! - **search**: a foot whose stance begins with no ground under it keeps reaching down at
 //!   [`SEARCH_SPEED`] until it touches or its leg's room runs out — late, on a step down;
 //! - **blocked**: a swinging foot pushed back against its swing (a riser in the way) lifts higher,
-//!   its lift growing at [`LIFT_GROWTH`] while blocked, and carries on forward over it;
+//!   its lift growing at [`LIFT_GROWTH`] while blocked, stays where it is across the ground
+//!   meanwhile, and carries on forward over it, catching up with its swing by the landing;
+//! - **the lift remembered**: the extra lift a blocked swing needed is remembered, fading over
+//!   [`LIFT_MEMORY_TIME`], and every swing starts that much higher — the legs behind the one
+//!   that met a riser, and the next risers of a flight, are cleared instead of met (stick
+//!   insects step higher after meeting an obstacle);
 //! - **the body follows the feet that are down**: a plane fitted through the stance feet's offsets
 //!   (least squares on their standing points) is taken off every foot's target, low-passed over
 //!   [`BODY_TIME`] — the body rises with the feet on a step and pitches with them on a stair, and
@@ -24,6 +34,11 @@ pub const SEARCH_SPEED: f64 = 0.15;
 /// How fast a blocked swing's lift grows (step heights per second), and the most it grows to.
 pub const LIFT_GROWTH: f64 = 12.0;
 pub const MAX_EXTRA_LIFT: f64 = 2.5;
+/// How long the legs remember the extra lift a blocked swing needed (s, the memory's time
+/// constant): every swing starts that much higher, so on a flight of stairs the legs behind
+/// the first and the swings at the next risers clear them instead of each scraping up the
+/// riser's face again (stick insects step higher after meeting an obstacle).
+pub const LIFT_MEMORY_TIME: f64 = 3.0;
 /// How fast a blocked swing draws its foot back from the obstacle (m/s), the most it draws it
 /// back (m), and how fast it gives that back once free: pushed on into a riser the servos wind
 /// up against it to their effort and the released leg kicks the body (hex18 hopped 7 cm).
@@ -53,8 +68,26 @@ pub struct Reactive {
     lift_off: [f64; 6],
     /// The extra lift of a blocked swing (step heights).
     extra: [f64; 6],
+    /// The extra lift the last blocked swings needed, fading over [`LIFT_MEMORY_TIME`], with
+    /// which every swing starts (step heights).
+    lift_memory: f64,
+    /// The memory each swing started with (step heights).
+    remembered: [f64; 6],
     /// How far a blocked swing's foot is drawn back against its swing (m).
     back_off: [f64; 6],
+    /// Each foot's horizontal shift from its planned path (m, body frame): a foot that touched
+    /// down early moves with the ground from there, not on along its swing.
+    shift: [DVec3; 6],
+    /// The shift at lift-off, which the swing gives back as it does the height.
+    shift_lift_off: [DVec3; 6],
+    /// The part of the shift a blocked swing held back, given back by its landing.
+    held: [DVec3; 6],
+    /// The swing's horizontal progress and phase at the last step, and whether the shift saw
+    /// this swing begin.
+    progress: [(f64, f64); 6],
+    shifting: [bool; 6],
+    /// The swing was blocked at the last step.
+    blocked: [bool; 6],
     /// The swing ended early on the ground.
     touched: [bool; 6],
     was_stance: [bool; 6],
@@ -73,7 +106,15 @@ impl Reactive {
             offset: [0.0; 6],
             lift_off: [0.0; 6],
             extra: [0.0; 6],
+            lift_memory: 0.0,
+            remembered: [0.0; 6],
             back_off: [0.0; 6],
+            shift: [DVec3::ZERO; 6],
+            shift_lift_off: [DVec3::ZERO; 6],
+            held: [DVec3::ZERO; 6],
+            progress: [(0.0, 0.0); 6],
+            shifting: [false; 6],
+            blocked: [false; 6],
             touched: [false; 6],
             was_stance: [true; 6],
             plane: DVec3::ZERO,
@@ -94,6 +135,7 @@ impl Reactive {
 
     /// Moves the body's plane towards the one through the feet that are down, over [`BODY_TIME`].
     pub fn follow_feet(&mut self, neutral: &[DVec3; 6], phases: &[LegPhase; 6]) {
+        self.lift_memory *= 1.0 - (self.dt / LIFT_MEMORY_TIME).min(1.0);
         let down: Vec<usize> = (0..6)
             .filter(|&k| phases[k].is_stance() || self.touched[k])
             .collect();
@@ -142,6 +184,7 @@ impl Reactive {
                     self.was_stance[k] = false;
                     self.lift_off[k] = self.offset[k] - plane;
                     self.extra[k] = 0.0;
+                    self.remembered[k] = self.lift_memory;
                     self.back_off[k] = 0.0;
                     self.touched[k] = false;
                 }
@@ -152,16 +195,23 @@ impl Reactive {
                 let blocked = s > LIFT_OFF_SHARE
                     && touching
                     && (s < DESCENT_SHARE || back < -0.5 * feel.force.length());
+                self.blocked[k] = blocked;
                 if blocked {
                     self.extra[k] = (self.extra[k] + LIFT_GROWTH * self.dt).min(MAX_EXTRA_LIFT);
+                    self.lift_memory = self.lift_memory.max(self.remembered[k] + self.extra[k]);
                     self.back_off[k] =
                         (self.back_off[k] + BACK_OFF_SPEED * self.dt).min(MAX_BACK_OFF);
                 } else {
                     self.back_off[k] = (self.back_off[k] - BACK_OFF_SPEED * self.dt).max(0.0);
                 }
                 let towards_plane = 0.5 * (1.0 + (std::f64::consts::PI * s).cos());
-                let here = (self.lift_off[k] * towards_plane + lift * (1.0 + self.extra[k]))
-                    .clamp(low, high);
+                // the remembered lift rises and falls with zero slope at both ends: it adds
+                // nothing to the speed at which the foot lands (π·h/T_swing for the sine)
+                let remembered =
+                    step_height * self.remembered[k] * (std::f64::consts::PI * s).sin().powi(2);
+                let here =
+                    (self.lift_off[k] * towards_plane + lift * (1.0 + self.extra[k]) + remembered)
+                        .clamp(low, high);
                 if s >= DESCENT_SHARE && touching && !blocked {
                     // touch-down: the foot stays where it met the ground
                     self.touched[k] = true;
@@ -183,6 +233,54 @@ impl Reactive {
                 (self.offset[k] - plane).clamp(low, high)
             }
         }
+    }
+
+    /// Leg `k`'s horizontal shift (m, body frame) from its planned point, after [`Self::offset`]
+    /// of the same step: `progress` is the swing's horizontal progress along the planned path
+    /// n + d·(½ − progress) (0 in stance), `d` the ground's displacement under the foot over a
+    /// stance of `stance_time` (s).
+    ///
+    /// A foot on the ground moves as the ground does, d/stance_time, while a swing's plan moves
+    /// −d·Δprogress: the shift takes the difference — after an early touch-down, and while a
+    /// swing is blocked (the foot stays at the riser, instead of the plan driving it on into the
+    /// riser with the servos' whole effort: hex18 pressed 31 N into a 6 cm riser and pushed
+    /// the body back across its stance feet). A blocked swing, freed, catches up with its plan
+    /// by its landing. In stance plan and ground move together and the shift holds; the next
+    /// swing gives it back in the air along ½(1 + cos πs), as the height's lift-off offset.
+    pub fn shift(
+        &mut self,
+        k: usize,
+        phase: LegPhase,
+        progress: f64,
+        d: DVec3,
+        stance_time: f64,
+    ) -> DVec3 {
+        match phase {
+            LegPhase::Swing(s) => {
+                if !self.shifting[k] {
+                    self.shifting[k] = true;
+                    self.shift_lift_off[k] = self.shift[k];
+                    self.held[k] = DVec3::ZERO;
+                    self.progress[k] = (progress, s);
+                }
+                let (last_progress, last_s) = self.progress[k];
+                let with_ground = d * (self.dt / stance_time + progress - last_progress);
+                if self.touched[k] {
+                    self.shift[k] += with_ground;
+                } else {
+                    if self.blocked[k] {
+                        self.held[k] += with_ground;
+                    } else if last_s < 1.0 {
+                        self.held[k] *= ((1.0 - s) / (1.0 - last_s)).clamp(0.0, 1.0);
+                    }
+                    let towards_plan = 0.5 * (1.0 + (std::f64::consts::PI * s).cos());
+                    self.shift[k] = self.shift_lift_off[k] * towards_plan + self.held[k];
+                }
+                self.progress[k] = (progress, s);
+            }
+            LegPhase::Stance(_) => self.shifting[k] = false,
+        }
+        self.shift[k]
     }
 
     /// How far leg `k`'s swinging foot is drawn back against its swing (m).
@@ -272,5 +370,130 @@ mod tests {
         assert!(lifted > free + 0.01, "{lifted} against {free}");
         assert!(r.back_off(0) > 0.0);
         assert!(!r.grounded(0, LegPhase::Swing(0.4)));
+    }
+
+    /// A swing's planned point at progress p of `d` (the ground's displacement over a stance).
+    fn planned(foot: DVec3, d: DVec3, progress: f64) -> DVec3 {
+        foot + d * (0.5 - progress)
+    }
+
+    /// A foot that touches down early stays where it touched, moving with the ground through the
+    /// rest of its swing and its stance; the next swing gives the shift back in the air.
+    #[test]
+    fn a_foot_that_touched_down_moves_with_the_ground() {
+        let mut r = Reactive::new(4.0, DT);
+        let foot = DVec3::new(0.1, 0.1, -0.1);
+        let d = DVec3::new(-0.05, 0.0, 0.0);
+        let (stance_time, swing_time) = (0.5, 0.5);
+        r.feel(pressed(4.0, DVec3::new(0.0, 0.0, 4.0)));
+        r.offset(0, foot, LegPhase::Stance(0.9), 0.0, STEP, DVec3::X, ROOM);
+        r.shift(0, LegPhase::Stance(0.9), 0.0, d, stance_time);
+        // a swing of 500 steps with progress = s, touching from s = 0.6 on
+        let mut at = vec![];
+        for i in 0..500 {
+            let s = i as f64 / 500.0;
+            let touching = s >= 0.6;
+            let force = if touching { 3.0 } else { 0.0 };
+            r.feel(pressed(force, DVec3::new(0.0, 0.0, force)));
+            r.offset(0, foot, LegPhase::Swing(s), 0.0, STEP, DVec3::X, ROOM);
+            at.push(planned(foot, d, s) + r.shift(0, LegPhase::Swing(s), s, d, stance_time));
+        }
+        let touched = (0.6 * 500.0) as usize;
+        assert!(r.grounded(0, LegPhase::Swing(0.99)));
+        // from the touch on the foot moves d/stance_time a second, as the ground does
+        for w in at[touched + 1..].windows(2) {
+            assert!((w[1] - w[0] - d * (DT / stance_time)).length() < 1e-12);
+        }
+        // through the stance plan and ground move together: the shift holds
+        r.offset(0, foot, LegPhase::Stance(0.0), 0.0, STEP, DVec3::X, ROOM);
+        let held = r.shift(0, LegPhase::Stance(0.0), 0.0, d, stance_time);
+        let expected = d * (1.0 - 0.6 + 0.4 * swing_time / stance_time);
+        assert!(
+            (held - expected).length() < 1e-3 * d.length(),
+            "{held} against {expected}"
+        );
+        assert_eq!(r.shift(0, LegPhase::Stance(0.7), 0.0, d, stance_time), held);
+        // the next swing, touching nothing, gives it back by its end
+        r.feel(pressed(0.0, DVec3::ZERO));
+        r.offset(0, foot, LegPhase::Swing(0.0), 0.0, STEP, DVec3::X, ROOM);
+        let start = r.shift(0, LegPhase::Swing(0.0), 0.0, d, stance_time);
+        r.offset(0, foot, LegPhase::Swing(0.999), 0.0, STEP, DVec3::X, ROOM);
+        let end = r.shift(0, LegPhase::Swing(0.999), 0.999, d, stance_time);
+        assert_eq!(start, held);
+        assert!(end.length() < 1e-4 * held.length());
+    }
+
+    /// A blocked swing's foot stays where it is across the ground instead of being driven on into
+    /// the riser, and once free catches up with its plan by the landing.
+    #[test]
+    fn a_blocked_swing_holds_its_ground_and_catches_up() {
+        let mut r = Reactive::new(4.0, DT);
+        let foot = DVec3::new(0.1, 0.1, -0.1);
+        let d = DVec3::new(-0.05, 0.0, 0.0);
+        r.feel(pressed(4.0, DVec3::new(0.0, 0.0, 4.0)));
+        r.offset(0, foot, LegPhase::Stance(0.9), 0.0, STEP, DVec3::X, ROOM);
+        r.shift(0, LegPhase::Stance(0.9), 0.0, d, 0.5);
+        let mut at = vec![];
+        for i in 0..500 {
+            let s = i as f64 / 500.0;
+            // pushed back by a riser from 30 % to 40 % of the swing
+            let force = if (0.3..0.4).contains(&s) {
+                DVec3::new(-3.0, 0.0, 0.5)
+            } else {
+                DVec3::ZERO
+            };
+            r.feel(pressed(force.length(), force));
+            r.offset(0, foot, LegPhase::Swing(s), 0.02, STEP, DVec3::X, ROOM);
+            at.push(planned(foot, d, s) + r.shift(0, LegPhase::Swing(s), s, d, 0.5));
+        }
+        for w in at[151..200].windows(2) {
+            assert!((w[1] - w[0] - d * (DT / 0.5)).length() < 1e-12);
+        }
+        let last = *at.last().unwrap();
+        assert!((last - planned(foot, d, 0.998)).length() < 1e-3 * d.length());
+    }
+
+    /// The extra lift a blocked swing needed raises the next swings, of every leg, with zero slope
+    /// at their ends (the landing no faster), and fades over the memory's time.
+    #[test]
+    fn the_lift_a_riser_asked_for_is_remembered() {
+        let mut r = Reactive::new(4.0, DT);
+        let foot = DVec3::new(0.1, 0.1, -0.1);
+        let phases = [LegPhase::Stance(0.5); 6];
+        let neutral = [foot; 6];
+        r.feel(pressed(0.0, DVec3::ZERO));
+        // leg 1 standing on the ground, then swinging through nothing
+        let mut standing = [FootFeel::default(); 6];
+        standing[1] = FootFeel {
+            normal_force: 4.0,
+            force: DVec3::new(0.0, 0.0, 4.0),
+        };
+        let swing = |r: &mut Reactive| {
+            r.feel(standing);
+            r.offset(1, foot, LegPhase::Stance(0.9), 0.0, STEP, DVec3::X, ROOM);
+            r.feel(pressed(0.0, DVec3::ZERO));
+            r.offset(1, foot, LegPhase::Swing(0.5), 0.02, STEP, DVec3::X, ROOM)
+        };
+        let plain = swing(&mut r);
+        // leg 0 blocked for 50 steps
+        r.feel(pressed(3.0, DVec3::new(-3.0, 0.0, 0.5)));
+        for _ in 0..50 {
+            r.offset(0, foot, LegPhase::Swing(0.4), 0.02, STEP, DVec3::X, ROOM);
+        }
+        let needed = 50.0 * LIFT_GROWTH * DT;
+        let raised = swing(&mut r);
+        assert!(
+            (raised - plain - needed * STEP).abs() < 1e-9,
+            "{raised} against {plain}"
+        );
+        let near_end = r.offset(1, foot, LegPhase::Swing(0.999), 0.0, STEP, DVec3::X, ROOM);
+        assert!(near_end.abs() < 1e-4 * needed * STEP);
+        // one memory time later the next swing starts 1/e as high
+        for _ in 0..(LIFT_MEMORY_TIME / DT) as usize {
+            r.follow_feet(&neutral, &phases);
+        }
+        let faded = swing(&mut r);
+        let share = (faded - plain) / (needed * STEP);
+        assert!((share - (-1.0f64).exp()).abs() < 1e-3, "{share}");
     }
 }
