@@ -398,7 +398,11 @@ pub fn stepping_stones(
 }
 
 /// Gaps: trenches across the way along +x, `width` wide and `depth` deep, the first starting at
-/// x = `first_gap`, one every `spacing`.
+/// x = `first_gap`, one every `spacing`. A sample on a trench's edge (on a grid whose cells
+/// divide the spacing, every edge is one) is in the trench at its start and not at its end, at
+/// every trench alike: read as it rounded, the 2 cm trenches of `ladder/gaps.toml` were 1, 2 or
+/// 3 samples wide, and a 1 cm one (a V-groove narrower than hex18's 2 cm foot, not walls)
+/// wedged a foot 7.2 mm deep.
 pub fn gaps(
     size: [f64; 2],
     center: [f64; 2],
@@ -408,9 +412,11 @@ pub fn gaps(
     depth: f64,
     cell: f64,
 ) -> Result<HeightGrid, GridError> {
+    // far above the rounding of x − first_gap, far below any cell
+    let edge = 1e-9 * spacing.max(width);
     sampled(size, center, cell, |x, _| {
-        let along = x - first_gap;
-        if along >= 0.0 && along - (along / spacing).floor() * spacing < width {
+        let along = x - first_gap + edge;
+        if along >= 0.0 && along.rem_euclid(spacing) < width {
             -depth
         } else {
             0.0
@@ -682,5 +688,30 @@ mod tests {
     fn refuses_absurd_sizes_before_allocating() {
         assert!(steps([1e6, 1e6], [0.0, 0.0], 0.0, 1.0, 0.1, 1e-3).is_err());
         assert!(sine([1.0, 1.0], [0.0, 0.0], 0.1, 1.0, 0.0).is_err());
+    }
+
+    /// Every trench of a gaps terrain is as wide as asked, in samples and in walls: on a grid
+    /// whose cells divide the spacing each edge falls on a sample, and read as it rounded the
+    /// ladder's 2 cm trenches were 1, 2 or 3 samples wide.
+    #[test]
+    fn every_trench_is_as_wide_as_asked() {
+        for (w, samples) in [(0.02, 2), (0.06, 6), (0.1, 10), (0.12, 12)] {
+            let g = gaps([6.0, 4.0], [0.0, 0.0], 0.5, w, 0.4, 0.1, 0.01).unwrap();
+            let mut trenches = vec![];
+            let mut low = 0;
+            for i in 0..600 {
+                if g.height(-3.0 + i as f64 * 0.01, 0.0) < -0.05 {
+                    low += 1;
+                } else if low > 0 {
+                    trenches.push(low);
+                    low = 0;
+                }
+            }
+            assert!(trenches.len() >= 6, "{trenches:?}");
+            assert!(
+                trenches.iter().all(|&n| n == samples),
+                "{w} m: {trenches:?}"
+            );
+        }
     }
 }
