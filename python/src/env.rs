@@ -116,10 +116,11 @@ impl Task {
         Ok(outcome)
     }
 
-    /// Sets the joints' targets or the gait's command from the action, clipped as NumPy's `clip`
-    /// would (`max` then `min`, so that limits given the wrong way round cannot panic).
+    /// Sets the joints' targets or the gait's command from the action (no NaN: checked before),
+    /// clipped as NumPy's `clip` would (to the joint limits `max` then `min`, not `clamp`, so that
+    /// limits given the wrong way round cannot panic).
     fn act(&self, session: &mut WalkSession, action: &[f64]) -> PyResult<()> {
-        let clipped = action.iter().map(|a| a.max(-1.0).min(1.0));
+        let clipped = action.iter().map(|a| a.clamp(-1.0, 1.0));
         match &self.drive {
             Drive::Joints { scale, limits } => {
                 let targets = clipped
@@ -472,8 +473,8 @@ pub(crate) fn step_tasks<'py>(
         .zip(&seeds)
         .zip(obs.chunks_mut(d))
         .map(|((((sim, task), action), &seed), obs)| World {
-            sim: &mut **sim,
-            task: &mut **task,
+            sim,
+            task,
             action,
             seed,
             obs,
