@@ -1,8 +1,9 @@
 """Steps per second stepping hexsim from Python: n steps per call, one step per call, and the
 Gymnasium environment, on hex18's tripod on the natural terrain (the workload of `hexsim bench`'s
 multibody walk); then many worlds at once: `step_many` and Python threads each stepping a
-`Simulation`, and the vector environment, against one world. Compare the first with
-`hexsim bench`'s "walk, multibody" figure.
+`Simulation`, and the vector environment, against one world; and the vector environment's serial
+work per world and action (CPU time, which a busy machine hardly changes). Compare the first
+with `hexsim bench`'s "walk, multibody" figure.
 
     python examples/bench.py [--steps 20000] [--repeats 3] [--worlds N (default: the cores)]
 """
@@ -106,6 +107,28 @@ def vector_environment():
     return actions * args.worlds * env.envs[0].frame_skip / (time.perf_counter() - start)
 
 
+def vector_serial_work():
+    """µs of the calling thread's CPU time per world and action that a HexapodVectorEnv spends
+    around the physics (an upper bound of its serial part: on one thread, the worlds'
+    observations and rewards count too). CPU time, not wall time, so a busy machine hardly
+    changes it: one step per action, less the same steps taken bare."""
+    actions = 1000
+    sims = [hexsim.Simulation(duration=10.0) for _ in range(args.worlds)]
+    start = time.thread_time()
+    for _ in range(actions):
+        hexsim.step_many(sims, 1, threads=1)
+    bare = time.thread_time() - start
+    env = hexsim.HexapodVectorEnv(
+        args.worlds, threads=1, action="joints", control_dt=1e-3, duration=10.0
+    )
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    start = time.thread_time()
+    for _ in range(actions):
+        env.step(action)
+    return (time.thread_time() - start - bare) / (actions * args.worlds) * 1e6
+
+
 single = [
     ("n steps per call", n_per_call),
     ("1 step per call", one_per_call),
@@ -123,3 +146,5 @@ for label, measure in [
 ]:
     rate = best(measure)
     print(f"{label:38s} {rate:9.0f} steps/s  ({rate / one:.2f}× one world)")
+serial = min(vector_serial_work() for _ in range(args.repeats))
+print(f"{'HexapodVectorEnv, serial work':38s} {serial:9.1f} µs CPU per world and action")

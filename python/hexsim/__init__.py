@@ -6,7 +6,8 @@ read its state as NumPy arrays and its metrics as ``hexsim run --metrics`` write
 for the rerun viewer. Importing the package registers the Gymnasium environments
 ``hexsim/HexapodRough-v0`` (joint targets) and ``hexsim/HexapodGait-v0`` (gait commands);
 ``step_many`` steps several simulations at once on threads, and ``HexapodVectorEnv`` (or
-``gym.make_vec``) is the vector environment built on it.
+``gym.make_vec``) is the vector environment, each world's whole step (action, physics,
+observation, reward) on those threads in one call.
 See docs/python.md.
 """
 

@@ -11,6 +11,12 @@ the ground. The reward is the forward progress (m, along the starting heading, x
 episode ends (terminated) when the body tilts past ``fall_tilt_deg`` or the simulation diverges,
 and is truncated at the scenario's duration. The terrain's seed is drawn from ``reset``'s seed,
 so each episode walks a new ground and the same seed gives the same one.
+
+The work on a world — the action applied, the physics stepped, the observation, reward and ends
+read — is Rust's (``hexsim._hexsim.Task``), one code for the single environment and for the
+vector environment, which does it for all its worlds in one call on a thread pool
+(``step_tasks``, the GIL released). Python keeps the seeding (the environments' ``np_random``)
+and Gymnasium's bookkeeping: autoreset, infos.
 """
 
 from __future__ import annotations
@@ -24,9 +30,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ._hexsim import DivergedError, Simulation, step_many
-
-FEET = 6
+from ._hexsim import DivergedError, Simulation, Task, step_tasks
 
 
 class HexapodEnv(gym.Env):
@@ -61,87 +65,49 @@ class HexapodEnv(gym.Env):
         self.max_command = np.asarray(max_command, dtype=np.float64)
         self.energy_weight = float(energy_weight)
         self.fall_tilt = math.radians(fall_tilt_deg)
-        n = len(self.sim.joint_names)
         self.limits = np.asarray(self.sim.joint_limits, dtype=np.float64)
-        size = n if action == "joints" else 3
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(size,), dtype=np.float32)
+        self.task = Task(
+            self.sim,
+            action,
+            self.frame_skip,
+            action_scale=self.action_scale,
+            max_command=tuple(self.max_command),
+            energy_weight=self.energy_weight,
+            fall_tilt=self.fall_tilt,
+        )
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(self.task.action_size,), dtype=np.float32)
         # roll, pitch, velocity (3), angular velocity (3), hips' height, joints (2n), feet (6)
         self.observation_space = spaces.Box(
-            -np.inf, np.inf, shape=(2 + 3 + 3 + 1 + 2 * n + FEET,), dtype=np.float64
+            -np.inf, np.inf, shape=(self.task.observation_size,), dtype=np.float64
         )
-        self.standing = np.zeros(n)
-        self._x = 0.0
-        self._energy = 0.0
+        self._terrain_seed = None
 
-    def _observe(self, state: dict) -> np.ndarray:
-        return np.concatenate(
-            [
-                state["body_rpy"][:2],
-                state["body_velocity"],
-                state["body_angular_velocity"],
-                [state["body_height"]],
-                state["joint_angles"],
-                state["joint_velocities"],
-                state["foot_contact"].astype(np.float64),
-            ]
-        )
+    @property
+    def standing(self) -> np.ndarray:
+        """The gait's standing pose at the end of the episode's settle time: the joint action's
+        centre."""
+        return self.task.standing
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        self.sim.step(self._begin_reset())
-        return self._end_reset()
+        self._terrain_seed = self._draw_terrain_seed()
+        obs = self.task.reset(self.sim, self._terrain_seed)
+        if self.sim.failure:
+            raise DivergedError(self.sim.failure)
+        return obs, {"terrain_seed": self._terrain_seed}
 
     def step(self, action):
-        self._act(action)
-        try:
-            self.sim.step(self.frame_skip)
-        except DivergedError:
-            pass  # the outcome reads it from the simulation
-        return self._outcome()
-
-    # The parts of reset and step around the physics, so that HexapodVectorEnv steps the worlds'
-    # physics together (hexsim.step_many) and does the rest exactly as here.
-
-    def _begin_reset(self) -> int:
-        """Draws the terrain and restarts; returns the steps to stand through the settle time."""
-        self._terrain_seed = int(self.np_random.integers(0, 2**31 - 1))
-        self.sim.reset(seed=self._terrain_seed)
-        return max(1, round(self.sim.settle_time / self.sim.dt))
-
-    def _end_reset(self):
-        # the gait's standing pose at the end of the settle time is the action's centre
-        state = self.sim.state()
-        self.standing = state["joint_targets"].copy()
-        self._x = float(state["body_position"][0])
-        self._energy = self.sim.servo_energy
-        return self._observe(state), {"terrain_seed": self._terrain_seed}
-
-    def _act(self, action) -> None:
-        action = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-        if self.mode == "joints":
-            targets = np.clip(
-                self.standing + self.action_scale * action, self.limits[:, 0], self.limits[:, 1]
-            )
-            self.sim.set_joint_targets(targets)
-        else:
-            self.sim.set_command(*(action * self.max_command))
-
-    def _outcome(self):
-        diverged = self.sim.failure
-        energy = self.sim.servo_energy
-        work, self._energy = energy - self._energy, energy
-        state = self.sim.state()
-        x = float(state["body_position"][0])
-        reward = (x - self._x) - self.energy_weight * work
-        self._x = x
-        roll, pitch = state["body_rpy"][:2]
-        fallen = max(abs(roll), abs(pitch)) > self.fall_tilt
-        terminated = bool(fallen or diverged)
-        truncated = bool(not terminated and self.sim.remaining == 0)
+        action = np.asarray(action, dtype=np.float64)
+        obs, reward, terminated, truncated, work, x, diverged = self.task.step(self.sim, action)
         info = {"work": work, "x": x}
         if diverged:
             info["diverged"] = diverged
-        return self._observe(state), float(reward), terminated, truncated, info
+        return obs, reward, terminated, truncated, info
+
+    def _draw_terrain_seed(self) -> int:
+        """The next episode's terrain seed, from the environment's ``np_random`` (the vector
+        environment draws its worlds' here too, so that they equal single environments')."""
+        return int(self.np_random.integers(0, 2**31 - 1))
 
     def close(self):
         self.sim.close()
@@ -149,12 +115,13 @@ class HexapodEnv(gym.Env):
 
 class HexapodVectorEnv(VectorEnv):
     """``num_envs`` hexapod worlds stepped together: Gymnasium's ``VectorEnv``, next-step
-    autoreset (Gymnasium 1.x's default), each world's physics on a thread of its own
-    (``hexsim.step_many``, the GIL released), up to ``threads`` (default: the machine's cores).
+    autoreset (Gymnasium 1.x's default), each world on a thread of its own (``step_tasks``: the
+    action, the physics, the observation, reward and ends, in one call, the GIL released), up to
+    ``threads`` (default: the machine's cores).
 
     World ``i`` is ``HexapodEnv(**kwargs)`` reset with ``seed + i``, exactly as in
-    ``gymnasium.vector.SyncVectorEnv``: the same observations, rewards and ends, bit for bit,
-    whatever the threads.
+    ``gymnasium.vector.SyncVectorEnv``: the same observations, rewards, ends and infos, bit for
+    bit, whatever the threads.
     """
 
     metadata = {"render_modes": [], "autoreset_mode": AutoresetMode.NEXT_STEP}
@@ -171,10 +138,9 @@ class HexapodVectorEnv(VectorEnv):
         self.single_action_space = self.envs[0].action_space
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
+        self._sims = [env.sim for env in self.envs]
+        self._tasks = [env.task for env in self.envs]
         self._autoreset = np.zeros(num_envs, dtype=np.bool_)
-
-    def _step_physics(self, worlds: list[int], steps: list[int]) -> None:
-        step_many([self.envs[i].sim for i in worlds], steps, threads=self.threads)
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         if seed is None or isinstance(seed, int):
@@ -183,44 +149,62 @@ class HexapodVectorEnv(VectorEnv):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed: {len(seeds)} seeds for {self.num_envs} worlds")
-        settle = []
         for env, s in zip(self.envs, seeds):
             gym.Env.reset(env, seed=s)
-            settle.append(env._begin_reset())
-        self._step_physics(list(range(self.num_envs)), settle)
-        observations, infos = [], {}
-        for i, env in enumerate(self.envs):
-            obs, info = env._end_reset()
-            observations.append(obs)
-            infos = self._add_info(infos, info, i)
+        everyone = np.ones(self.num_envs, dtype=np.bool_)
+        terrain = self._draw_terrain_seeds(everyone)
+        no_actions = np.zeros(self.action_space.shape, dtype=np.float64)
+        obs, *_ = step_tasks(self._sims, self._tasks, no_actions, terrain, threads=self.threads)
         self._autoreset[:] = False
-        return np.stack(observations), infos
+        return obs, self._infos(everyone, terrain, None, None, None)
 
     def step(self, actions):
-        actions = np.asarray(actions)
-        resetting = [i for i in range(self.num_envs) if self._autoreset[i]]
-        stepping = [i for i in range(self.num_envs) if not self._autoreset[i]]
-        counts = {}
-        for i in resetting:
-            counts[i] = self.envs[i]._begin_reset()
-        for i in stepping:
-            self.envs[i]._act(actions[i])
-            counts[i] = self.envs[i].frame_skip
-        order = resetting + stepping
-        self._step_physics(order, [counts[i] for i in order])
-        observations = [None] * self.num_envs
-        rewards = np.zeros(self.num_envs, dtype=np.float64)
-        terminations = np.zeros(self.num_envs, dtype=np.bool_)
-        truncations = np.zeros(self.num_envs, dtype=np.bool_)
-        infos = {}
-        for i, env in enumerate(self.envs):
-            if self._autoreset[i]:
-                observations[i], info = env._end_reset()
-            else:
-                observations[i], rewards[i], terminations[i], truncations[i], info = env._outcome()
-            infos = self._add_info(infos, info, i)
-        self._autoreset = np.logical_or(terminations, truncations)
-        return np.stack(observations), rewards, terminations, truncations, infos
+        actions = self._checked(actions)
+        resetting = self._autoreset
+        terrain = self._draw_terrain_seeds(resetting)
+        obs, rewards, terminations, truncations, work, x, diverged = step_tasks(
+            self._sims, self._tasks, actions, terrain, threads=self.threads
+        )
+        self._autoreset = terminations | truncations
+        infos = self._infos(resetting, terrain, work, x, diverged)
+        return obs, rewards, terminations, truncations, infos
+
+    def _checked(self, actions) -> np.ndarray:
+        """The actions as float64, refused before any seed is drawn (``step_tasks`` checks them
+        too, but after the resetting worlds' terrain seeds are drawn)."""
+        actions = np.asarray(actions, dtype=np.float64)
+        if actions.shape != self.action_space.shape:
+            raise ValueError(f"action: shape {actions.shape}, expected {self.action_space.shape}")
+        if np.isnan(actions).any():
+            world, component = np.argwhere(np.isnan(actions))[0]
+            raise ValueError(
+                f"action: NaN in world {world}'s action, component {component}; "
+                "expected numbers in [-1, 1]"
+            )
+        return actions
+
+    def _draw_terrain_seeds(self, resetting: np.ndarray) -> list[int | None]:
+        """The terrain seeds of the worlds that reset (None for the others), each drawn from its
+        environment's ``np_random`` as a single environment's reset draws it."""
+        return [env._draw_terrain_seed() if r else None for env, r in zip(self.envs, resetting)]
+
+    def _infos(self, resetting, terrain, work, x, diverged) -> dict[str, Any]:
+        """The infos as ``VectorEnv._add_info`` batches the single environments' (a value array
+        and a ``_key`` mask per key, a key only if some world has it): ``terrain_seed`` for the
+        worlds reset, ``work`` and ``x`` (and ``diverged``) for the worlds stepped."""
+        n = self.num_envs
+        infos: dict[str, Any] = {}
+        if resetting.any():
+            infos["terrain_seed"] = np.array([s or 0 for s in terrain], dtype=int)
+            infos["_terrain_seed"] = resetting.copy()
+        stepped = ~resetting
+        if work is not None and stepped.any():
+            infos["work"], infos["_work"] = work, stepped
+            infos["x"], infos["_x"] = x, stepped.copy()
+            if any(diverged):
+                infos["diverged"] = np.array(diverged, dtype=object)
+                infos["_diverged"] = np.array([d is not None for d in diverged])
+        return infos
 
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:

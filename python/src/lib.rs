@@ -3,6 +3,11 @@
 //! Thin by design: every number comes from the library's [`WalkSession`], the run `hexsim run`
 //! makes, so a scenario stepped to its end here gives `hexsim run --metrics`'s metrics bit for
 //! bit. Errors are the library's messages, raised as `hexsim.HexsimError`.
+//!
+//! Many worlds at once: [`step_many`] steps several simulations on the worlds' thread pool
+//! ([`pool`]), the GIL released; the Gymnasium environments' work on a world — action,
+//! physics, observation, reward, episode ends — is [`env`]'s, for one world or for many in one
+//! call.
 
 use hexsim::gait::VelocityCommand;
 use hexsim::runner::Outputs;
@@ -14,7 +19,9 @@ use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+
+mod env;
+mod pool;
 
 create_exception!(
     _hexsim,
@@ -547,7 +554,7 @@ fn step_many(
         sessions.push(session);
     }
     let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-    let threads = threads.unwrap_or(cores).clamp(1, n.max(1));
+    let threads = threads.unwrap_or(cores);
     let taken = py.detach(|| advance_all(&mut sessions, &counts, threads));
     for sim in &mut simulations {
         let stopped = sim
@@ -562,89 +569,28 @@ fn step_many(
     Ok(taken)
 }
 
-/// Advances `sessions[i]` by `counts[i]` steps on `threads` threads: the calling thread steps
-/// the first share of the worlds itself, and a pool of `threads − 1` threads, kept between calls
-/// and kept awake a moment after each, the others. A call is often one action's 20 steps,
-/// ~0.4 ms: starting threads for it cost a fifth of that, and waking sleeping ones nearly as
-/// much (two worlds on 2 cores ran 1.63× one world in 20-step calls, 1.94× in long ones). Each
-/// session is stepped by one thread, alone, so the result does not depend on the threads.
+/// Advances `sessions[i]` by `counts[i]` steps on up to `threads` threads (the worlds' pool);
+/// returns the steps each took. A diverged session takes none.
 fn advance_all(sessions: &mut [&mut WalkSession], counts: &[u64], threads: usize) -> Vec<u64> {
-    let step = |session: &mut WalkSession, count: u64| {
-        if session.failure().is_some() {
-            0
-        } else {
-            session.advance(count)
+    let mut worlds: Vec<(&mut WalkSession, u64, u64)> = sessions
+        .iter_mut()
+        .zip(counts)
+        .map(|(session, &count)| (&mut **session, count, 0))
+        .collect();
+    pool::for_each(&mut worlds, threads, |(session, count, taken)| {
+        if session.failure().is_none() {
+            *taken = session.advance(*count);
         }
-    };
-    let run = |sessions: &mut [&mut WalkSession], counts: &[u64], taken: &mut [u64]| {
-        for ((session, &count), taken) in sessions.iter_mut().zip(counts).zip(taken) {
-            *taken = step(session, count);
-        }
-    };
-    let mut taken = vec![0; sessions.len()];
-    if threads <= 1 || sessions.len() <= 1 {
-        run(sessions, counts, &mut taken);
-        return taken;
-    }
-    // the threads kept awake by the last call stop spinning: there is work
-    let call = CALLS.fetch_add(1, Ordering::Relaxed) + 1;
-    let share = sessions.len().div_ceil(threads);
-    let mut shares = sessions
-        .chunks_mut(share)
-        .zip(counts.chunks(share))
-        .zip(taken.chunks_mut(share));
-    let ((first, first_counts), first_taken) = shares.next().expect("more than one world");
-    let pool = pool(threads - 1);
-    pool.in_place_scope(|scope| {
-        for ((sessions, counts), taken) in shares {
-            scope.spawn(move |_| run(sessions, counts, taken));
-        }
-        run(first, first_counts, first_taken);
     });
-    // Keep the pool's threads awake for the next call: between two actions Python computes
-    // observations and rewards for some 50–100 µs, long enough for an idle thread to sleep,
-    // and waking it took as long. Each spins until the next call or KEEP_AWAKE.
-    for _ in 0..threads - 1 {
-        pool.spawn(move || {
-            let started = std::time::Instant::now();
-            while CALLS.load(Ordering::Relaxed) == call && started.elapsed() < KEEP_AWAKE {
-                std::hint::spin_loop();
-            }
-        });
-    }
-    taken
-}
-
-/// Calls of [`advance_all`] on a pool so far: a thread kept awake stops when it changes.
-static CALLS: AtomicU64 = AtomicU64::new(0);
-
-/// How long a pool thread stays awake after a call, waiting for the next (longer than a
-/// Gymnasium step's Python work, short enough to cost nothing when no call follows).
-const KEEP_AWAKE: std::time::Duration = std::time::Duration::from_micros(500);
-
-/// The thread pool of `threads` threads, made on first use and kept.
-fn pool(threads: usize) -> std::sync::Arc<rayon::ThreadPool> {
-    static POOLS: std::sync::Mutex<Vec<(usize, std::sync::Arc<rayon::ThreadPool>)>> =
-        std::sync::Mutex::new(Vec::new());
-    let mut pools = POOLS.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, pool)) = pools.iter().find(|(n, _)| *n == threads) {
-        return pool.clone();
-    }
-    let pool = std::sync::Arc::new(
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .thread_name(|i| format!("hexsim-world-{i}"))
-            .build()
-            .expect("a thread pool of a few threads starts"),
-    );
-    pools.push((threads, pool.clone()));
-    pool
+    worlds.into_iter().map(|(_, _, taken)| taken).collect()
 }
 
 #[pymodule]
 fn _hexsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Simulation>()?;
     m.add_function(wrap_pyfunction!(step_many, m)?)?;
+    m.add_class::<env::Task>()?;
+    m.add_function(wrap_pyfunction!(env::step_tasks, m)?)?;
     m.add("HexsimError", m.py().get_type::<HexsimError>())?;
     m.add("DivergedError", m.py().get_type::<DivergedError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
