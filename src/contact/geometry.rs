@@ -313,9 +313,11 @@ fn crease_starts(
         let (x, y) = (center.x + REACH * radius * u, center.y + REACH * radius * v);
         let plane = found.point.z - (n.x * (x - found.point.x) + n.y * (y - found.point.y)) / n.z;
         if let Some(k) = curvature {
-            // the distance along the tangent plane, its horizontal one over cos(tilt)
-            let along = (x - found.point.x).hypot(y - found.point.y) / n.z;
-            if 0.5 * k * along * along <= sphere - plane {
+            // the distance along the tangent plane, its horizontal one over cos(tilt), squared
+            // (no root: libm's `hypot` was most of the probes' cost)
+            let (u, v) = (x - found.point.x, y - found.point.y);
+            let along2 = (u * u + v * v) / (n.z * n.z);
+            if 0.5 * k * along2 <= sphere - plane {
                 return None;
             }
         }
