@@ -131,8 +131,17 @@ pub struct IkWarm {
     frames: Frames,
 }
 
-/// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]).
-type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3);
+/// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]), and the
+/// first two links' rotations (the load feed-forward's, [`LegChain::statics`]).
+type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3, [DMat3; 2]);
+
+/// Frames to be overwritten.
+const NO_FRAMES: Frames = (
+    [(DVec3::ZERO, DVec3::ZERO); 3],
+    DVec3::ZERO,
+    DMat3::ZERO,
+    [DMat3::ZERO; 2],
+);
 
 /// A 3-joint leg's pose as the servos' load feed-forward reads it ([`LegChain::statics`]), body
 /// frame: each joint's position and unit axis, the centre of mass of each joint's child link,
@@ -251,13 +260,40 @@ impl LegChain {
     }
 
     /// [`Self::frames`] of a 3-joint leg, its loop of fixed length (the gait solves six legs
-    /// every step).
+    /// every step), with the first two links' rotations as they are turned on the way, kept so
+    /// that the load feed-forward does not turn them again (their sines and cosines were 1.3k
+    /// instructions of a walk's step on hex18). The arithmetic of [`Self::frames_of`], but for
+    /// the first joint's frame: its origin, not the identity times it (the same numbers but
+    /// for the sign of a zero).
     fn frames3(&self, q: [f64; 3]) -> Frames {
-        self.frames_of::<3>(&q, 3)
+        let mut frames = NO_FRAMES;
+        self.frames3_into(q, &mut frames);
+        frames
     }
 
-    /// The first `n` joints' frames (at most `N`), in storage of `N`: one loop for
-    /// [`Self::frames`] and [`Self::frames3`], monomorphised so the 3-joint one is of fixed length.
+    /// [`Self::frames3`] into `out`.
+    #[inline]
+    fn frames3_into(&self, q: [f64; 3], out: &mut Frames) {
+        // the first joint's frame is its origin (not the identity times it)
+        let mut frame = self.origins[0];
+        for k in 0..3 {
+            if k > 0 {
+                frame *= self.origins[k];
+            }
+            let m = &mut frame.matrix3;
+            out.0[k] = (frame.translation, m.z_axis);
+            let (s, c) = q[k].sin_cos();
+            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
+            if k < 2 {
+                out.3[k] = *m;
+            }
+        }
+        out.1 = frame.transform_point3(self.foot);
+        out.2 = frame.matrix3;
+    }
+
+    /// The first `n` joints' frames (at most `N`), in storage of `N`, for [`Self::frames`]
+    /// ([`Self::frames3`] is the same loop for three joints, keeping two links' rotations).
     #[inline]
     fn frames_of<const N: usize>(
         &self,
@@ -341,44 +377,48 @@ impl LegChain {
             return super::redundant::solve(self, target, &guess);
         }
         let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        let (mut joints, mut foot, mut rotation) = match warm {
-            Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits) => w.frames,
-            _ => self.frames3(q),
-        };
-        let mut error = target - foot;
+        // the forward kinematics of `q` and of the trial, in two buffers that trade places as
+        // a trial is taken (not copied: each holds four matrices)
+        let mut frames = [NO_FRAMES; 2];
+        let mut now = 0;
+        match warm {
+            Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits) => frames[0] = w.frames,
+            _ => self.frames3_into(q, &mut frames[0]),
+        }
+        let mut error = target - frames[now].1;
         for _ in 0..50 {
             if error.length() < tolerance {
                 break;
             }
-            let j = Self::jacobian_of(&joints, foot);
+            let j = Self::jacobian_of(&frames[now].0, frames[now].1);
             // a small damping keeps the step finite where the leg is stretched (singular)
             let lambda2 = 1e-6;
             let step = j.transpose()
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
+            let trial = 1 - now;
             let mut next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames3(next);
-            if (target - next_foot).length() >= error.length() {
+            self.frames3_into(next, &mut frames[trial]);
+            if (target - frames[trial].1).length() >= error.length() {
                 // no progress: try a half step once, then stop
                 next = self.clamp3([
                     q[0] + 0.5 * step.x,
                     q[1] + 0.5 * step.y,
                     q[2] + 0.5 * step.z,
                 ]);
-                (next_joints, next_foot, next_rotation) = self.frames3(next);
-                if (target - next_foot).length() >= error.length() {
+                self.frames3_into(next, &mut frames[trial]);
+                if (target - frames[trial].1).length() >= error.length() {
                     break;
                 }
             }
             q = next;
-            joints = next_joints;
-            foot = next_foot;
-            rotation = next_rotation;
-            error = target - foot;
+            now = trial;
+            error = target - frames[now].1;
         }
+        let rotation = frames[now].2;
         *warm = Some(IkWarm {
             angles: q,
-            frames: (joints, foot, rotation),
+            frames: frames[now],
         });
         IkSolution {
             angles: LegAngles::three(q),
@@ -390,9 +430,8 @@ impl LegChain {
     /// The leg's pose for the load feed-forward at `q`, from the forward kinematics of the solve
     /// that left `warm`, when `q` is its answer bit for bit (None otherwise, or for a leg of
     /// more than three joints): the gait's targets are that answer nearly always, and the
-    /// feed-forward so poses the legs with two link turns each instead of forward kinematics of
-    /// all the links. The first two links' orientations are turned as [`Self::frames`] turns
-    /// them (the last is the answer's foot rotation).
+    /// feed-forward so poses the legs without forward kinematics of all the links. The links'
+    /// orientations are those the solve's last forward kinematics turned ([`Self::frames3`]).
     pub fn statics(&self, warm: &IkWarm, q: &[f64]) -> Option<LegStatics> {
         if self.n != 3 || q.len() != 3 {
             return None;
@@ -400,16 +439,8 @@ impl LegChain {
         if warm.angles.map(f64::to_bits) != [q[0], q[1], q[2]].map(f64::to_bits) {
             return None;
         }
-        let (joints, foot, rotation) = warm.frames;
-        let mut links = [rotation; 3];
-        let mut frame = DAffine3::IDENTITY;
-        for (k, link) in links.iter_mut().take(2).enumerate() {
-            frame *= self.origins[k];
-            let m = &mut frame.matrix3;
-            let (s, c) = q[k].sin_cos();
-            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
-            *link = *m;
-        }
+        let (joints, foot, rotation, [first, second]) = warm.frames;
+        let links = [first, second, rotation];
         Some(LegStatics {
             joints,
             coms: [0, 1, 2].map(|k| links[k] * self.coms[k] + joints[k].0),
