@@ -124,11 +124,22 @@ pub struct IkSolution {
 }
 
 /// A solve's answer with the forward kinematics it ended on ([`LegChain::solve_warm`]): the
-/// gait solves every leg every step from its last answer, and so starts where this ends.
+/// gait solves every leg every step from its last answer, and so starts where this ends. The
+/// next solve works in it: the answer's frames and the trial's, in two buffers that trade
+/// places as a trial is taken (each holds four matrices: not copied).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkWarm {
     angles: [f64; 3],
-    frames: Frames,
+    frames: [Frames; 2],
+    /// Which of `frames` are the answer's.
+    now: usize,
+}
+
+impl IkWarm {
+    /// The answer's frames.
+    fn frames(&self) -> &Frames {
+        &self.frames[self.now]
+    }
 }
 
 /// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]), and the
@@ -377,26 +388,32 @@ impl LegChain {
             return super::redundant::solve(self, target, &guess);
         }
         let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        // the forward kinematics of `q` and of the trial, in two buffers that trade places as
-        // a trial is taken (not copied: each holds four matrices)
-        let mut frames = [NO_FRAMES; 2];
-        let mut now = 0;
-        match warm {
-            Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits) => frames[0] = w.frames,
-            _ => self.frames3_into(q, &mut frames[0]),
+        let known = matches!(warm, Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits));
+        if !known {
+            let w = warm.insert(IkWarm {
+                angles: q,
+                frames: [NO_FRAMES; 2],
+                now: 0,
+            });
+            self.frames3_into(q, &mut w.frames[0]);
         }
-        let mut error = target - frames[now].1;
+        let IkWarm {
+            angles,
+            frames,
+            now,
+        } = warm.as_mut().expect("set above");
+        let mut error = target - frames[*now].1;
         for _ in 0..50 {
             if error.length() < tolerance {
                 break;
             }
-            let j = Self::jacobian_of(&frames[now].0, frames[now].1);
+            let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
             // a small damping keeps the step finite where the leg is stretched (singular)
             let lambda2 = 1e-6;
             let step = j.transpose()
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
-            let trial = 1 - now;
+            let trial = 1 - *now;
             let mut next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
             self.frames3_into(next, &mut frames[trial]);
             if (target - frames[trial].1).length() >= error.length() {
@@ -412,18 +429,14 @@ impl LegChain {
                 }
             }
             q = next;
-            now = trial;
-            error = target - frames[now].1;
+            *now = trial;
+            error = target - frames[*now].1;
         }
-        let rotation = frames[now].2;
-        *warm = Some(IkWarm {
-            angles: q,
-            frames: frames[now],
-        });
+        *angles = q;
         IkSolution {
             angles: LegAngles::three(q),
             error: error.length(),
-            foot_rotation: rotation,
+            foot_rotation: frames[*now].2,
         }
     }
 
@@ -439,7 +452,7 @@ impl LegChain {
         if warm.angles.map(f64::to_bits) != [q[0], q[1], q[2]].map(f64::to_bits) {
             return None;
         }
-        let (joints, foot, rotation, [first, second]) = warm.frames;
+        let (joints, foot, rotation, [first, second]) = *warm.frames();
         let links = [first, second, rotation];
         Some(LegStatics {
             joints,
