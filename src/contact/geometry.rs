@@ -80,8 +80,8 @@ pub fn sphere_faces(
 /// within micrometres of it instead of millimetres (the sphere's centre over a slope): on a
 /// smooth grid the closest point within a foot's reach is the one point where the normal
 /// passes through the centre, and the search converges on it to the same nanometre from
-/// either start, in about two surface evaluations fewer per foot (3k instructions of a walk's
-/// step on hex18).
+/// either start, in about two surface evaluations fewer per foot (with the bicubic blend's
+/// new order, 17.5k → 13.4k instructions of the terrain search in a walk's step on hex18).
 pub fn sphere_faces_from(
     terrain: &HeightGrid,
     center: DVec3,
