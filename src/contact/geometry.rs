@@ -96,7 +96,7 @@ pub fn sphere_faces_from(
     };
     let below = closest_from(terrain, center, radius, orientation, start);
     *last = (!cliffs && below.penetration > 0.0)
-        .then(|| (below.point.x - center.x, below.point.y - center.y));
+        .then_some((below.point.x - center.x, below.point.y - center.y));
     if cliffs {
         return among_walls(terrain, center, radius, orientation, below);
     }

@@ -287,13 +287,13 @@ impl LegChain {
     fn frames3_into(&self, q: [f64; 3], out: &mut Frames) {
         // the first joint's frame is its origin (not the identity times it)
         let mut frame = self.origins[0];
-        for k in 0..3 {
+        for (k, angle) in q.into_iter().enumerate() {
             if k > 0 {
                 frame *= self.origins[k];
             }
             let m = &mut frame.matrix3;
             out.0[k] = (frame.translation, m.z_axis);
-            let (s, c) = q[k].sin_cos();
+            let (s, c) = angle.sin_cos();
             (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
             if k < 2 {
                 out.3[k] = *m;
