@@ -67,8 +67,37 @@ pub fn sphere_faces(
     radius: f64,
     orientation: Orientation,
 ) -> Faces {
-    let below = closest_from(terrain, center, radius, orientation, (center.x, center.y));
-    if terrain.has_cliffs() {
+    sphere_faces_from(terrain, center, radius, orientation, &mut None)
+}
+
+/// [`sphere_faces`] for a sphere that touched the ground last step, its search from below
+/// started where last step's ended: `last` holds the offset (x, y) from the centre to the
+/// surface point that search converged on, and is left holding this step's (None where the
+/// sphere is clear of the ground, or on a grid with cliffs, whose surface is searched from
+/// below the centre always).
+///
+/// The closest point moves with the sphere by a few micrometres a step, so the search starts
+/// within micrometres of it instead of millimetres (the sphere's centre over a slope): on a
+/// smooth grid the closest point within a foot's reach is the one point where the normal
+/// passes through the centre, and the search converges on it to the same nanometre from
+/// either start, in about two surface evaluations fewer per foot (with the bicubic blend's
+/// new order, 17.5k → 13.4k instructions of the terrain search in a walk's step on hex18).
+pub fn sphere_faces_from(
+    terrain: &HeightGrid,
+    center: DVec3,
+    radius: f64,
+    orientation: Orientation,
+    last: &mut Option<(f64, f64)>,
+) -> Faces {
+    let cliffs = terrain.has_cliffs();
+    let start = match *last {
+        Some((dx, dy)) if !cliffs => (center.x + dx, center.y + dy),
+        _ => (center.x, center.y),
+    };
+    let below = closest_from(terrain, center, radius, orientation, start);
+    *last = (!cliffs && below.penetration > 0.0)
+        .then_some((below.point.x - center.x, below.point.y - center.y));
+    if cliffs {
         return among_walls(terrain, center, radius, orientation, below);
     }
     if below.penetration > 0.0 {
@@ -284,9 +313,11 @@ fn crease_starts(
         let (x, y) = (center.x + REACH * radius * u, center.y + REACH * radius * v);
         let plane = found.point.z - (n.x * (x - found.point.x) + n.y * (y - found.point.y)) / n.z;
         if let Some(k) = curvature {
-            // the distance along the tangent plane, its horizontal one over cos(tilt)
-            let along = (x - found.point.x).hypot(y - found.point.y) / n.z;
-            if 0.5 * k * along * along <= sphere - plane {
+            // the distance along the tangent plane, its horizontal one over cos(tilt), squared
+            // (no root: libm's `hypot` was most of the probes' cost)
+            let (u, v) = (x - found.point.x, y - found.point.y);
+            let along2 = (u * u + v * v) / (n.z * n.z);
+            if 0.5 * k * along2 <= sphere - plane {
                 return None;
             }
         }

@@ -369,11 +369,24 @@ impl ContactModel {
         center: DVec3,
         radius: f64,
     ) -> Faces {
+        self.sphere_faces_from(terrain, center, radius, &mut None)
+    }
+
+    /// [`Self::sphere_faces`] of a sphere whose last search ended at the offset `last` from its
+    /// centre ([`geometry::sphere_faces_from`]), left holding this one's.
+    pub fn sphere_faces_from(
+        &self,
+        terrain: &crate::terrain::HeightGrid,
+        center: DVec3,
+        radius: f64,
+        last: &mut Option<(f64, f64)>,
+    ) -> Faces {
         match (self.variant, self.orientation) {
             (Variant::Paper, Orientation::Paper { .. }) => {
+                *last = None;
                 Faces::single(self.sphere_geometry(terrain, center, radius))
             }
-            _ => sphere_faces(terrain, center, radius, self.orientation),
+            _ => geometry::sphere_faces_from(terrain, center, radius, self.orientation, last),
         }
     }
 

@@ -18,7 +18,7 @@ impl LegPhase {
 
 /// The phase of a leg with stance start `offset` (cycle fraction) at gait time `t`.
 pub fn leg_phase(t: f64, period: f64, duty: f64, offset: f64) -> LegPhase {
-    let phase = (t / period - offset).rem_euclid(1.0);
+    let phase = fraction(t / period - offset);
     if phase < duty {
         LegPhase::Stance(phase / duty)
     } else {
@@ -41,6 +41,16 @@ pub fn minimum_support(offsets: &[f64; 6], duty: f64) -> usize {
         .unwrap_or(0)
 }
 
+/// `x.rem_euclid(1.0)` bit for bit, without the call to libm's `fmod` it makes (six legs a
+/// step): below 2⁵² in size, `x % 1.0` is x less its integer part, exactly, with x's sign.
+fn fraction(x: f64) -> f64 {
+    if x.abs() >= 4_503_599_627_370_496.0 {
+        return x.rem_euclid(1.0);
+    }
+    let r = (x - (x as i64) as f64).copysign(x);
+    if r < 0.0 { r + 1.0 } else { r }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -57,5 +67,30 @@ mod tests {
             assert_ne!(stance[0], stance[1]);
         }
         assert_eq!(minimum_support(&offsets, 0.5), 3);
+    }
+
+    /// The same bits as `rem_euclid(1.0)`: gait times, whole numbers of either sign (a zero's
+    /// sign included), the neighbours of each, and beyond 2⁵².
+    #[test]
+    fn fraction_is_rem_euclid() {
+        let mut xs: Vec<f64> = (0..100_000).map(|k| -3.0 + k as f64 * 0.000_137).collect();
+        for x in [
+            -3.0f64,
+            -1.0,
+            -0.0,
+            0.0,
+            1.0,
+            2.0,
+            1e15,
+            4_503_599_627_370_496.0,
+            1e300,
+        ] {
+            xs.extend([x, -x, x.next_down(), x.next_up()]);
+        }
+        for x in xs {
+            assert_eq!(fraction(x).to_bits(), x.rem_euclid(1.0).to_bits(), "{x}");
+        }
+        assert!(fraction(f64::NAN).is_nan());
+        assert!(fraction(f64::INFINITY).is_nan());
     }
 }

@@ -124,15 +124,35 @@ pub struct IkSolution {
 }
 
 /// A solve's answer with the forward kinematics it ended on ([`LegChain::solve_warm`]): the
-/// gait solves every leg every step from its last answer, and so starts where this ends.
+/// gait solves every leg every step from its last answer, and so starts where this ends. The
+/// next solve works in it: the answer's frames and the trial's, in two buffers that trade
+/// places as a trial is taken (each holds four matrices: not copied).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkWarm {
     angles: [f64; 3],
-    frames: Frames,
+    frames: [Frames; 2],
+    /// Which of `frames` are the answer's.
+    now: usize,
 }
 
-/// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]).
-type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3);
+impl IkWarm {
+    /// The answer's frames.
+    fn frames(&self) -> &Frames {
+        &self.frames[self.now]
+    }
+}
+
+/// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]), and the
+/// first two links' rotations (the load feed-forward's, [`LegChain::statics`]).
+type Frames = ([(DVec3, DVec3); 3], DVec3, DMat3, [DMat3; 2]);
+
+/// Frames to be overwritten.
+const NO_FRAMES: Frames = (
+    [(DVec3::ZERO, DVec3::ZERO); 3],
+    DVec3::ZERO,
+    DMat3::ZERO,
+    [DMat3::ZERO; 2],
+);
 
 /// A 3-joint leg's pose as the servos' load feed-forward reads it ([`LegChain::statics`]), body
 /// frame: each joint's position and unit axis, the centre of mass of each joint's child link,
@@ -251,13 +271,40 @@ impl LegChain {
     }
 
     /// [`Self::frames`] of a 3-joint leg, its loop of fixed length (the gait solves six legs
-    /// every step).
+    /// every step), with the first two links' rotations as they are turned on the way, kept so
+    /// that the load feed-forward does not turn them again (their sines and cosines were 1.3k
+    /// instructions of a walk's step on hex18). The arithmetic of [`Self::frames_of`], but for
+    /// the first joint's frame: its origin, not the identity times it (the same numbers but
+    /// for the sign of a zero).
     fn frames3(&self, q: [f64; 3]) -> Frames {
-        self.frames_of::<3>(&q, 3)
+        let mut frames = NO_FRAMES;
+        self.frames3_into(q, &mut frames);
+        frames
     }
 
-    /// The first `n` joints' frames (at most `N`), in storage of `N`: one loop for
-    /// [`Self::frames`] and [`Self::frames3`], monomorphised so the 3-joint one is of fixed length.
+    /// [`Self::frames3`] into `out`.
+    #[inline]
+    fn frames3_into(&self, q: [f64; 3], out: &mut Frames) {
+        // the first joint's frame is its origin (not the identity times it)
+        let mut frame = self.origins[0];
+        for (k, angle) in q.into_iter().enumerate() {
+            if k > 0 {
+                frame *= self.origins[k];
+            }
+            let m = &mut frame.matrix3;
+            out.0[k] = (frame.translation, m.z_axis);
+            let (s, c) = angle.sin_cos();
+            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
+            if k < 2 {
+                out.3[k] = *m;
+            }
+        }
+        out.1 = frame.transform_point3(self.foot);
+        out.2 = frame.matrix3;
+    }
+
+    /// The first `n` joints' frames (at most `N`), in storage of `N`, for [`Self::frames`]
+    /// ([`Self::frames3`] is the same loop for three joints, keeping two links' rotations).
     #[inline]
     fn frames_of<const N: usize>(
         &self,
@@ -305,76 +352,99 @@ impl LegChain {
     /// also keeps its extra joints near their rest angles. (The gait solves six legs every
     /// step: each trial's forward kinematics also gives the next iteration's Jacobian.)
     pub fn solve(&self, target: DVec3, guess: impl AsRef<[f64]>) -> IkSolution {
-        self.solve_warm(target, guess, &mut None)
+        self.solve_within(target, guess, &mut None, IK_TOLERANCE * 0.1)
     }
 
     /// [`Self::solve`], taking a 3-joint leg's forward kinematics of `guess` from `warm` when it
     /// holds them (the last answer's, bit for bit the same as computing them again: a fifth of
     /// the gait's instructions on hex18's walk), and leaving this answer's there for the next
     /// solve. A redundant leg's solve keeps no such state.
+    ///
+    /// It stops within [`IK_TOLERANCE`] (1 µm) of the target, where a cold [`Self::solve`] goes
+    /// on to 0.1 µm: the gait solves every leg twice a step, each from its own last answer a
+    /// step's motion away, and the last Newton step of a third of those solves was to go from
+    /// under 1 µm to under 0.1 µm (4.9k instructions of a walk's step on hex18). A micrometre is
+    /// far below what the servos hold a joint to (their compliance under a leg's load moves the
+    /// foot by tenths of a millimetre); the walk's 20 s distance moves by 10⁻⁷ of itself.
     pub fn solve_warm(
         &self,
         target: DVec3,
         guess: impl AsRef<[f64]>,
         warm: &mut Option<IkWarm>,
     ) -> IkSolution {
+        self.solve_within(target, guess, warm, IK_TOLERANCE)
+    }
+
+    /// [`Self::solve_warm`] to `tolerance` (m).
+    fn solve_within(
+        &self,
+        target: DVec3,
+        guess: impl AsRef<[f64]>,
+        warm: &mut Option<IkWarm>,
+        tolerance: f64,
+    ) -> IkSolution {
         let guess = self.angles(guess.as_ref());
         if self.is_redundant() {
             return super::redundant::solve(self, target, &guess);
         }
         let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        let (mut joints, mut foot, mut rotation) = match warm {
-            Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits) => w.frames,
-            _ => self.frames3(q),
-        };
-        let mut error = target - foot;
+        let known = matches!(warm, Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits));
+        if !known {
+            let w = warm.insert(IkWarm {
+                angles: q,
+                frames: [NO_FRAMES; 2],
+                now: 0,
+            });
+            self.frames3_into(q, &mut w.frames[0]);
+        }
+        let IkWarm {
+            angles,
+            frames,
+            now,
+        } = warm.as_mut().expect("set above");
+        let mut error = target - frames[*now].1;
         for _ in 0..50 {
-            if error.length() < IK_TOLERANCE * 0.1 {
+            if error.length() < tolerance {
                 break;
             }
-            let j = Self::jacobian_of(&joints, foot);
+            let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
             // a small damping keeps the step finite where the leg is stretched (singular)
             let lambda2 = 1e-6;
             let step = j.transpose()
                 * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
                 * error;
+            let trial = 1 - *now;
             let mut next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            let (mut next_joints, mut next_foot, mut next_rotation) = self.frames3(next);
-            if (target - next_foot).length() >= error.length() {
+            self.frames3_into(next, &mut frames[trial]);
+            if (target - frames[trial].1).length() >= error.length() {
                 // no progress: try a half step once, then stop
                 next = self.clamp3([
                     q[0] + 0.5 * step.x,
                     q[1] + 0.5 * step.y,
                     q[2] + 0.5 * step.z,
                 ]);
-                (next_joints, next_foot, next_rotation) = self.frames3(next);
-                if (target - next_foot).length() >= error.length() {
+                self.frames3_into(next, &mut frames[trial]);
+                if (target - frames[trial].1).length() >= error.length() {
                     break;
                 }
             }
             q = next;
-            joints = next_joints;
-            foot = next_foot;
-            rotation = next_rotation;
-            error = target - foot;
+            *now = trial;
+            error = target - frames[*now].1;
         }
-        *warm = Some(IkWarm {
-            angles: q,
-            frames: (joints, foot, rotation),
-        });
+        *angles = q;
         IkSolution {
             angles: LegAngles::three(q),
             error: error.length(),
-            foot_rotation: rotation,
+            foot_rotation: frames[*now].2,
         }
     }
 
     /// The leg's pose for the load feed-forward at `q`, from the forward kinematics of the solve
     /// that left `warm`, when `q` is its answer bit for bit (None otherwise, or for a leg of
     /// more than three joints): the gait's targets are that answer nearly always, and the
-    /// feed-forward so poses the legs with two link turns each instead of forward kinematics of
-    /// all the links. The first two links' orientations are turned as [`Self::frames`] turns
-    /// them (the last is the answer's foot rotation).
+    /// feed-forward so poses the legs without forward kinematics of all the links. The links'
+    /// orientations are those the solve's last forward kinematics turned ([`Self::frames3`]).
     pub fn statics(&self, warm: &IkWarm, q: &[f64]) -> Option<LegStatics> {
         if self.n != 3 || q.len() != 3 {
             return None;
@@ -382,16 +452,8 @@ impl LegChain {
         if warm.angles.map(f64::to_bits) != [q[0], q[1], q[2]].map(f64::to_bits) {
             return None;
         }
-        let (joints, foot, rotation) = warm.frames;
-        let mut links = [rotation; 3];
-        let mut frame = DAffine3::IDENTITY;
-        for (k, link) in links.iter_mut().take(2).enumerate() {
-            frame *= self.origins[k];
-            let m = &mut frame.matrix3;
-            let (s, c) = q[k].sin_cos();
-            (m.x_axis, m.y_axis) = (m.x_axis * c + m.y_axis * s, m.y_axis * c - m.x_axis * s);
-            *link = *m;
-        }
+        let (joints, foot, rotation, [first, second]) = *warm.frames();
+        let links = [first, second, rotation];
         Some(LegStatics {
             joints,
             coms: [0, 1, 2].map(|k| links[k] * self.coms[k] + joints[k].0),

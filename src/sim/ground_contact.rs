@@ -73,6 +73,9 @@ const SAME_FACE: f64 = std::f64::consts::FRAC_1_SQRT_2;
 pub(super) struct GroundContacts {
     /// [`MAX_FACES`] per sphere: the feet's, then every link sphere's.
     slots: Vec<Slot>,
+    /// Per sphere (the feet's, then every link sphere's): where its last closest-point search
+    /// ended, from its centre, while it touches ([`ContactModel::sphere_faces_from`]).
+    last_search: Vec<Option<(f64, f64)>>,
     links: Vec<LinkSpheres>,
     spheres: Vec<ContactSphere>,
     /// Per sphere in `spheres`: the leg whose foot's sole it is part of (see
@@ -123,6 +126,7 @@ impl GroundContacts {
             terrain.ceiling_near(0.5 * (x0 + x1), 0.5 * (y0 + y1), (x1 - x0).max(y1 - y0));
         GroundContacts {
             slots: vec![Slot::default(); (6 + spheres.len()) * MAX_FACES],
+            last_search: vec![None; 6 + spheres.len()],
             links,
             spheres,
             soles,
@@ -194,6 +198,7 @@ impl GroundContacts {
                 if touched {
                     self.slots[(6 + first) * MAX_FACES..(6 + end) * MAX_FACES]
                         .fill(Slot::default());
+                    self.last_search[6 + first..6 + end].fill(None);
                     self.links[l].touched = false;
                 }
                 continue;
@@ -312,9 +317,10 @@ impl GroundContacts {
         if center.z - r > self.ceiling || center.z - r > terrain.ceiling_near(center.x, center.y, r)
         {
             self.slots[slots].fill(Slot::default());
+            self.last_search[id] = None;
             return false;
         }
-        let faces = contact.sphere_faces(terrain, center, r);
+        let faces = contact.sphere_faces_from(terrain, center, r, &mut self.last_search[id]);
         let faces = faces.as_slice();
         if faces[0].penetration <= 0.0 {
             self.slots[slots].fill(Slot::default());

@@ -138,7 +138,7 @@ pub struct Hexapod {
     ground: GroundContacts,
     last_contacts: [Option<ContactForce>; 6],
     last_link_contacts: Vec<LinkContact>,
-    /// Every link's world pose this step (scratch).
+    /// Every link's world pose as the last step left it ([`Hexapod::place_frames`]).
     frames: Vec<DAffine3>,
     step: u64,
     /// Wall-clock seconds spent inside rapier's step (see [`Hexapod::physics_seconds`]).
@@ -279,6 +279,7 @@ impl Hexapod {
             physics_seconds: 0.0,
         };
         hexapod.read_joints();
+        hexapod.place_frames();
         if settings.articulation == Articulation::Impulse {
             // the feet's normal dampers move the articulated robot, as in the multibody
             let mut reference = Hexapod::new(
@@ -371,9 +372,7 @@ impl Hexapod {
 
     /// World poses of all the model's links (for drawing).
     pub fn link_frames(&self) -> Vec<DAffine3> {
-        (0..self.model.links.len())
-            .map(|k| self.link_frame(k))
-            .collect()
+        self.frames.clone()
     }
 
     /// Wall-clock seconds spent inside rapier's step so far. The rest of a step is hexsim's
@@ -388,8 +387,23 @@ impl Hexapod {
         self.joints.joint_drift(&self.engine)
     }
 
-    /// World pose of a model link's frame.
+    /// World pose of a model link's frame (as the last step left it: [`Self::place_frames`]).
     fn link_frame(&self, link: usize) -> DAffine3 {
+        self.frames[link]
+    }
+
+    /// Every link's world pose, read from rapier's bodies: once the robot is built and after
+    /// each step, so that the step's contacts, its sample and the gait read them without
+    /// converting rapier's poses again (only a step moves the bodies).
+    fn place_frames(&mut self) {
+        let mut frames = std::mem::take(&mut self.frames);
+        frames.clear();
+        frames.extend((0..self.model.links.len()).map(|k| self.frame_of(k)));
+        self.frames = frames;
+    }
+
+    /// World pose of a model link's frame, from its rapier body.
+    fn frame_of(&self, link: usize) -> DAffine3 {
         let pose = affine_of(self.engine.bodies[self.bodies[link]].position());
         if link == 0 {
             pose * DAffine3::from_translation(-self.root_com)
@@ -407,9 +421,7 @@ impl Hexapod {
         }
         self.joints
             .drive(&mut self.engine, &self.targets, &self.angles, &self.rates);
-        let mut frames = std::mem::take(&mut self.frames);
-        frames.clear();
-        frames.extend((0..self.model.links.len()).map(|k| self.link_frame(k)));
+        let frames = std::mem::take(&mut self.frames);
         let contacts = self.ground.apply(
             &mut self.engine,
             self.joints.as_mut(),
@@ -426,6 +438,7 @@ impl Hexapod {
         self.physics_seconds += started.elapsed().as_secs_f64();
         self.step += 1;
         self.read_joints();
+        self.place_frames();
         if self.step.is_multiple_of(DRIFT_EVERY) {
             self.drift = self.joint_drift();
         }
