@@ -87,7 +87,7 @@ impl Task {
         sim.reset(Some(seed))?;
         let settle = settle_steps(sim.session()?);
         sim.session_mut()?.advance(settle);
-        finish_if_stopped(sim)?;
+        sim.finish_if_stopped()?;
         let session = sim.session()?;
         let robot = &last_sample(session)?.robot;
         self.standing.clone_from(&robot.joint_targets);
@@ -109,7 +109,7 @@ impl Task {
         if session.failure().is_none() {
             session.advance(self.frame_skip);
         }
-        finish_if_stopped(sim)?;
+        sim.finish_if_stopped()?;
         let session = sim.session()?;
         let outcome = self.outcome(session)?;
         observe(session, obs)?;
@@ -180,19 +180,6 @@ fn settle_steps(session: &WalkSession) -> u64 {
     (walker.settle_time() / walker.hexapod().dt())
         .round_ties_even()
         .max(1.0) as u64
-}
-
-/// After steps: a session stopped by an output's error is finished, which raises it (as
-/// `Simulation.step` does); one stopped by a divergence stays, for its state to be read.
-fn finish_if_stopped(sim: &mut Simulation) -> PyResult<()> {
-    let stopped = sim
-        .session
-        .as_ref()
-        .is_some_and(|s| s.stopped() && s.failure().is_none());
-    if stopped {
-        sim.finish()?;
-    }
-    Ok(())
 }
 
 fn last_sample(session: &WalkSession) -> PyResult<&WalkSample> {

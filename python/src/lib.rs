@@ -217,6 +217,20 @@ impl Simulation {
         Ok(())
     }
 
+    /// After steps: a session stopped by an output's error is finished, which raises it (as
+    /// `step` does, naming the files still written); one stopped by a divergence stays, for its
+    /// state to be read.
+    fn finish_if_stopped(&mut self) -> PyResult<()> {
+        let stopped = self
+            .session
+            .as_ref()
+            .is_some_and(|s| s.stopped() && s.failure().is_none());
+        if stopped {
+            self.finish()?;
+        }
+        Ok(())
+    }
+
     fn finish(&mut self) -> PyResult<Vec<PathBuf>> {
         let Some(session) = self.session.take() else {
             return Ok(Vec::new());
@@ -557,14 +571,7 @@ fn step_many(
     let threads = threads.unwrap_or(cores);
     let taken = py.detach(|| advance_all(&mut sessions, &counts, threads));
     for sim in &mut simulations {
-        let stopped = sim
-            .session
-            .as_ref()
-            .is_some_and(|s| s.stopped() && s.failure().is_none());
-        if stopped {
-            // an output's error: finishing says which, as `step` does
-            sim.finish()?;
-        }
+        sim.finish_if_stopped()?;
     }
     Ok(taken)
 }
