@@ -327,20 +327,16 @@ fn contact_mobility_in<const D: usize>(
         let mut rows = scratch.contact(i);
         let columns = jacobian.as_slice().chunks_exact(6);
         for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
-            if column.iter().all(|v| v.to_bits() == 0) {
+            if column.iter().fold(0, |bits, v| bits | v.to_bits()) == 0 {
                 velocity += glam::Vec3::ZERO * rate;
-                for (a, &entry) in off_path.iter().enumerate() {
-                    rows.set(dof, a, entry);
-                }
+                rows.set(dof, off_path);
                 continue;
             }
             let linear = glam::Vec3::from_slice(&column[..3]);
             let angular = glam::Vec3::from_slice(&column[3..]);
             let point = linear - r.cross(angular);
             velocity += point * rate;
-            for (a, axis) in axes.iter().enumerate() {
-                rows.set(dof, a, axis.dot(point));
-            }
+            rows.set(dof, axes.map(|axis| axis.dot(point)));
         }
         velocities[i] = velocity.as_dvec3();
     }
