@@ -108,7 +108,7 @@ impl GroundPlane {
 const LEVELLING_RAMP: f64 = 0.5;
 
 /// A step of the walker: the robot's state and the gait's targets for it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct WalkSample {
     pub robot: HexapodSample,
     /// The gait's targets; None while settling and while the joints are driven from outside.
@@ -386,6 +386,14 @@ impl Walker {
     }
 
     pub fn step(&mut self) -> WalkSample {
+        let mut sample = WalkSample::default();
+        self.step_into(&mut sample);
+        sample
+    }
+
+    /// [`Walker::step`], written over `sample` (an earlier one no longer read) in place: its
+    /// vectors are reused, not allocated ([`Hexapod::step_into`]).
+    pub fn step_into(&mut self, sample: &mut WalkSample) {
         let t = self.gait_time();
         if let Some(targets) = &self.given_targets {
             self.hexapod.set_targets(targets);
@@ -450,7 +458,8 @@ impl Walker {
             let angles = self.controller.standing_on(|_| 0.0);
             self.set_leg_targets(angles, [true; 6]);
         }
-        let robot = self.hexapod.step();
+        self.hexapod.step_into(&mut sample.robot);
+        let robot = &sample.robot;
         let to_body = robot.body.matrix3.transpose();
         self.feel = robot.foot_contacts.map(|c| {
             c.map_or(FootFeel::default(), |c| FootFeel {
@@ -466,11 +475,8 @@ impl Walker {
                 }
             }
         }
-        WalkSample {
-            robot,
-            gait: self.last_targets,
-            settling: t < 0.0,
-        }
+        sample.gait = self.last_targets;
+        sample.settling = t < 0.0;
     }
 }
 
