@@ -322,14 +322,14 @@ impl Walker {
         let body = self.hexapod.body_frame().matrix3;
         let gravity = body.transpose() * DVec3::new(0.0, 0.0, -STANDARD_GRAVITY);
         let mut legs = [LegStatics::default(); 6];
-        let posed = self.legs_hold_every_link
-            && model.legs.iter().enumerate().all(|(k, leg)| {
-                let q = [0, 1, 2].map(|i| self.targets_by_joint[leg.joints[i]]);
-                self.controller
-                    .leg_statics(k, &q)
-                    .map(|l| legs[k] = l)
-                    .is_some()
-            });
+        let mut posed = self.legs_hold_every_link;
+        for (k, leg) in model.legs.iter().enumerate() {
+            if !posed {
+                break;
+            }
+            let q = [0, 1, 2].map(|i| self.targets_by_joint[leg.joints[i]]);
+            posed = self.controller.leg_statics(k, &q, &mut legs[k]);
+        }
         if posed {
             let loads = statics::stance_loads_of_legs(model, &legs, gravity, stance);
             statics::holding_torques_of_legs(model, &legs, gravity, &loads, &mut self.torques);
