@@ -101,13 +101,15 @@ pub fn sphere_faces_from(
         return among_walls(terrain, center, radius, orientation, below);
     }
     if below.penetration > 0.0 {
-        // a second face of a crease the sphere sits in, found from the side it rises on
+        // a second face of a crease the sphere sits in, found from the side it rises on (none
+        // to look for, nearly always: the one face, as `Touching::faces` gives a single one)
+        let starts = crease_starts(terrain, center, radius, &below);
+        if starts.iter().all(Option::is_none) {
+            return Faces::single(below);
+        }
         let mut touching = Touching::default();
         touching.add(below);
-        for start in crease_starts(terrain, center, radius, &below)
-            .into_iter()
-            .flatten()
-        {
+        for start in starts.into_iter().flatten() {
             touching.add(closest_from(terrain, center, radius, orientation, start));
         }
         return touching.faces(below);
