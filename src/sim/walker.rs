@@ -286,9 +286,9 @@ impl Walker {
 
     /// Sets the servos' targets to the legs' `angles`, held against the load of the feet in
     /// `stance` when [`Self::load_feedforward`] is on.
-    fn set_leg_targets(&mut self, angles: [LegAngles; 6], stance: [bool; 6]) {
+    fn set_leg_targets(&mut self, angles: &[LegAngles; 6], stance: [bool; 6]) {
         for (leg, angles) in self.hexapod.model().legs.iter().zip(angles) {
-            for (j, a) in leg.joints.iter().zip(angles) {
+            for (j, &a) in leg.joints.iter().zip(angles) {
                 self.targets_by_joint[*j] = a;
             }
         }
@@ -440,7 +440,7 @@ impl Walker {
             } else {
                 self.controller.targets(t, command, blend)
             };
-            self.set_leg_targets(targets.joint_angles, targets.grounded);
+            self.set_leg_targets(&targets.joint_angles, targets.grounded);
             self.reach.record(t, &targets);
             self.last_targets = Some(targets);
         } else if self.terrain_following {
@@ -453,10 +453,10 @@ impl Walker {
                 self.tilted_start,
             );
             let angles = self.controller.standing_on(ground);
-            self.set_leg_targets(angles, [true; 6]);
+            self.set_leg_targets(&angles, [true; 6]);
         } else if self.load_feedforward {
             let angles = self.controller.standing_on(|_| 0.0);
-            self.set_leg_targets(angles, [true; 6]);
+            self.set_leg_targets(&angles, [true; 6]);
         }
         self.hexapod.step_into(&mut sample.robot);
         let robot = &sample.robot;
