@@ -472,12 +472,12 @@ impl Hexapod {
         copy(&mut sample.joint_velocities, &self.rates);
         copy(&mut sample.joint_targets, &self.targets);
         sample.joint_torques.clear();
-        sample
-            .joint_torques
-            .extend((0..self.model.joints.len()).map(|j| {
-                self.joints
-                    .applied_torque(j, self.targets[j], self.rates[j])
-            }));
+        let n = self.model.joints.len();
+        self.joints.applied_torques(
+            &self.targets[..n],
+            &self.rates[..n],
+            &mut sample.joint_torques,
+        );
         sample.link_contacts.clear();
         sample
             .link_contacts
