@@ -101,13 +101,15 @@ pub fn sphere_faces_from(
         return among_walls(terrain, center, radius, orientation, below);
     }
     if below.penetration > 0.0 {
-        // a second face of a crease the sphere sits in, found from the side it rises on
+        // a second face of a crease the sphere sits in, found from the side it rises on (none
+        // to look for, nearly always: the one face, as `Touching::faces` gives a single one)
+        let starts = crease_starts(terrain, center, radius, &below);
+        if starts.iter().all(Option::is_none) {
+            return Faces::single(below);
+        }
         let mut touching = Touching::default();
         touching.add(below);
-        for start in crease_starts(terrain, center, radius, &below)
-            .into_iter()
-            .flatten()
-        {
+        for start in starts.into_iter().flatten() {
             touching.add(closest_from(terrain, center, radius, orientation, start));
         }
         return touching.faces(below);
@@ -299,7 +301,7 @@ fn crease_starts(
     // it rises above the tangent plane at most K·L²/2 a distance L off
     let curvature = terrain.curvature_near(center.x, center.y, radius);
     let s = std::f64::consts::FRAC_1_SQRT_2;
-    [
+    let directions = [
         (1.0, 0.0),
         (s, s),
         (0.0, 1.0),
@@ -308,8 +310,11 @@ fn crease_starts(
         (-s, -s),
         (0.0, -1.0),
         (s, -s),
-    ]
-    .map(|(u, v)| {
+    ];
+    // a loop, not the array's `map` (whose closure was called per probe, its invariants
+    // computed again each time): the same arithmetic
+    let mut starts = [None; 8];
+    for (start, (u, v)) in starts.iter_mut().zip(directions) {
         let (x, y) = (center.x + REACH * radius * u, center.y + REACH * radius * v);
         let plane = found.point.z - (n.x * (x - found.point.x) + n.y * (y - found.point.y)) / n.z;
         if let Some(k) = curvature {
@@ -318,12 +323,13 @@ fn crease_starts(
             let (u, v) = (x - found.point.x, y - found.point.y);
             let along2 = (u * u + v * v) / (n.z * n.z);
             if 0.5 * k * along2 <= sphere - plane {
-                return None;
+                continue;
             }
         }
         let h = terrain.height(x, y);
-        (h > plane + 1e-6 && h > sphere).then_some((x, y))
-    })
+        *start = (h > plane + 1e-6 && h > sphere).then_some((x, y));
+    }
+    starts
 }
 
 /// The surfaces (treads, wall faces, edges) a sphere clear of the ground with its centre

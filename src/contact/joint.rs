@@ -168,10 +168,16 @@ fn fill_blocks<R, C, S, R2, S2>(
     S2: na::StorageMut<f64, R2, na::U1>,
 {
     for a in 0..m {
-        for b in 0..m {
+        // the block below the diagonal is the one above it transposed, bit for bit (a sum is
+        // the same either way round): each pair of blocks is read and summed once
+        for b in a..m {
             let symmetric = (block(a, b) + block(b, a).transpose()) * 0.5;
             t_ss.fixed_view_mut::<2, 2>(2 * a, 2 * b)
                 .copy_from(&symmetric);
+            if b != a {
+                t_ss.fixed_view_mut::<2, 2>(2 * b, 2 * a)
+                    .copy_from(&symmetric.transpose());
+            }
         }
         column.fixed_rows_mut::<2>(2 * a).copy_from(&rhs(a));
     }

@@ -632,10 +632,14 @@ impl GaitController {
         }
     }
 
-    /// Leg `k`'s pose at `angles` for the load feed-forward, from its last solve's forward
-    /// kinematics when `angles` are that solve's answer ([`LegChain::statics`]).
-    pub fn leg_statics(&self, k: usize, angles: &[f64]) -> Option<LegStatics> {
-        self.chains[k].statics(self.warm_last[k].as_ref()?, angles)
+    /// Leg `k`'s pose at `angles` for the load feed-forward into `out`, from its last solve's
+    /// forward kinematics when `angles` are that solve's answer ([`LegChain::statics_into`]);
+    /// false (`out` untouched) otherwise.
+    #[inline]
+    pub fn leg_statics(&self, k: usize, angles: &[f64], out: &mut LegStatics) -> bool {
+        self.warm_last[k]
+            .as_ref()
+            .is_some_and(|warm| self.chains[k].statics_into(warm, angles, out))
     }
 
     /// Leg `k`'s foot centre target and joint angles for the planned point `planned`, `lift`

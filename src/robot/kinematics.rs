@@ -341,8 +341,14 @@ impl LegChain {
         q
     }
 
+    #[inline]
     fn clamp3(&self, q: [f64; 3]) -> [f64; 3] {
-        [0, 1, 2].map(|k| q[k].clamp(self.lower[k], self.upper[k]))
+        let (lower, upper) = (&self.lower, &self.upper);
+        [
+            q[0].clamp(lower[0], upper[0]),
+            q[1].clamp(lower[1], upper[1]),
+            q[2].clamp(lower[2], upper[2]),
+        ]
     }
 
     /// Joint angles that put the foot at `target` (body frame), starting from `guess` (use the
@@ -446,19 +452,28 @@ impl LegChain {
     /// feed-forward so poses the legs without forward kinematics of all the links. The links'
     /// orientations are those the solve's last forward kinematics turned ([`Self::frames3`]).
     pub fn statics(&self, warm: &IkWarm, q: &[f64]) -> Option<LegStatics> {
+        let mut statics = LegStatics::default();
+        self.statics_into(warm, q, &mut statics).then_some(statics)
+    }
+
+    /// [`Self::statics`] written into `out` (false, `out` untouched, where it gives None): the
+    /// feed-forward poses six legs every step, each in place.
+    #[inline]
+    pub fn statics_into(&self, warm: &IkWarm, q: &[f64], out: &mut LegStatics) -> bool {
         if self.n != 3 || q.len() != 3 {
-            return None;
+            return false;
         }
         if warm.angles.map(f64::to_bits) != [q[0], q[1], q[2]].map(f64::to_bits) {
-            return None;
+            return false;
         }
-        let (joints, foot, rotation, [first, second]) = *warm.frames();
+        let (joints, foot, rotation, [first, second]) = warm.frames();
         let links = [first, second, rotation];
-        Some(LegStatics {
-            joints,
-            coms: [0, 1, 2].map(|k| links[k] * self.coms[k] + joints[k].0),
-            foot,
-        })
+        out.joints = *joints;
+        for k in 0..3 {
+            out.coms[k] = *links[k] * self.coms[k] + joints[k].0;
+        }
+        out.foot = *foot;
+        true
     }
 
     /// Heading of the leg at rest (all joints zero): the yaw of the foot seen from the hip.

@@ -20,6 +20,13 @@ pub trait Stepper {
 
     fn step(&mut self) -> Self::Sample;
 
+    /// [`Stepper::step`] into `last`, the last sample, once nothing reads it any more: a
+    /// stepper may write the new sample over it in place instead of making a new one (the walk's
+    /// vectors of joint angles, rates, targets and torques: no allocation, no copy of the sample).
+    fn step_into(&mut self, last: &mut Option<Self::Sample>) {
+        *last = Some(self.step());
+    }
+
     fn world(&self) -> &Self::World;
 
     /// Why `sample` is not physical, if it is not: what, where and the likely cause (see
@@ -98,16 +105,16 @@ impl<S> Looping<S> {
         let started = std::time::Instant::now();
         let mut taken = 0;
         while !self.stopped() && taken < steps && !super::interrupted() {
-            let sample = stepper.step();
+            stepper.step_into(&mut self.last);
+            let sample = self.last.as_ref().expect("a step leaves its sample");
             taken += 1;
-            if let Some(message) = stepper.diverged(&sample) {
+            if let Some(message) = stepper.diverged(sample) {
                 // the diverged step is still observed: the files show where it went wrong
-                let _ = observe(observers, &sample, stepper.world());
+                let _ = observe(observers, sample, stepper.world());
                 self.failure = Some(message);
             } else {
-                self.error = observe(observers, &sample, stepper.world()).err();
+                self.error = observe(observers, sample, stepper.world()).err();
             }
-            self.last = Some(sample);
         }
         self.taken += taken;
         self.seconds += started.elapsed().as_secs_f64();

@@ -81,16 +81,31 @@ struct Walking {
     watchdog: Watchdog,
 }
 
+impl Walking {
+    /// Gives the walker this step's command: the caller's, or the schedule's.
+    fn command_now(&mut self) {
+        let command = self
+            .command
+            .unwrap_or_else(|| self.commands.at(self.walker.gait_time().max(0.0)));
+        self.walker.set_command(command);
+    }
+}
+
 impl Stepper for Walking {
     type Sample = WalkSample;
     type World = Walker;
 
     fn step(&mut self) -> WalkSample {
-        let command = self
-            .command
-            .unwrap_or_else(|| self.commands.at(self.walker.gait_time().max(0.0)));
-        self.walker.set_command(command);
+        self.command_now();
         self.walker.step()
+    }
+
+    fn step_into(&mut self, last: &mut Option<WalkSample>) {
+        self.command_now();
+        match last {
+            Some(sample) => self.walker.step_into(sample),
+            None => *last = Some(self.walker.step()),
+        }
     }
 
     fn world(&self) -> &Walker {

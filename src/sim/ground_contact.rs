@@ -313,9 +313,13 @@ impl GroundContacts {
         let slots = id * MAX_FACES..(id + 1) * MAX_FACES;
         let center = frame.transform_point3(sphere.center);
         let r = sphere.radius;
-        // a sphere well clear of the ground needs no closest-point search
-        if center.z - r > self.ceiling || center.z - r > terrain.ceiling_near(center.x, center.y, r)
-        {
+        // a sphere well clear of the ground needs no closest-point search; one that touched
+        // last step (a stance foot: nearly always it still does) is searched without asking the
+        // cells around it: were it clear of their bounds, the search would find the same, a gap
+        // (no surface point within its radius), and the same slots and search state are reset
+        let clear =
+            |terrain: &HeightGrid| center.z - r > terrain.ceiling_near(center.x, center.y, r);
+        if center.z - r > self.ceiling || (self.last_search[id].is_none() && clear(terrain)) {
             self.slots[slots].fill(Slot::default());
             self.last_search[id] = None;
             return false;

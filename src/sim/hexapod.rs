@@ -79,7 +79,7 @@ pub enum Attitude {
 }
 
 /// The robot's state after a step.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct HexapodSample {
     pub step: u64,
     pub time: f64,
@@ -414,6 +414,15 @@ impl Hexapod {
 
     /// Computes each foot's ground force, applies it with the servos', and advances one step.
     pub fn step(&mut self) -> HexapodSample {
+        let mut sample = HexapodSample::default();
+        self.step_into(&mut sample);
+        sample
+    }
+
+    /// [`Hexapod::step`], written over `sample` (an earlier one no longer read) in place: its
+    /// vectors (joint angles, rates, targets, torques, link contacts) are reused, not
+    /// allocated, and the sample is not copied: the step loop hands each step the last one's.
+    pub fn step_into(&mut self, sample: &mut HexapodSample) {
         for &h in &self.bodies {
             // not `bodies[h]`: a body indexed mutably is marked modified, and rapier then redoes
             // its island, mass and (impulse joints) joint layout work in the step
@@ -443,17 +452,36 @@ impl Hexapod {
             self.drift = self.joint_drift();
         }
         self.last_contacts = contacts;
-        self.sample()
+        self.sample_into(sample);
     }
 
     /// The current state.
     pub fn sample(&self) -> HexapodSample {
-        let joint_torques = (0..self.model.joints.len())
-            .map(|j| {
-                self.joints
-                    .applied_torque(j, self.targets[j], self.rates[j])
-            })
-            .collect();
+        let mut sample = HexapodSample::default();
+        self.sample_into(&mut sample);
+        sample
+    }
+
+    /// [`Hexapod::sample`] written over `sample`, its vectors reused.
+    fn sample_into(&self, sample: &mut HexapodSample) {
+        let copy = |into: &mut Vec<f64>, from: &[f64]| {
+            into.clear();
+            into.extend_from_slice(from);
+        };
+        copy(&mut sample.joint_angles, &self.angles);
+        copy(&mut sample.joint_velocities, &self.rates);
+        copy(&mut sample.joint_targets, &self.targets);
+        sample.joint_torques.clear();
+        let n = self.model.joints.len();
+        self.joints.applied_torques(
+            &self.targets[..n],
+            &self.rates[..n],
+            &mut sample.joint_torques,
+        );
+        sample.link_contacts.clear();
+        sample
+            .link_contacts
+            .extend_from_slice(&self.last_link_contacts);
         let (v_com, omega) = self.joints.base_velocity(&self.engine);
         let body = self.link_frame(0);
         let com_offset = body.matrix3 * self.root_com;
@@ -463,26 +491,19 @@ impl Hexapod {
                 .link_frame(leg.foot_link)
                 .transform_point3(leg.foot.center);
         }
-        HexapodSample {
-            step: self.step,
-            time: self.time(),
-            body_height: {
-                let hips = body.transform_point3(self.hips_centre);
-                hips.z - self.terrain.height(hips.x, hips.y)
-            },
-            body,
-            body_rotation: DQuat::from_mat3(&body.matrix3).normalize(),
-            body_velocity: v_com - omega.cross(com_offset),
-            body_angular_velocity: omega,
-            joint_angles: self.angles.clone(),
-            joint_velocities: self.rates.clone(),
-            joint_targets: self.targets.clone(),
-            joint_torques,
-            foot_positions,
-            foot_contacts: self.last_contacts,
-            link_contacts: self.last_link_contacts.clone(),
-            joint_drift: self.drift,
-        }
+        sample.step = self.step;
+        sample.time = self.time();
+        sample.body_height = {
+            let hips = body.transform_point3(self.hips_centre);
+            hips.z - self.terrain.height(hips.x, hips.y)
+        };
+        sample.body = body;
+        sample.body_rotation = DQuat::from_mat3(&body.matrix3).normalize();
+        sample.body_velocity = v_com - omega.cross(com_offset);
+        sample.body_angular_velocity = omega;
+        sample.foot_positions = foot_positions;
+        sample.foot_contacts = self.last_contacts;
+        sample.joint_drift = self.drift;
     }
 }
 

@@ -108,7 +108,7 @@ impl GroundPlane {
 const LEVELLING_RAMP: f64 = 0.5;
 
 /// A step of the walker: the robot's state and the gait's targets for it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct WalkSample {
     pub robot: HexapodSample,
     /// The gait's targets; None while settling and while the joints are driven from outside.
@@ -286,9 +286,9 @@ impl Walker {
 
     /// Sets the servos' targets to the legs' `angles`, held against the load of the feet in
     /// `stance` when [`Self::load_feedforward`] is on.
-    fn set_leg_targets(&mut self, angles: [LegAngles; 6], stance: [bool; 6]) {
+    fn set_leg_targets(&mut self, angles: &[LegAngles; 6], stance: [bool; 6]) {
         for (leg, angles) in self.hexapod.model().legs.iter().zip(angles) {
-            for (j, a) in leg.joints.iter().zip(angles) {
+            for (j, &a) in leg.joints.iter().zip(angles) {
                 self.targets_by_joint[*j] = a;
             }
         }
@@ -322,14 +322,14 @@ impl Walker {
         let body = self.hexapod.body_frame().matrix3;
         let gravity = body.transpose() * DVec3::new(0.0, 0.0, -STANDARD_GRAVITY);
         let mut legs = [LegStatics::default(); 6];
-        let posed = self.legs_hold_every_link
-            && model.legs.iter().enumerate().all(|(k, leg)| {
-                let q = [0, 1, 2].map(|i| self.targets_by_joint[leg.joints[i]]);
-                self.controller
-                    .leg_statics(k, &q)
-                    .map(|l| legs[k] = l)
-                    .is_some()
-            });
+        let mut posed = self.legs_hold_every_link;
+        for (k, leg) in model.legs.iter().enumerate() {
+            if !posed {
+                break;
+            }
+            let q = [0, 1, 2].map(|i| self.targets_by_joint[leg.joints[i]]);
+            posed = self.controller.leg_statics(k, &q, &mut legs[k]);
+        }
         if posed {
             let loads = statics::stance_loads_of_legs(model, &legs, gravity, stance);
             statics::holding_torques_of_legs(model, &legs, gravity, &loads, &mut self.torques);
@@ -386,6 +386,14 @@ impl Walker {
     }
 
     pub fn step(&mut self) -> WalkSample {
+        let mut sample = WalkSample::default();
+        self.step_into(&mut sample);
+        sample
+    }
+
+    /// [`Walker::step`], written over `sample` (an earlier one no longer read) in place: its
+    /// vectors are reused, not allocated ([`Hexapod::step_into`]).
+    pub fn step_into(&mut self, sample: &mut WalkSample) {
         let t = self.gait_time();
         if let Some(targets) = &self.given_targets {
             self.hexapod.set_targets(targets);
@@ -432,7 +440,7 @@ impl Walker {
             } else {
                 self.controller.targets(t, command, blend)
             };
-            self.set_leg_targets(targets.joint_angles, targets.grounded);
+            self.set_leg_targets(&targets.joint_angles, targets.grounded);
             self.reach.record(t, &targets);
             self.last_targets = Some(targets);
         } else if self.terrain_following {
@@ -445,12 +453,13 @@ impl Walker {
                 self.tilted_start,
             );
             let angles = self.controller.standing_on(ground);
-            self.set_leg_targets(angles, [true; 6]);
+            self.set_leg_targets(&angles, [true; 6]);
         } else if self.load_feedforward {
             let angles = self.controller.standing_on(|_| 0.0);
-            self.set_leg_targets(angles, [true; 6]);
+            self.set_leg_targets(&angles, [true; 6]);
         }
-        let robot = self.hexapod.step();
+        self.hexapod.step_into(&mut sample.robot);
+        let robot = &sample.robot;
         let to_body = robot.body.matrix3.transpose();
         self.feel = robot.foot_contacts.map(|c| {
             c.map_or(FootFeel::default(), |c| FootFeel {
@@ -466,11 +475,8 @@ impl Walker {
                 }
             }
         }
-        WalkSample {
-            robot,
-            gait: self.last_targets,
-            settling: t < 0.0,
-        }
+        sample.gait = self.last_targets;
+        sample.settling = t < 0.0;
     }
 }
 

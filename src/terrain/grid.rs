@@ -571,14 +571,17 @@ impl HeightGrid {
 /// Cell index, local coordinate in [0, 1] and whether the coordinate lay inside the grid.
 fn locate(x: f64, origin: f64, spacing: f64, n: usize) -> (usize, f64, bool) {
     let u = (x - origin) / spacing;
-    let last = (n - 1) as f64;
+    // sizes and cells go between integers and floats through i64, exactly as through usize
+    // (they are far below 2⁵³), because x86-64 converts a signed integer in one instruction and
+    // an unsigned one in several (the grid lookups run a hundred times a step)
+    let last = (n - 1) as i64 as f64;
     // NaN compares false everywhere: treat it as outside, at the origin (callers check finiteness).
     let inside = (0.0..=last).contains(&u);
     let u = if u.is_nan() { 0.0 } else { u.clamp(0.0, last) };
     // u ≥ 0: truncation is the floor, without the call to libm's `floor` that x86-64's baseline
     // instruction set (no SSE4.1 rounding) makes of it, a dozen times a step for each foot
-    let cell = (u as usize).min(n - 2);
-    (cell, u - cell as f64, inside)
+    let cell = (u as i64 as usize).min(n - 2);
+    (cell, u - cell as i64 as f64, inside)
 }
 
 /// Catmull–Rom weights for samples at −1, 0, 1, 2 and their derivatives with respect to t.

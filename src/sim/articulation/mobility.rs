@@ -90,9 +90,13 @@ impl<const D: usize> Mobility<D> {
     #[inline]
     pub fn contact(&mut self, i: usize) -> ContactAxes<'_, D> {
         let first = 3 * i;
+        let lanes = [0, 1, 2].map(|axis| {
+            let lane = first % GROUP_AXES + axis;
+            (lane / LANE, lane % LANE)
+        });
         ContactAxes {
             jacobian: &mut self.groups[first / GROUP_AXES].jacobian,
-            first: first % GROUP_AXES,
+            lanes,
         }
     }
 
@@ -123,7 +127,7 @@ impl<const D: usize> Mobility<D> {
         }
         // more contacts (shins, a belly): M⁻¹·Aᵀ group by group (each column of Aᵀ is solved on
         // its own), then W's blocks between every two groups
-        let needed = needed_rows(&self.groups[..groups], axes, factors.parents());
+        let needed = needed_rows::<CHUNKS, D>(&self.groups[..groups], axes, factors.parents());
         for g in 0..groups {
             let valid = lanes(axes - g * GROUP_AXES);
             let group = &mut self.groups[g];
@@ -158,7 +162,7 @@ impl<const D: usize> Mobility<D> {
 
     /// [`Mobility::compute`] for one group of axes, `C` chunks of them.
     fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
-        let needed = needed_rows(&self.groups[..1], axes, factors.parents());
+        let needed = needed_rows::<C, D>(&self.groups[..1], axes, factors.parents());
         let group = &mut self.groups[0];
         group.solved = group.jacobian;
         solve::<C, D>(&mut group.solved, factors, &needed, &lanes(axes));
@@ -168,10 +172,11 @@ impl<const D: usize> Mobility<D> {
         for row in product.iter_mut() {
             *row = [Vec4::ZERO; CHUNKS];
         }
+        // (A's row read as one run of lanes: no lane index computed per entry)
         let rows = group.jacobian.iter().zip(group.solved.iter()).zip(needed);
         for ((a_row, x_row), _) in rows.filter(|(_, needed)| *needed) {
-            for (a, w_row) in product.iter_mut().enumerate() {
-                let coefficient = a_row[a / LANE].as_ref()[a % LANE];
+            let coefficients: [[f32; LANE]; C] = std::array::from_fn(|c| a_row[c].to_array());
+            for (w_row, &coefficient) in product.iter_mut().zip(coefficients.as_flattened()) {
                 if coefficient != 0.0 {
                     for c in 0..C {
                         w_row[c] += x_row[c] * coefficient;
@@ -209,15 +214,18 @@ impl<const D: usize> Mobility<D> {
 /// One contact's three axes in its group's Jacobian ([`Mobility::contact`]).
 pub struct ContactAxes<'a, const D: usize> {
     jacobian: &'a mut [Row; D],
-    first: usize,
+    /// Each axis' chunk and lane in a row, found once for all the contact's entries.
+    lanes: [(usize, usize); 3],
 }
 
 impl<const D: usize> ContactAxes<'_, D> {
-    /// Sets the contact's axis `axis` (0: t₁, 1: t₂, 2: n) entry for degree of freedom `dof`.
+    /// Sets the contact's three axes' (t₁, t₂, n) entries for degree of freedom `dof`.
     #[inline]
-    pub fn set(&mut self, dof: usize, axis: usize, value: f32) {
-        let lane = self.first + axis;
-        self.jacobian[dof][lane / LANE].as_mut()[lane % LANE] = value;
+    pub fn set(&mut self, dof: usize, values: [f32; 3]) {
+        let row = &mut self.jacobian[dof];
+        for (&(chunk, lane), value) in self.lanes.iter().zip(values) {
+            row[chunk].as_mut()[lane] = value;
+        }
     }
 }
 
@@ -245,12 +253,19 @@ fn has_entry<const C: usize>(row: &Row, lanes: &Lanes) -> bool {
 /// contact axes (over `groups`) has a Jacobian entry, and their ancestors, which the lower
 /// solve reads on the way down. A leg whose foot is in the air (half of them in a tripod's
 /// stance) has none.
-fn needed_rows<const D: usize>(groups: &[Group<D>], axes: usize, parents: &[usize]) -> [bool; D] {
+///
+/// `C`: the chunks that hold the axes (a single group's first `C`; [`CHUNKS`] for several): the
+/// lanes past them are not valid, so they are not looked at.
+fn needed_rows<const C: usize, const D: usize>(
+    groups: &[Group<D>],
+    axes: usize,
+    parents: &[usize],
+) -> [bool; D] {
     let mut needed = [false; D];
     for (g, group) in groups.iter().enumerate() {
         let valid = lanes(axes.saturating_sub(g * GROUP_AXES));
         for (k, row) in group.jacobian.iter().enumerate() {
-            needed[k] |= has_entry::<CHUNKS>(row, &valid);
+            needed[k] |= has_entry::<C>(row, &valid);
         }
     }
     for k in (0..D).rev() {

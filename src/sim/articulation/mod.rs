@@ -124,6 +124,18 @@ pub(super) trait Joints: Send {
     /// rate now.
     fn applied_torque(&self, joint: usize, target: f64, rate: f64) -> f64;
 
+    /// Every joint's [`Joints::applied_torque`], appended to `out` (one call for the sample's
+    /// eighteen or more, not one each through the trait object).
+    fn applied_torques(&self, targets: &[f64], rates: &[f64], out: &mut Vec<f64>) {
+        out.extend(
+            targets
+                .iter()
+                .zip(rates)
+                .enumerate()
+                .map(|(j, (&target, &rate))| self.applied_torque(j, target, rate)),
+        );
+    }
+
     /// The root's centre-of-mass velocity and angular velocity (world).
     fn base_velocity(&self, engine: &Engine) -> (DVec3, DVec3);
 

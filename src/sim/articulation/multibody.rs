@@ -254,6 +254,18 @@ impl Joints for MultibodyRobot {
         }
     }
 
+    /// Each joint's [`Joints::applied_torque`], in one loop (the trait's default calls it
+    /// through the trait object).
+    fn applied_torques(&self, targets: &[f64], rates: &[f64], out: &mut Vec<f64>) {
+        out.extend(
+            targets
+                .iter()
+                .zip(rates)
+                .enumerate()
+                .map(|(j, (&target, &rate))| self.applied_torque(j, target, rate)),
+        );
+    }
+
     /// The torque the servo applied over the last step (N·m): the implicit spring-damper's
     /// k·(q* − qₙ) − (k·dt + d)·q̇ₙ₊₁, or the saturated effort.
     fn applied_torque(&self, joint: usize, target: f64, qd: f64) -> f64 {
@@ -327,20 +339,16 @@ fn contact_mobility_in<const D: usize>(
         let mut rows = scratch.contact(i);
         let columns = jacobian.as_slice().chunks_exact(6);
         for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
-            if column.iter().all(|v| v.to_bits() == 0) {
+            if column.iter().fold(0, |bits, v| bits | v.to_bits()) == 0 {
                 velocity += glam::Vec3::ZERO * rate;
-                for (a, &entry) in off_path.iter().enumerate() {
-                    rows.set(dof, a, entry);
-                }
+                rows.set(dof, off_path);
                 continue;
             }
             let linear = glam::Vec3::from_slice(&column[..3]);
             let angular = glam::Vec3::from_slice(&column[3..]);
             let point = linear - r.cross(angular);
             velocity += point * rate;
-            for (a, axis) in axes.iter().enumerate() {
-                rows.set(dof, a, axis.dot(point));
-            }
+            rows.set(dof, axes.map(|axis| axis.dot(point)));
         }
         velocities[i] = velocity.as_dvec3();
     }
