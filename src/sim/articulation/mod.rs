@@ -124,8 +124,9 @@ pub(super) trait Joints: Send {
     /// rate now.
     fn applied_torque(&self, joint: usize, target: f64, rate: f64) -> f64;
 
-    /// Every joint's [`Joints::applied_torque`], appended to `out` (one call for the sample's
-    /// eighteen or more, not one each through the trait object).
+    /// Every joint's [`Joints::applied_torque`], appended to `out`: one call through the trait
+    /// object for the sample's eighteen or more (inside it, compiled for each articulation,
+    /// `applied_torque` is a direct call).
     fn applied_torques(&self, targets: &[f64], rates: &[f64], out: &mut Vec<f64>) {
         out.extend(
             targets

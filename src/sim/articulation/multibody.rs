@@ -254,18 +254,6 @@ impl Joints for MultibodyRobot {
         }
     }
 
-    /// Each joint's [`Joints::applied_torque`], in one loop (the trait's default calls it
-    /// through the trait object).
-    fn applied_torques(&self, targets: &[f64], rates: &[f64], out: &mut Vec<f64>) {
-        out.extend(
-            targets
-                .iter()
-                .zip(rates)
-                .enumerate()
-                .map(|(j, (&target, &rate))| self.applied_torque(j, target, rate)),
-        );
-    }
-
     /// The torque the servo applied over the last step (N·m): the implicit spring-damper's
     /// k·(q* − qₙ) − (k·dt + d)·q̇ₙ₊₁, or the saturated effort.
     fn applied_torque(&self, joint: usize, target: f64, qd: f64) -> f64 {
