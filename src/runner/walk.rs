@@ -102,10 +102,8 @@ impl Stepper for Walking {
 
     fn step_into(&mut self, last: &mut Option<WalkSample>) {
         self.command_now();
-        match last {
-            Some(sample) => self.walker.step_into(sample),
-            None => *last = Some(self.walker.step()),
-        }
+        self.walker
+            .step_into(last.get_or_insert_with(WalkSample::default));
     }
 
     fn world(&self) -> &Walker {

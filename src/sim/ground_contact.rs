@@ -317,9 +317,10 @@ impl GroundContacts {
         // last step (a stance foot: nearly always it still does) is searched without asking the
         // cells around it: were it clear of their bounds, the search would find the same, a gap
         // (no surface point within its radius), and the same slots and search state are reset
-        let clear =
-            |terrain: &HeightGrid| center.z - r > terrain.ceiling_near(center.x, center.y, r);
-        if center.z - r > self.ceiling || (self.last_search[id].is_none() && clear(terrain)) {
+        if center.z - r > self.ceiling
+            || (self.last_search[id].is_none()
+                && center.z - r > terrain.ceiling_near(center.x, center.y, r))
+        {
             self.slots[slots].fill(Slot::default());
             self.last_search[id] = None;
             return false;
