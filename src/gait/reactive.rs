@@ -15,6 +15,11 @@
 //! - **blocked**: a swinging foot pushed back against its swing (a riser in the way) lifts higher,
 //!   its lift growing at [`LIFT_GROWTH`] while blocked, stays where it is across the ground
 //!   meanwhile, and carries on forward over it, catching up with its swing by the landing;
+//! - **not on a riser**: ground steeper than 45° ([`FOOTHOLD_COS`]) that pushes back against
+//!   the swing is an obstacle, not a foothold, whatever the force's direction: a swing that
+//!   meets it is blocked, from its lift-off on. Landed on a stair's nose (its friction holding
+//!   the force 35° off vertical), hex18's rear foot slid 5 cm down the riser early in its
+//!   stance; lifting from a riser's foot, a front foot scraped up its face;
 //! - **the lift remembered**: the extra lift a blocked swing needed is remembered, fading over
 //!   [`LIFT_MEMORY_TIME`], and every swing starts that much higher — the legs behind the one
 //!   that met a riser, and the next risers of a flight, are cleared instead of met (stick
@@ -51,11 +56,20 @@ pub const BODY_TIME: f64 = 0.3;
 const LIFT_OFF_SHARE: f64 = 0.15;
 const DESCENT_SHARE: f64 = 0.5;
 
-/// What a foot feels: its normal force (N) and its total ground force in the body frame.
+/// The steepest ground a swing lands on (the cosine of its slope: 45°). A foot that meets
+/// steeper ground (a riser's nose or face) has met an obstacle, not a foothold: landed on a
+/// stair's nose, hex18's rear foot slid 5 cm down the riser in its stance, at 1 m/s.
+pub const FOOTHOLD_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// What a foot feels: its normal force (N), its total ground force in the body frame, and
+/// which way up the ground it touches is, if it touches any (the contact normal's share along
+/// gravity's up, 1 on level ground, 0 on a wall: what a spherical foot's tactile skin tells
+/// from where it is touched, even as it lifts away and the force is nil).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FootFeel {
     pub normal_force: f64,
     pub force: DVec3,
+    pub upright: Option<f64>,
 }
 
 /// The reactive gait's state per leg, between steps.
@@ -192,9 +206,14 @@ impl Reactive {
                     return (self.offset[k] - plane).clamp(low, high);
                 }
                 let back = feel.force.truncate().dot(swing_direction.truncate());
-                let blocked = s > LIFT_OFF_SHARE
-                    && touching
-                    && (s < DESCENT_SHARE || back < -0.5 * feel.force.length());
+                // ground too steep to stand on that pushes back against the swing blocks it,
+                // from its lift-off on (a foot lifting from a riser's foot scraped 5 cm up its
+                // face); a stair's nose under a swing on its way down is passed over
+                let against = back < 0.0 && feel.upright.is_some_and(|up| up < FOOTHOLD_COS);
+                let blocked = against
+                    || touching
+                        && s > LIFT_OFF_SHARE
+                        && (s < DESCENT_SHARE || back < -0.5 * feel.force.length());
                 self.blocked[k] = blocked;
                 if blocked {
                     self.extra[k] = (self.extra[k] + LIFT_GROWTH * self.dt).min(MAX_EXTRA_LIFT);
@@ -312,6 +331,7 @@ mod tests {
         feel[0] = FootFeel {
             normal_force: normal,
             force,
+            upright: (normal > 0.0).then(|| force.normalize_or_zero().z),
         };
         feel
     }
@@ -370,6 +390,52 @@ mod tests {
         assert!(lifted > free + 0.01, "{lifted} against {free}");
         assert!(r.back_off(0) > 0.0);
         assert!(!r.grounded(0, LegPhase::Swing(0.4)));
+    }
+
+    /// A swing that meets ground too steep to stand on (a stair's nose, a riser's face) has met
+    /// an obstacle, not a foothold, even when the force it feels is near vertical: it does not
+    /// land there but lifts and draws back, from its lift-off on; the same force on a tread is a
+    /// touch-down, and a foot lifting off a tread is not blocked.
+    #[test]
+    fn a_foot_does_not_land_on_a_riser() {
+        let foot = DVec3::new(0.1, 0.1, -0.1);
+        // up and back, 25° off vertical: the nose's push with its friction up
+        let force = DVec3::new(-7.0, 0.0, 15.0);
+        let swing_into = |upright: f64, s: f64| {
+            let mut r = Reactive::new(4.0, DT);
+            r.feel(pressed(4.0, DVec3::new(0.0, 0.0, 4.0)));
+            r.offset(0, foot, LegPhase::Stance(0.9), 0.0, STEP, DVec3::X, ROOM);
+            let mut feel = pressed(force.length(), force);
+            feel[0].upright = Some(upright);
+            r.feel(feel);
+            let free = r.offset(0, foot, LegPhase::Swing(s), 0.01, STEP, DVec3::X, ROOM);
+            let mut lifted = free;
+            for _ in 0..20 {
+                lifted = r.offset(0, foot, LegPhase::Swing(s), 0.01, STEP, DVec3::X, ROOM);
+            }
+            (
+                r.grounded(0, LegPhase::Swing(s)),
+                r.back_off(0),
+                lifted - free,
+            )
+        };
+        // a nose whose normal is 71° off vertical, late in the swing: blocked
+        let (grounded, back_off, lift) = swing_into(0.32, 0.8);
+        assert!(
+            !grounded && back_off > 0.0 && lift > 0.0,
+            "{back_off} {lift}"
+        );
+        // a tread: the touch-down
+        let (grounded, back_off, _) = swing_into(1.0, 0.8);
+        assert!(grounded && back_off == 0.0);
+        // lifting off against a riser's face: blocked; off a tread: free
+        let (grounded, back_off, lift) = swing_into(0.0, 0.02);
+        assert!(
+            !grounded && back_off > 0.0 && lift > 0.0,
+            "{back_off} {lift}"
+        );
+        let (_, back_off, lift) = swing_into(1.0, 0.02);
+        assert!(back_off == 0.0 && lift == 0.0);
     }
 
     /// A swing's planned point at progress p of `d` (the ground's displacement over a stance).
@@ -467,6 +533,7 @@ mod tests {
         standing[1] = FootFeel {
             normal_force: 4.0,
             force: DVec3::new(0.0, 0.0, 4.0),
+            upright: Some(1.0),
         };
         let swing = |r: &mut Reactive| {
             r.feel(standing);

@@ -465,6 +465,7 @@ impl Walker {
             c.map_or(FootFeel::default(), |c| FootFeel {
                 normal_force: c.normal_force,
                 force: to_body * c.force,
+                upright: Some(c.frame.normal.z),
             })
         });
         if self.compliant {
