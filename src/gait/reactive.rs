@@ -57,8 +57,9 @@ const LIFT_OFF_SHARE: f64 = 0.15;
 const DESCENT_SHARE: f64 = 0.5;
 
 /// The steepest ground a swing lands on (the cosine of its slope: 45°). A foot that meets
-/// steeper ground (a riser's nose or face) has met an obstacle, not a foothold: landed on a
-/// stair's nose, hex18's rear foot slid 5 cm down the riser in its stance, at 1 m/s.
+/// steeper ground pushing back against its swing (a riser's nose or face) has met an obstacle,
+/// not a foothold: landed on a stair's nose, hex18's rear foot slid 5 cm down the riser in its
+/// stance, at 1 m/s.
 pub const FOOTHOLD_COS: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// What a foot feels: its normal force (N), its total ground force in the body frame, and
