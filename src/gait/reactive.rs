@@ -16,8 +16,8 @@
 //!   its lift growing at [`LIFT_GROWTH`] while blocked, stays where it is across the ground
 //!   meanwhile, and carries on forward over it, catching up with its swing by the landing;
 //! - **not on a riser**: ground steeper than 45° ([`FOOTHOLD_COS`]) that pushes back against
-//!   the swing is an obstacle, not a foothold, whatever the force's direction: a swing that
-//!   meets it is blocked, from its lift-off on. Landed on a stair's nose (its friction holding
+//!   the swing is an obstacle, not a foothold, however near vertical its friction turns the
+//!   force: a swing that meets it is blocked, from its lift-off on. Landed on a stair's nose (its friction holding
 //!   the force 35° off vertical), hex18's rear foot slid 5 cm down the riser early in its
 //!   stance; lifting from a riser's foot, a front foot scraped up its face;
 //! - **the lift remembered**: the extra lift a blocked swing needed is remembered, fading over
