@@ -554,7 +554,7 @@ impl GaitController {
                         // ground moves by d over a stance
                         let from = n + d * (0.5 + s * ratio) + self.foothold[k];
                         let to = n - d * (0.5 + (1.0 - s) * ratio) + self.next_foothold[k];
-                        let crossed = SwingGround::new(ground, from, to);
+                        let crossed = SwingGround::new(ground, from, to, self.radius[k]);
                         let landing = ground(to);
                         let lifted = if self.stance_ground[k].is_nan() {
                             ground(from)
