@@ -104,6 +104,9 @@ pub struct GaitController {
     next_foothold: [DVec3; 6],
     stance_ground: [f64; 6],
     swinging: [bool; 6],
+    /// Where the feet are (body frame, as `ground`'s points), when known: a stance foot stands
+    /// on the ground under it, not under its planned point ([`Self::feet_at`]).
+    feet_at: Option<[DVec3; 6]>,
     /// The last planned foot points and their gait time, for the bound on a target's speed
     /// ([`super::slew`]).
     last_planned: [DVec3; 6],
@@ -292,6 +295,7 @@ impl GaitController {
             next_foothold: [DVec3::ZERO; 6],
             stance_ground: [f64::NAN; 6],
             swinging: [false; 6],
+            feet_at: None,
             last_planned: [DVec3::ZERO; 6],
             last_time: None,
             joint_speed: last.map(|q| {
@@ -331,6 +335,13 @@ impl GaitController {
         self.last_planned = [DVec3::ZERO; 6];
         self.last_angles = last;
         speed
+    }
+
+    /// Perceptive: where the feet's centres are now (body frame, as the points of
+    /// [`Self::targets_on`]'s `ground`), so that a stance foot does not follow its planned
+    /// point over an edge it does not stand on ([`foothold::stance_ground`]).
+    pub fn feet_at(&mut self, feet: [DVec3; 6]) {
+        self.feet_at = Some(feet);
     }
 
     /// Turns the feet's rolling offset on or off (on after [`Self::new`]; the fit and its
@@ -545,7 +556,12 @@ impl GaitController {
             if let Some(ground) = &ground {
                 foot.z += match phase {
                     LegPhase::Stance(_) => {
-                        self.stance_ground[k] = ground(foot);
+                        self.stance_ground[k] = match self.feet_at {
+                            Some(feet) => {
+                                foothold::stance_ground(ground, foot, feet[k], self.radius[k])
+                            }
+                            None => ground(foot),
+                        };
                         self.stance_ground[k]
                     }
                     LegPhase::Swing(s) => {

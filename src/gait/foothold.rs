@@ -37,6 +37,49 @@ pub fn near_edge(ground: &impl Fn(DVec3) -> f64, p: DVec3, half_width: f64) -> b
     })
 }
 
+/// The ground under a stance foot planned at `planned` whose centre is at `foot` (body frame,
+/// `ground`'s points): the planned point's, unless an edge lies between the two and the foot
+/// stands on its high side — then the ground under the foot ([`footprint_ground`]).
+///
+/// A body that moves or pitches off its plan by a few centimetres carries a stance foot's
+/// planned point across the ground while the foot stands still. Over a trench's edge the
+/// planned ground drops by the trench's depth, and the leg, its target dropped with it, pushed
+/// hex18's rear foot into the trench (perceptive, 6 cm gaps: the robot went over backwards).
+/// Everywhere else the planned point's ground is kept: followed always, the ground under the
+/// feet let a body that fell behind its plan on a 30° slope raise its own stance targets (the
+/// feet ahead of their planned points, uphill) and slide back down.
+pub fn stance_ground(
+    ground: &impl Fn(DVec3) -> f64,
+    planned: DVec3,
+    foot: DVec3,
+    radius: f64,
+) -> f64 {
+    let there = ground(planned);
+    let under = footprint_ground(ground, foot, radius);
+    let apart = (planned - foot).truncate().length() + radius;
+    if under - there > EDGE_SLOPE * apart {
+        under
+    } else {
+        there
+    }
+}
+
+/// The ground a foot of `radius` centred above `p` stands on: the highest under its footprint
+/// (its centre and four points a radius away), so a foot whose centre overhangs an edge stands
+/// on the edge, not at the bottom of the drop beside it.
+pub fn footprint_ground(ground: &impl Fn(DVec3) -> f64, p: DVec3, radius: f64) -> f64 {
+    [
+        DVec3::ZERO,
+        DVec3::X * radius,
+        -DVec3::X * radius,
+        DVec3::Y * radius,
+        -DVec3::Y * radius,
+    ]
+    .iter()
+    .map(|&o| ground(p + o))
+    .fold(f64::NEG_INFINITY, f64::max)
+}
+
 /// The shift (body frame, horizontal) that moves the foothold `p` off any edge within
 /// `radius + EDGE_MARGIN` of it: the shortest up to `longest`, tried along `direction` (the
 /// leg's travel across the ground) first, then against it, to either side and diagonally (a
@@ -121,5 +164,32 @@ mod tests {
         // out of reach: stays
         let shift = away_from_edges(&riser, DVec3::new(0.29, 0.0, 0.0), DVec3::X, radius, 0.01);
         assert_eq!(shift, DVec3::ZERO);
+    }
+
+    /// A stance foot standing 1 cm before a trench whose planned point the body has carried
+    /// 2 cm past its edge stands on the tread; one planned on the tread, or on a 30° slope
+    /// 2 cm up or down from where it stands, keeps its planned point's ground, and one whose
+    /// centre overhangs the edge by less than its radius stands on the edge.
+    #[test]
+    fn a_stance_foot_stands_on_the_ground_under_it() {
+        let radius = 0.01;
+        let trench = |p: DVec3| if p.x < 0.3 { 0.0 } else { -0.1 };
+        let foot = DVec3::new(0.29, 0.1, -0.1);
+        let over = DVec3::new(0.32, 0.1, -0.1);
+        assert_eq!(stance_ground(&trench, over, foot, radius), 0.0);
+        let on = DVec3::new(0.27, 0.1, -0.1);
+        assert_eq!(stance_ground(&trench, on, foot, radius), 0.0);
+        // in the trench, planned in it too: its bottom
+        let deep = DVec3::new(0.35, 0.1, -0.1);
+        assert_eq!(stance_ground(&trench, deep, deep, radius), -0.1);
+        // overhanging by 0.6 radius: on the edge
+        let hang = DVec3::new(0.306, 0.1, -0.1);
+        assert_eq!(footprint_ground(&trench, hang, radius), 0.0);
+        let slope = |p: DVec3| 0.577 * p.x;
+        for planned_x in [0.27, 0.31] {
+            let planned = DVec3::new(planned_x, 0.1, -0.1);
+            let g = stance_ground(&slope, planned, foot, radius);
+            assert_eq!(g, slope(planned), "{planned_x}");
+        }
     }
 }

@@ -43,6 +43,8 @@ pub struct Walker {
     heading: Option<HeadingHold>,
     /// What each foot felt in the last step (normal force, ground force in the body frame).
     feel: [FootFeel; 6],
+    /// Where each foot's centre was after the last step (world); None before the first.
+    feet: Option<[DVec3; 6]>,
     /// Each leg's ground force in the last step, its foot's and its links' (body frame);
     /// summed only for leg compliance, the one that reads it.
     leg_forces: [DVec3; 6],
@@ -151,6 +153,7 @@ impl Walker {
             hold_heading: false,
             heading: None,
             feel: [FootFeel::default(); 6],
+            feet: None,
             leg_forces: [DVec3::ZERO; 6],
             leg_of_link,
             given_targets: None,
@@ -429,6 +432,13 @@ impl Walker {
                 self.command
             };
             let targets = if self.terrain_following {
+                if let Some(feet) = self.feet {
+                    // the feet where they are, in the frame of `terrain_under`'s points
+                    let body = self.hexapod.body_frame();
+                    let to_level = glam::DMat3::from_rotation_z(-heading_of(&body.matrix3));
+                    self.controller
+                        .feet_at(feet.map(|w| to_level * (w - body.translation)));
+                }
                 let plane = self.ground_reference();
                 let ground = Self::ground_within_reach(
                     &self.hexapod,
@@ -460,6 +470,7 @@ impl Walker {
         }
         self.hexapod.step_into(&mut sample.robot);
         let robot = &sample.robot;
+        self.feet = Some(robot.foot_positions);
         let to_body = robot.body.matrix3.transpose();
         self.feel = robot.foot_contacts.map(|c| {
             c.map_or(FootFeel::default(), |c| FootFeel {
