@@ -39,7 +39,7 @@ pub fn near_edge(ground: &impl Fn(DVec3) -> f64, p: DVec3, half_width: f64) -> b
 
 /// The ground under a stance foot planned at `planned` whose centre is at `foot` (body frame,
 /// `ground`'s points): the planned point's, unless an edge lies between the two and the foot
-/// stands on its high side — then the ground under the foot ([`footprint_ground`]).
+/// stands on its high side — then the ground under the foot.
 ///
 /// A body that moves or pitches off its plan by a few centimetres carries a stance foot's
 /// planned point across the ground while the foot stands still. Over a trench's edge the
@@ -47,7 +47,10 @@ pub fn near_edge(ground: &impl Fn(DVec3) -> f64, p: DVec3, half_width: f64) -> b
 /// hex18's rear foot into the trench (perceptive, 6 cm gaps: the robot went over backwards).
 /// Everywhere else the planned point's ground is kept: followed always, the ground under the
 /// feet let a body that fell behind its plan on a 30° slope raise its own stance targets (the
-/// feet ahead of their planned points, uphill) and slide back down.
+/// feet ahead of their planned points, uphill) and slide back down. Under the foot's centre
+/// only: the highest ground under its footprint lifted a foot standing in a trench by its wall
+/// onto the wall's top, where it hung in the air (hex18's middle and rear feet touched down in
+/// 26 % of the walk against 48 %).
 pub fn stance_ground(
     ground: &impl Fn(DVec3) -> f64,
     planned: DVec3,
@@ -55,29 +58,13 @@ pub fn stance_ground(
     radius: f64,
 ) -> f64 {
     let there = ground(planned);
-    let under = footprint_ground(ground, foot, radius);
+    let under = ground(foot);
     let apart = (planned - foot).truncate().length() + radius;
     if under - there > EDGE_SLOPE * apart {
         under
     } else {
         there
     }
-}
-
-/// The ground a foot of `radius` centred above `p` stands on: the highest under its footprint
-/// (its centre and four points a radius away), so a foot whose centre overhangs an edge stands
-/// on the edge, not at the bottom of the drop beside it.
-pub fn footprint_ground(ground: &impl Fn(DVec3) -> f64, p: DVec3, radius: f64) -> f64 {
-    [
-        DVec3::ZERO,
-        DVec3::X * radius,
-        -DVec3::X * radius,
-        DVec3::Y * radius,
-        -DVec3::Y * radius,
-    ]
-    .iter()
-    .map(|&o| ground(p + o))
-    .fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The shift (body frame, horizontal) that moves the foothold `p` off any edge within
@@ -167,9 +154,9 @@ mod tests {
     }
 
     /// A stance foot standing 1 cm before a trench whose planned point the body has carried
-    /// 2 cm past its edge stands on the tread; one planned on the tread, or on a 30° slope
-    /// 2 cm up or down from where it stands, keeps its planned point's ground, and one whose
-    /// centre overhangs the edge by less than its radius stands on the edge.
+    /// 2 cm past its edge stands on the tread; one planned on the tread, one standing in the
+    /// trench by its wall, and one on a 30° slope 2 cm up or down from its planned point keep
+    /// the planned point's ground.
     #[test]
     fn a_stance_foot_stands_on_the_ground_under_it() {
         let radius = 0.01;
@@ -179,12 +166,8 @@ mod tests {
         assert_eq!(stance_ground(&trench, over, foot, radius), 0.0);
         let on = DVec3::new(0.27, 0.1, -0.1);
         assert_eq!(stance_ground(&trench, on, foot, radius), 0.0);
-        // in the trench, planned in it too: its bottom
-        let deep = DVec3::new(0.35, 0.1, -0.1);
-        assert_eq!(stance_ground(&trench, deep, deep, radius), -0.1);
-        // overhanging by 0.6 radius: on the edge
-        let hang = DVec3::new(0.306, 0.1, -0.1);
-        assert_eq!(footprint_ground(&trench, hang, radius), 0.0);
+        let by_the_wall = DVec3::new(0.305, 0.1, -0.2);
+        assert_eq!(stance_ground(&trench, over, by_the_wall, radius), -0.1);
         let slope = |p: DVec3| 0.577 * p.x;
         for planned_x in [0.27, 0.31] {
             let planned = DVec3::new(planned_x, 0.1, -0.1);
