@@ -39,7 +39,9 @@ pub fn near_edge(ground: &impl Fn(DVec3) -> f64, p: DVec3, half_width: f64) -> b
 
 /// The ground under a stance foot planned at `planned` whose centre is at `foot` (body frame,
 /// `ground`'s points): the planned point's, unless an edge lies between the two and the foot
-/// stands on its high side — then the ground under the foot.
+/// stands on its high side — then the ground under the foot. An edge is a rise steeper than
+/// [`EDGE_SLOPE`] over their distance and the foot's radius (the foot's extent, where its
+/// centre alone does not say which side of an edge it rests on).
 ///
 /// A body that moves or pitches off its plan by a few centimetres carries a stance foot's
 /// planned point across the ground while the foot stands still. Over a trench's edge the

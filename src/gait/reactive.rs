@@ -17,9 +17,9 @@
 //!   meanwhile, and carries on forward over it, catching up with its swing by the landing;
 //! - **not on a riser**: ground steeper than 45° ([`FOOTHOLD_COS`]) that pushes back against
 //!   the swing is an obstacle, not a foothold, however near vertical its friction turns the
-//!   force: a swing that meets it is blocked, from its lift-off on. Landed on a stair's nose (its friction holding
-//!   the force 35° off vertical), hex18's rear foot slid 5 cm down the riser early in its
-//!   stance; lifting from a riser's foot, a front foot scraped up its face;
+//!   force: a swing that meets it is blocked, from its lift-off on. Landed on a stair's nose
+//!   (its friction holding the force 35° off vertical), hex18's rear foot slid 5 cm down the
+//!   riser early in its stance; lifting from a riser's foot, a front foot scraped up its face;
 //! - **the lift remembered**: the extra lift a blocked swing needed is remembered, fading over
 //!   [`LIFT_MEMORY_TIME`], and every swing starts that much higher — the legs behind the one
 //!   that met a riser, and the next risers of a flight, are cleared instead of met (stick

@@ -191,13 +191,19 @@ impl Walker {
         self.hexapod.time() - self.settle_time
     }
 
+    /// The frame of [`Self::terrain_under`]'s points: the body's centre, turned by its heading
+    /// only (world = centre + heading · point).
+    fn level_frame(hexapod: &Hexapod) -> (DVec3, glam::DMat3) {
+        let body = hexapod.body_frame();
+        let heading = glam::DMat3::from_rotation_z(heading_of(&body.matrix3));
+        (body.translation, heading)
+    }
+
     /// The terrain's height under a body-frame point, seen with the body's heading only (its
     /// tilt is what following the terrain avoids).
     fn terrain_under(hexapod: &Hexapod) -> impl Fn(DVec3) -> f64 + '_ {
-        let body = hexapod.body_frame();
         let terrain = hexapod.terrain();
-        let heading = glam::DMat3::from_rotation_z(heading_of(&body.matrix3));
-        let center = body.translation;
+        let (center, heading) = Self::level_frame(hexapod);
         move |p: DVec3| {
             let w = center + heading * p;
             terrain.height(w.x, w.y)
@@ -433,11 +439,11 @@ impl Walker {
             };
             let targets = if self.terrain_following {
                 if let Some(feet) = self.feet {
-                    // the feet where they are, in the frame of `terrain_under`'s points
-                    let body = self.hexapod.body_frame();
-                    let to_level = glam::DMat3::from_rotation_z(-heading_of(&body.matrix3));
+                    // the feet where they are, as `terrain_under`'s points
+                    let (center, heading) = Self::level_frame(&self.hexapod);
+                    let to_level = heading.transpose();
                     self.controller
-                        .feet_at(feet.map(|w| to_level * (w - body.translation)));
+                        .feet_at(feet.map(|w| to_level * (w - center)));
                 }
                 let plane = self.ground_reference();
                 let ground = Self::ground_within_reach(
