@@ -416,20 +416,15 @@ impl GaitController {
     /// On stairs the treads' departure from the flight's plane is followed in full and the
     /// flight's slope by λ: the body pitches with the stairs by the rest.
     ///
-    /// Each foot's rise is taken where it would stand: off any edge (the foothold a swing
-    /// would choose, [`foothold::away_from_edges`]) — a standing point over a stone's pit would
-    /// otherwise count the pit's depth, and every foot's target would scale down by it.
-    pub fn levelling(&self, residual: impl Fn(DVec3) -> f64, planar: impl Fn(DVec3) -> f64) -> f64 {
+    /// Each foot's rise is taken at `standing`, where it would stand ([`Self::standing_footholds`]).
+    pub fn levelling(
+        &self,
+        residual: impl Fn(DVec3) -> f64,
+        planar: impl Fn(DVec3) -> f64,
+        standing: &[DVec3; 6],
+    ) -> f64 {
         (0..6).fold(1.0f64, |share, k| {
-            let n = self.neutral[k];
-            let shift = foothold::away_from_edges(
-                &residual,
-                n,
-                DVec3::X,
-                self.radius[k],
-                self.spec.stride_length,
-            );
-            let (r, q) = (residual(n + shift), planar(n + shift));
+            let (r, q) = (residual(standing[k]), planar(standing[k]));
             let (down, up) = self.vertical_room[k];
             // r + λ·q within [−down, up]
             let most = if q > 0.0 {
@@ -443,8 +438,18 @@ impl GaitController {
         })
     }
 
-    /// Joint angles of the standing pose with each foot lowered or raised to the ground under it
-    /// (see `ground` in [`Self::targets`]): the body stands level on a slope.
+    /// Where each foot would stand at its neutral point on `ground`: off any edge (the foothold
+    /// a swing would choose, [`foothold::away_from_edges`]) — a standing point over a stone's pit
+    /// would otherwise count the pit's depth in [`Self::levelling`], and every foot's target
+    /// would scale down by it.
+    pub fn standing_footholds(&self, ground: &impl Fn(DVec3) -> f64) -> [DVec3; 6] {
+        std::array::from_fn(|k| {
+            let n = self.neutral[k];
+            let longest = self.spec.stride_length;
+            n + foothold::away_from_edges(ground, n, DVec3::X, self.radius[k], longest)
+        })
+    }
+
     pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [LegAngles; 6] {
         self.last_time = None;
         let angles = std::array::from_fn(|k| {

@@ -21,20 +21,28 @@ pub const EDGE_MARGIN: f64 = 0.04;
 /// The steps in which the search moves a foothold, as shares of its longest move.
 const SEARCH_STEPS: usize = 12;
 
-/// Whether `ground` (height of the terrain under a body-frame point) has an edge within
-/// `half_width` of `p`, along the body's x or y.
+/// Whether `ground` (height of the terrain under a body-frame point) has an edge within the
+/// square of half-width `half_width` about `p`: along the body's x and y, on the lines through
+/// `p` and along the square's sides. The lines through `p` alone miss the crossing of two
+/// trenches, where each runs inside one of them (hex18 on 2 cm stepping stones: its feet and
+/// its body's ground were put where two pits cross, the body sank 4 cm and its femurs dragged).
 pub fn near_edge(ground: &impl Fn(DVec3) -> f64, p: DVec3, half_width: f64) -> bool {
     let n = (half_width / SAMPLE).ceil() as i32;
     let step = half_width / n as f64;
-    [DVec3::X, DVec3::Y].iter().any(|&axis| {
-        let mut last = ground(p - axis * half_width);
-        (-n + 1..=n).any(|i| {
-            let h = ground(p + axis * (i as f64 * step));
-            let edge = (h - last).abs() > EDGE_SLOPE * step;
-            last = h;
-            edge
+    [(DVec3::X, DVec3::Y), (DVec3::Y, DVec3::X)]
+        .iter()
+        .any(|&(axis, across)| {
+            [0.0, -half_width, half_width].iter().any(|&offset| {
+                let line = p + across * offset;
+                let mut last = ground(line - axis * half_width);
+                (-n + 1..=n).any(|i| {
+                    let h = ground(line + axis * (i as f64 * step));
+                    let edge = (h - last).abs() > EDGE_SLOPE * step;
+                    last = h;
+                    edge
+                })
+            })
         })
-    })
 }
 
 /// The ground under a stance foot planned at `planned` whose centre is at `foot` (body frame,
@@ -72,8 +80,10 @@ pub fn stance_ground(
 /// The shift (body frame, horizontal) that moves the foothold `p` off any edge within
 /// `radius + EDGE_MARGIN` of it: the shortest up to `longest`, tried along `direction` (the
 /// leg's travel across the ground) first, then against it, to either side and diagonally (a
-/// stone's rim may lie beside the foot); zero where `p` is clear or no shift within `longest`
-/// clears it.
+/// stone's rim may lie beside the foot); zero where `p` is clear. Where no shift within
+/// `longest` clears that margin, the margin is halved, then dropped to the foot's radius
+/// alone: on 2 cm stepping stones, where hex18's middle hips ride over a pit between two rows
+/// of 15 cm stones, a full margin is out of reach, and the unmoved point stood in the pit.
 pub fn away_from_edges(
     ground: &impl Fn(DVec3) -> f64,
     p: DVec3,
@@ -81,10 +91,6 @@ pub fn away_from_edges(
     radius: f64,
     longest: f64,
 ) -> DVec3 {
-    let half_width = radius + EDGE_MARGIN;
-    if !near_edge(ground, p, half_width) {
-        return DVec3::ZERO;
-    }
     let ahead = DVec3::new(direction.x, direction.y, 0.0)
         .try_normalize()
         .unwrap_or(DVec3::X);
@@ -100,11 +106,17 @@ pub fn away_from_edges(
         (-ahead + side) * diagonal,
         (-ahead - side) * diagonal,
     ];
-    for i in 1..=SEARCH_STEPS {
-        let along = longest * i as f64 / SEARCH_STEPS as f64;
-        for way in ways {
-            if !near_edge(ground, p + way * along, half_width) {
-                return way * along;
+    for margin in [EDGE_MARGIN, 0.5 * EDGE_MARGIN, 0.0] {
+        let half_width = radius + margin;
+        if !near_edge(ground, p, half_width) {
+            return DVec3::ZERO;
+        }
+        for i in 1..=SEARCH_STEPS {
+            let along = longest * i as f64 / SEARCH_STEPS as f64;
+            for way in ways {
+                if !near_edge(ground, p + way * along, half_width) {
+                    return way * along;
+                }
             }
         }
     }
@@ -150,9 +162,40 @@ mod tests {
         let rim = |p: DVec3| if p.y < 0.0 { -0.1 } else { 0.0 };
         let shift = away_from_edges(&rim, DVec3::new(0.2, 0.01, -0.1), DVec3::X, radius, longest);
         assert!(shift.x.abs() < 1e-12 && shift.y > 0.02, "{shift:?}");
-        // out of reach: stays
-        let shift = away_from_edges(&riser, DVec3::new(0.29, 0.0, 0.0), DVec3::X, radius, 0.01);
-        assert_eq!(shift, DVec3::ZERO);
+        // a full margin out of reach: the foot's own radius clear of the edge, then in place
+        let p = DVec3::new(0.295, 0.0, 0.0);
+        let landed = p + away_from_edges(&riser, p, DVec3::X, radius, 0.01);
+        assert!(near_edge(&riser, landed, clear) && !near_edge(&riser, landed, radius));
+        assert!(landed.x < 0.3 - radius && landed.x > 0.285, "{landed:?}");
+        let p = DVec3::new(0.3, 0.0, 0.0);
+        assert_eq!(
+            away_from_edges(&riser, p, DVec3::X, radius, 0.001),
+            DVec3::ZERO
+        );
+    }
+
+    /// Where two trenches cross, the lines through the point run inside them and see no edge;
+    /// the footprint's sides cross their walls.
+    #[test]
+    fn a_crossing_of_two_trenches_is_near_an_edge() {
+        let pits = |p: DVec3| {
+            let in_pit = |u: f64| (0.585..0.605).contains(&u);
+            if in_pit(p.x) || in_pit(p.y) {
+                -0.1
+            } else {
+                0.0
+            }
+        };
+        assert!(near_edge(&pits, DVec3::new(0.595, 0.595, 0.0), 0.05));
+        // a foothold on a stone's corner moves onto the stone, not into the crossing beside it
+        let corner = DVec3::new(0.57, 0.57, 0.0);
+        let landed = corner + away_from_edges(&pits, corner, DVec3::X, 0.01, 0.06);
+        assert!(
+            pits(landed) == 0.0 && !near_edge(&pits, landed, 0.05),
+            "{landed:?}"
+        );
+        // the middle of a stone is clear
+        assert!(!near_edge(&pits, DVec3::new(0.51, 0.51, 0.0), 0.05));
     }
 
     /// A stance foot standing 1 cm before a trench whose planned point the body has carried
