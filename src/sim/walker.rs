@@ -8,7 +8,7 @@ use crate::gait::{
     away_from_edges,
 };
 use crate::robot::kinematics::{LegAngles, LegStatics};
-use crate::robot::statics;
+use crate::robot::{RobotModel, statics};
 use crate::terrain::FittedPlane;
 use glam::DVec3;
 
@@ -124,9 +124,8 @@ const STANDING_TURN: f64 = 0.01;
 struct StandingPoints {
     center: DVec3,
     heading: glam::DMat3,
-    /// The hips (over their first joints) and the points off edges where their ground is read.
+    /// Where the ground under each hip (over its first joint) is read, off edges.
     hips: [DVec3; 6],
-    hips_off_edges: [DVec3; 6],
     /// The neutral feet, off edges ([`GaitController::standing_footholds`]).
     feet: [DVec3; 6],
 }
@@ -242,10 +241,11 @@ impl Walker {
     /// femur, all six feet thrown off the ground); under six hips it steps by a sixth, and the
     /// tracker spreads that over the next steps.
     fn ground_reference(&mut self, standing: &StandingPoints) -> GroundPlane {
+        let model = self.hexapod.model();
         let ground = Self::terrain_under(&self.hexapod);
         let points: [DVec3; 6] = std::array::from_fn(|k| {
-            let (hip, at) = (standing.hips[k], standing.hips_off_edges[k]);
-            DVec3::new(hip.x, hip.y, ground(at))
+            let hip = Self::hip(model, k);
+            DVec3::new(hip.x, hip.y, ground(standing.hips[k]))
         });
         let mut fit = GroundPlane::fit(&points);
         // the slope tracked as the world sees it: turned into the heading's frame each step, a
@@ -284,6 +284,11 @@ impl Walker {
         plane
     }
 
+    /// Leg `k`'s hip: its first joint's origin (body frame).
+    fn hip(model: &RobotModel, k: usize) -> DVec3 {
+        model.joints[model.legs[k].joints[0]].origin.translation
+    }
+
     /// The points off edges ([`away_from_edges`]) where the ground under each hip and each
     /// neutral foot is read (body level frame), searched afresh only when the body has moved
     /// [`STANDING_MOVE`] or turned [`STANDING_TURN`] since the last search, and held in between:
@@ -300,18 +305,15 @@ impl Walker {
         let model = self.hexapod.model();
         let ground = Self::terrain_under(&self.hexapod);
         let longest = self.controller.gait().stride_length;
-        let hips: [DVec3; 6] =
-            std::array::from_fn(|k| model.joints[model.legs[k].joints[0]].origin.translation);
-        let hips_off_edges = std::array::from_fn(|k| {
-            let radius = model.legs[k].foot.radius;
-            hips[k] + away_from_edges(&ground, hips[k], DVec3::X, radius, longest)
+        let hips = std::array::from_fn(|k| {
+            let (hip, radius) = (Self::hip(model, k), model.legs[k].foot.radius);
+            hip + away_from_edges(&ground, hip, DVec3::X, radius, longest)
         });
         let feet = self.controller.standing_footholds(&ground);
         let held = StandingPoints {
             center,
             heading,
             hips,
-            hips_off_edges,
             feet,
         };
         self.standing = Some(held);
