@@ -1,15 +1,21 @@
 """Steps per second stepping hexsim from Python: n steps per call, one step per call, and the
 Gymnasium environment, on hex18's tripod on the natural terrain (the workload of `hexsim bench`'s
 multibody walk); then many worlds at once: `step_many` and Python threads each stepping a
-`Simulation`, and the vector environment, against one world; and the vector environment's serial
-work per world and action (CPU time, which a busy machine hardly changes). Compare the first
-with `hexsim bench`'s "walk, multibody" figure.
+`Simulation`, and the vector environment, each against one world stepped the same way (one
+`Simulation`; one `HexapodGait-v0`); and the vector environment's serial work per world and
+action (CPU time, which a busy machine hardly changes). Compare the first with `hexsim bench`'s
+"walk, multibody" figure.
+
+Each scaling figure is the median of `--repeats` ratios, each from one world and N worlds
+measured back to back (in alternating order), so that a machine whose speed drifts between
+measurements (shared vCPUs) moves both sides of a ratio alike.
 
     python examples/bench.py [--steps 20000] [--repeats 3] [--worlds N (default: the cores)]
 """
 
 import argparse
 import os
+import statistics
 import threading
 import time
 
@@ -68,22 +74,22 @@ def environment():
     return actions * env.unwrapped.frame_skip / (time.perf_counter() - start)
 
 
-def worlds_step_many():
-    sims = [hexsim.Simulation(duration=args.steps * 1e-3) for _ in range(args.worlds)]
+def worlds_step_many(worlds):
+    sims = [hexsim.Simulation(duration=args.steps * 1e-3) for _ in range(worlds)]
     start = time.perf_counter()
     taken = sum(hexsim.step_many(sims, sims[0].remaining))
     return taken / (time.perf_counter() - start)
 
 
-def worlds_threads():
+def worlds_threads(worlds):
     def walk(out, k):
         sim = hexsim.Simulation(duration=args.steps * 1e-3)  # a Simulation stays in its thread
         barrier.wait()
         out[k] = sim.step(sim.remaining)
 
-    barrier = threading.Barrier(args.worlds + 1)
-    taken = [0] * args.worlds
-    threads = [threading.Thread(target=walk, args=(taken, k)) for k in range(args.worlds)]
+    barrier = threading.Barrier(worlds + 1)
+    taken = [0] * worlds
+    threads = [threading.Thread(target=walk, args=(taken, k)) for k in range(worlds)]
     for t in threads:
         t.start()
     barrier.wait()
@@ -93,8 +99,8 @@ def worlds_threads():
     return sum(taken) / (time.perf_counter() - start)
 
 
-def vector_environment():
-    env = hexsim.HexapodVectorEnv(args.worlds, action="gait", duration=args.steps * 1e-3)
+def vector_environment(worlds):
+    env = hexsim.HexapodVectorEnv(worlds, action="gait", duration=args.steps * 1e-3)
     env.reset(seed=0)
     action = np.zeros(env.action_space.shape, dtype=np.float32)
     start = time.perf_counter()
@@ -104,7 +110,7 @@ def vector_environment():
         actions += 1
         if (terminated | truncated).any():
             break
-    return actions * args.worlds * env.envs[0].frame_skip / (time.perf_counter() - start)
+    return actions * worlds * env.envs[0].frame_skip / (time.perf_counter() - start)
 
 
 def vector_serial_work():
@@ -137,14 +143,30 @@ single = [
 ]
 for label, measure in single:
     print(f"{label:38s} {best(measure):9.0f} steps/s")
-one = best(n_per_call)
+def scaling(one, many):
+    """The median over the repeats of many worlds' steps/s over one world's, the two measured
+    back to back, in alternating order; and the medians of the two rates."""
+    ones, manys, ratios = [], [], []
+    for r in range(args.repeats):
+        if r % 2:
+            b, a = many(), one()
+        else:
+            a, b = one(), many()
+        ones.append(a)
+        manys.append(b)
+        ratios.append(b / a)
+    return statistics.median(ratios), statistics.median(ones), statistics.median(manys), ratios
+
+
 w = args.worlds
-for label, measure in [
-    (f"{w} worlds, step_many", worlds_step_many),
-    (f"{w} worlds, a Python thread each", worlds_threads),
-    (f"HexapodVectorEnv, {w} worlds", vector_environment),
+for label, one, many in [
+    (f"{w} worlds, step_many", lambda: worlds_step_many(1), lambda: worlds_step_many(w)),
+    (f"{w} worlds, a Python thread each", lambda: worlds_threads(1), lambda: worlds_threads(w)),
+    (f"HexapodVectorEnv, {w} worlds", environment, lambda: vector_environment(w)),
+    (f"  against a HexapodVectorEnv of 1", lambda: vector_environment(1), lambda: vector_environment(w)),
 ]:
-    rate = best(measure)
-    print(f"{label:38s} {rate:9.0f} steps/s  ({rate / one:.2f}× one world)")
+    ratio, a, b, ratios = scaling(one, many)
+    spread = f"{min(ratios):.2f}–{max(ratios):.2f}"
+    print(f"{label:38s} {b:9.0f} steps/s  ({ratio:.2f}× one world at {a:.0f}; {spread})")
 serial = min(vector_serial_work() for _ in range(args.repeats))
 print(f"{'HexapodVectorEnv, serial work':38s} {serial:9.1f} µs CPU per world and action")
