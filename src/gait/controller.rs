@@ -593,6 +593,11 @@ impl GaitController {
                     }
                 };
             }
+            if let (Some(dt), Some(_), LegPhase::Stance(_)) = (elapsed, &ground, phase) {
+                // perceptive: a standing foot's target sinks no faster than a swing lands
+                let lowest = self.last_planned[k].z - slew::landing_speed(&self.spec) * dt;
+                foot.z = foot.z.max(lowest);
+            }
             if let Some(dt) = elapsed {
                 let stride = d.length();
                 let longest = slew::speed_limit(&self.spec, stride) * dt;
@@ -728,6 +733,69 @@ impl Gait {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Perceptive, a stance foot's target sinks no faster than the gait lands
+    /// ([`slew::landing_speed`]) when the ground planned under it drops 5 cm at once, early in
+    /// its stance, and stands on the new ground before the stance ends; the swinging feet are
+    /// not held to it.
+    #[test]
+    fn a_stance_target_sinks_at_the_landing_speed() {
+        let model = crate::robot::hex18_for_tests();
+        let spec = crate::gait::GaitSpec::from_toml(
+            include_str!("../../gaits/tripod.toml"),
+            std::path::Path::new("tripod"),
+        )
+        .unwrap();
+        let gait = crate::gait::fit(&model, &spec).unwrap().gait;
+        let (command, h, depth) = (VelocityCommand::default(), 1e-3, 0.05);
+        let mut c = GaitController::new(&model, gait.clone()).unwrap();
+        let level = std::cell::Cell::new(0.0);
+        let landing = slew::landing_speed(&gait);
+        let mut before = c.targets_on(0.0, command, 1.0, |_| level.get());
+        let standing = before.feet;
+        // the drop comes 20 ms into the first stance that begins; those legs are watched
+        let mut drop: Option<(f64, Vec<usize>)> = None;
+        let (mut fastest_swing, mut checked) = (0.0f64, 0);
+        for i in 1..=(2.0 * gait.period / h).round() as usize {
+            let t = i as f64 * h;
+            if let Some((at, _)) = &drop
+                && t >= *at
+            {
+                level.set(-depth);
+            }
+            let now = c.targets_on(t, command, 1.0, |_| level.get());
+            for k in 0..6 {
+                let sink = before.feet[k].z - now.feet[k].z;
+                let standing_still = before.phases[k].is_stance() && now.phases[k].is_stance();
+                if standing_still {
+                    assert!(sink <= landing * h + 1e-12, "leg {k} at {t}: {sink}");
+                } else {
+                    fastest_swing = fastest_swing.max(sink / h);
+                }
+            }
+            if drop.is_none() {
+                let landed: Vec<usize> = (0..6)
+                    .filter(|&k| !before.phases[k].is_stance() && now.phases[k].is_stance())
+                    .collect();
+                if !landed.is_empty() {
+                    drop = Some((t + 0.02, landed));
+                }
+            }
+            if let Some((at, legs)) = &drop
+                && (t - at - depth / landing - 0.01).abs() < 0.5 * h
+            {
+                for &k in legs {
+                    assert!(now.phases[k].is_stance(), "leg {k} left its stance");
+                    let down = standing[k].z - now.feet[k].z;
+                    assert!((down - depth).abs() < 1e-9, "leg {k}: {down}");
+                    checked += 1;
+                }
+            }
+            before = now;
+        }
+        assert_eq!(checked, 3);
+        assert!(fastest_swing > landing, "{fastest_swing} against {landing}");
+    }
 
     /// Over hex18's stances, the foot sphere's material point on the ground moves with the ground
     /// (no scrub) when the centre targets roll; planned as the contact, it scrubs at r·ω. The
