@@ -2,6 +2,7 @@
 //! fixed joint (or a held one, a negligible slide, a passive foot's) folds into its parent's body,
 //! its mass, shapes and foot moved into that body's frame.
 
+use super::inertia_from;
 use super::inertials::{add_mass, check_inertial, massless};
 use super::joint_limits::{Unstated, revolute};
 use super::parse::Tree;
@@ -45,6 +46,10 @@ pub(super) struct Bodies<'a> {
     pub(super) passive_welded: Vec<String>,
     /// Per URDF link: the joints between it and the root that are not welded.
     pub(super) depth: Vec<usize>,
+    /// Whether each link's centre of mass and inertia come from its collision geometry (the
+    /// robot file's `inertia`), and the links that kept their URDF's, with why.
+    pub(super) inertia_from_collision: bool,
+    pub(super) inertia_kept: Vec<(String, String)>,
 }
 
 /// The most a prismatic joint may travel (m) to be read as fixed: simulators' descriptions mount a
@@ -86,6 +91,8 @@ impl<'a> Bodies<'a> {
             via_held: vec![false; robot.links.len()],
             passive_welded: Vec::new(),
             depth: vec![0; robot.links.len()],
+            inertia_from_collision: false,
+            inertia_kept: Vec::new(),
         }
     }
 
@@ -197,7 +204,13 @@ impl<'a> Bodies<'a> {
     /// Folds URDF link `k`'s inertial, visuals, shapes and foot sphere into its body.
     pub(super) fn fold(&mut self, k: usize) -> Result<(), String> {
         let urdf_link = &self.robot.links[k];
-        let (mass, com, inertia) = check_inertial(urdf_link)?;
+        let (mass, mut com, mut inertia) = check_inertial(urdf_link)?;
+        if self.inertia_from_collision && mass > 0.0 {
+            match inertia_from::from_collision(urdf_link, mass, self.base) {
+                Ok(found) => (com, inertia) = found,
+                Err(why) => self.inertia_kept.push((urdf_link.name.clone(), why)),
+            }
+        }
         if mass > 0.0 && inertia == DMat3::ZERO {
             self.point_masses.push((urdf_link.name.clone(), mass));
         }

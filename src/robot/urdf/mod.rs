@@ -5,6 +5,7 @@
 //! Every error names the file and the element (link or joint) and says what was expected.
 
 mod fold;
+mod inertia_from;
 mod inertials;
 mod joint_limits;
 mod parse;
@@ -153,11 +154,13 @@ fn build_holding(
         forward,
         gait: gait_hints,
         redundant_legs,
+        inertia,
     } = settings;
     let (forward, gait_hints) = (*forward, *gait_hints);
     let tree = parse::tree(robot)?;
     let held_at: HashMap<&str, f64> = held.iter().map(|h| (h.name.as_str(), h.angle)).collect();
     let mut bodies = Bodies::new(robot, base, feet.as_ref(), &held_at);
+    bodies.inertia_from_collision = *inertia == robot_file::InertiaFrom::Collision;
     // Walk the tree from the root, parents before children.
     let mut order = vec![tree.root];
     let mut cursor = 0;
@@ -179,6 +182,7 @@ fn build_holding(
         slides_welded,
         passive_welded,
         point_masses,
+        inertia_kept,
         ..
     } = bodies;
     inertials::check_masses(&links, &point_masses)?;
@@ -205,6 +209,15 @@ fn build_holding(
         ));
     }
     warnings.extend(mesh_problems.warnings());
+    if let Some((link, why)) = inertia_kept.first() {
+        warnings.push(format!(
+            "the robot file's `inertia = \"collision\"`: {} link{} kept {} URDF inertial{} (e.g. `{link}`: {why})",
+            inertia_kept.len(),
+            plural(inertia_kept.len()),
+            if inertia_kept.len() == 1 { "its" } else { "their" },
+            plural(inertia_kept.len()),
+        ));
+    }
     let unfound = if feet.is_none() {
         let (unfound, warning) = find_feet(&mut links, &joints, &shapes, base);
         warnings.extend(warning);

@@ -9,6 +9,8 @@ use std::path::Path;
 /// ```toml
 /// forward = "+y"              # walking direction: "+x" (default) "-x" "+y" "-y", or degrees about z
 /// redundant_legs = "driven"   # legs of 4 to 6 joints: every joint servoed, or "held" (default)
+/// inertia = "collision"       # each link's centre of mass and inertia from its collision
+///                             # geometry, its mass kept, or "urdf" (default: its <inertial>)
 /// [feet]                      # for a URDF that does not mark its feet with collision spheres
 /// links = ["lf_tibia", "lm_tibia", "lr_tibia", "rf_tibia", "rm_tibia", "rr_tibia"]
 /// offset = [0.12, 0.0, 0.0]   # foot centre in each link's frame (m)
@@ -36,6 +38,19 @@ struct RobotFile {
     gait: Option<GaitHints>,
     #[serde(default)]
     redundant_legs: Option<RedundantLegs>,
+    #[serde(default)]
+    inertia: Option<InertiaFrom>,
+}
+
+/// Where each link's centre of mass and inertia come from: the URDF's `<inertial>` (the
+/// default), or its collision geometry at uniform density, its URDF mass kept
+/// (`inertia_from`: for placeholder inertials, as MuJoCo's `inertiafromgeom`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InertiaFrom {
+    #[default]
+    Urdf,
+    Collision,
 }
 
 /// How a leg of more than three joints is driven (`branches`): its extra joints held still at
@@ -81,6 +96,7 @@ pub(super) struct RobotFileSettings {
     pub(super) forward: Option<f64>,
     pub(super) gait: GaitHints,
     pub(super) redundant_legs: RedundantLegs,
+    pub(super) inertia: InertiaFrom,
 }
 
 pub(super) fn read(
@@ -114,5 +130,6 @@ pub(super) fn read(
         feet: file.feet,
         gait,
         redundant_legs: file.redundant_legs.unwrap_or_default(),
+        inertia: file.inertia.unwrap_or_default(),
     })
 }
