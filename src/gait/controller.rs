@@ -734,19 +734,21 @@ impl Gait {
 mod tests {
     use super::*;
 
+    /// hex18 and the tripod fitted to it.
+    fn hex18_tripod() -> (RobotModel, Gait) {
+        let model = crate::robot::hex18_for_tests();
+        let spec = crate::gait::tripod_for_tests();
+        let gait = crate::gait::fit(&model, &spec).unwrap().gait;
+        (model, gait)
+    }
+
     /// Perceptive, a stance foot's target sinks no faster than the gait lands
     /// ([`slew::landing_speed`]) when the ground planned under it drops 5 cm at once, early in
     /// its stance, and stands on the new ground before the stance ends; the swinging feet are
     /// not held to it.
     #[test]
     fn a_stance_target_sinks_at_the_landing_speed() {
-        let model = crate::robot::hex18_for_tests();
-        let spec = crate::gait::GaitSpec::from_toml(
-            include_str!("../../gaits/tripod.toml"),
-            std::path::Path::new("tripod"),
-        )
-        .unwrap();
-        let gait = crate::gait::fit(&model, &spec).unwrap().gait;
+        let (model, gait) = hex18_tripod();
         let (command, h, depth) = (VelocityCommand::default(), 1e-3, 0.05);
         let mut c = GaitController::new(&model, gait.clone()).unwrap();
         let level = std::cell::Cell::new(0.0);
@@ -803,13 +805,7 @@ mod tests {
     /// ½·Δφ × ω: 9 % of the scrub here (0.68 of 7.66 mm/s on the front and rear legs).
     #[test]
     fn rolling_targets_hold_the_contact_point_still() {
-        let model = crate::robot::hex18_for_tests();
-        let spec = crate::gait::GaitSpec::from_toml(
-            include_str!("../../gaits/tripod.toml"),
-            std::path::Path::new("tripod"),
-        )
-        .unwrap();
-        let gait = crate::gait::fit(&model, &spec).unwrap().gait;
+        let (model, gait) = hex18_tripod();
         let command = VelocityCommand {
             forward: gait.nominal_speed(),
             ..Default::default()
