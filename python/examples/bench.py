@@ -143,6 +143,8 @@ single = [
 ]
 for label, measure in single:
     print(f"{label:38s} {best(measure):9.0f} steps/s")
+
+
 def scaling(one, many):
     """The median over the repeats of many worlds' steps/s over one world's, the two measured
     back to back, in alternating order; and the medians of the two rates."""

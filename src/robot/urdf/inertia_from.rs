@@ -11,9 +11,9 @@
 //! placed at its `<origin>`; parry's mass properties do the integrals.
 
 use super::pose;
-use glam::{DAffine3, DMat3, DVec3};
+use glam::{DAffine3, DMat3, DQuat, DVec3};
 use rapier3d::parry::mass_properties::MassProperties;
-use rapier3d::parry::math::{Pose, Rotation, Vector};
+use rapier3d::parry::math::{Pose, Vector};
 use rapier3d::parry::shape::SharedShape;
 use std::path::Path;
 
@@ -39,12 +39,9 @@ pub(super) fn from_collision(
         return Err("its collision geometry encloses no volume".into());
     }
     let density = mass / volume;
-    let com = solid.local_com;
-    let inertia = solid.reconstruct_inertia_matrix();
-    let inertia = DMat3::from_cols_array(&inertia.to_cols_array().map(|v| v as f64)) * density;
     Ok((
-        DVec3::new(com.x as f64, com.y as f64, com.z as f64),
-        inertia,
+        solid.local_com.as_dvec3(),
+        solid.reconstruct_inertia_matrix().as_dmat3() * density,
     ))
 }
 
@@ -68,10 +65,7 @@ fn solid(geometry: &urdf_rs::Geometry, base: &Path) -> Result<(SharedShape, DAff
         ),
         urdf_rs::Geometry::Mesh { filename, scale } => {
             let vertices = crate::robot::mesh::scaled_vertices(filename, scale.as_ref(), base)?;
-            let points: Vec<Vector> = vertices
-                .iter()
-                .map(|v| Vector::new(v.x as f32, v.y as f32, v.z as f32))
-                .collect();
+            let points: Vec<Vector> = vertices.iter().map(|v| v.as_vec3()).collect();
             let hull = SharedShape::convex_hull(&points)
                 .ok_or_else(|| format!("mesh {filename} has no convex hull (flat or empty)"))?;
             (hull, still)
@@ -79,20 +73,11 @@ fn solid(geometry: &urdf_rs::Geometry, base: &Path) -> Result<(SharedShape, DAff
     })
 }
 
+/// A frame as parry's pose (as `sim::articulation` converts them for rapier).
 fn pose_of(frame: &DAffine3) -> Pose {
-    let (_, rotation, translation) = frame.to_scale_rotation_translation();
     Pose::from_parts(
-        Vector::new(
-            translation.x as f32,
-            translation.y as f32,
-            translation.z as f32,
-        ),
-        Rotation::from_xyzw(
-            rotation.x as f32,
-            rotation.y as f32,
-            rotation.z as f32,
-            rotation.w as f32,
-        ),
+        frame.translation.as_vec3(),
+        DQuat::from_mat3(&frame.matrix3).normalize().as_quat(),
     )
 }
 
