@@ -156,6 +156,18 @@ pub const REACH_TOLERANCE: f64 = 1e-4;
 impl GaitController {
     /// Builds the controller and checks that the legs reach the standing pose and the swing apex.
     pub fn new(model: &RobotModel, spec: Gait) -> Result<Self, StanceError> {
+        let mut controller = Self::for_cycle(model, spec)?;
+        controller.vertical_room = controller.measured_vertical_room();
+        controller.joint_speed = controller.nominal_joint_speeds();
+        Ok(controller)
+    }
+
+    /// The controller of [`Self::new`] without the two bounds only a walk needs, which take
+    /// thousands of inverse kinematics solves: no vertical room for levelling (nor for the
+    /// reactive gait's searches) and no bound on a joint target's rate. What the stance fit
+    /// samples the nominal cycle with ([`super::margins`]), hundreds of candidates at a time: on
+    /// legs with redundant joints, solved iteratively, the bounds took most of a fit.
+    pub(super) fn for_cycle(model: &RobotModel, spec: Gait) -> Result<Self, StanceError> {
         let chains: Vec<LegChain> = model
             .legs
             .iter()
@@ -256,27 +268,7 @@ impl GaitController {
         }
         let radius = std::array::from_fn(|k| model.legs[k].foot.radius);
         let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]));
-        let vertical_room = std::array::from_fn(|k| {
-            let reach = |dz: f64| {
-                // the farthest a target moves along z from the standing one and is reached
-                let (mut lo, mut hi, mut guess) = (0.0, dz, last[k]);
-                for _ in 0..30 {
-                    let mid = 0.5 * (lo + hi);
-                    let answer = chains[k].solve(neutral[k] + DVec3::Z * mid, guess);
-                    if answer.error <= REACH_TOLERANCE {
-                        (lo, guess) = (mid, answer.angles);
-                    } else {
-                        hi = mid;
-                    }
-                }
-                lo.abs()
-            };
-            let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
-            let down = LEVELLING_SHARE * reach(-span);
-            let up = (LEVELLING_SHARE * reach(span) - spec.step_height).max(0.0);
-            (down, up)
-        });
-        let mut controller = GaitController {
+        Ok(GaitController {
             offsets: spec.offsets,
             spec,
             chains,
@@ -288,7 +280,7 @@ impl GaitController {
             grounded: last,
             warm_last: [None; 6],
             warm_grounded: [None; 6],
-            vertical_room,
+            vertical_room: [(0.0, 0.0); 6],
             reactive: None,
             compliance: None,
             foothold: [DVec3::ZERO; 6],
@@ -304,9 +296,33 @@ impl GaitController {
                 infinite
             }),
             last_angles: last,
-        };
-        controller.joint_speed = controller.nominal_joint_speeds();
-        Ok(controller)
+        })
+    }
+
+    /// How far each foot's standing target may be lowered and raised and stay within the leg's
+    /// reach ([`Self::levelling`]): the farthest a target moves along z from the standing one and
+    /// is reached (bisected), times [`LEVELLING_SHARE`]; raised, less a step height.
+    fn measured_vertical_room(&self) -> [(f64, f64); 6] {
+        let spec = &self.spec;
+        std::array::from_fn(|k| {
+            let reach = |dz: f64| {
+                let (mut lo, mut hi, mut guess) = (0.0, dz, self.last[k]);
+                for _ in 0..30 {
+                    let mid = 0.5 * (lo + hi);
+                    let answer = self.chains[k].solve(self.neutral[k] + DVec3::Z * mid, guess);
+                    if answer.error <= REACH_TOLERANCE {
+                        (lo, guess) = (mid, answer.angles);
+                    } else {
+                        hi = mid;
+                    }
+                }
+                lo.abs()
+            };
+            let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
+            let down = LEVELLING_SHARE * reach(-span);
+            let up = (LEVELLING_SHARE * reach(span) - spec.step_height).max(0.0);
+            (down, up)
+        })
     }
 
     /// Each joint's fastest rate (rad/s) over one cycle of the gait at its nominal speed on

@@ -252,7 +252,7 @@ fn measure(
     scale: f64,
 ) -> Result<Fitted, FitError> {
     let controller =
-        GaitController::new(model, gait.clone()).map_err(|e| FitError(e.to_string()))?;
+        GaitController::for_cycle(model, gait.clone()).map_err(|e| FitError(e.to_string()))?;
     let standing_pose = model.pose_from_legs(&controller.standing_angles());
     let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
     Ok(Fitted {
@@ -410,7 +410,7 @@ impl Search<'_> {
             outcome,
             penalty,
         };
-        let controller = match GaitController::new(self.model, gait.clone()) {
+        let controller = match GaitController::for_cycle(self.model, gait.clone()) {
             Ok(c) => c,
             Err(e) => {
                 let penalty = 1.0 + e.miss / self.leg;

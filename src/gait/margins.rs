@@ -44,7 +44,7 @@ pub(super) fn sampled_margins(
     samples: usize,
 ) -> Result<CycleMargins, StanceError> {
     // the plan's own path: the fit judges the stance without the feet's rolling offset
-    let mut controller = GaitController::new(model, gait.clone())?.with_rolling_feet(false);
+    let mut controller = GaitController::for_cycle(model, gait.clone())?.with_rolling_feet(false);
     let command = VelocityCommand {
         forward: gait.nominal_speed(),
         ..Default::default()
