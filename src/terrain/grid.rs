@@ -201,10 +201,67 @@ impl HeightGrid {
     /// An upper bound of the surface height over the square of half-width `r` around (x, y): a
     /// sphere of radius r centred higher than this above (x, y) cannot touch the ground, which
     /// spares a swinging foot the closest-point search.
+    ///
+    /// Each cell's stored bound holds over the whole cell; over the part of it the square
+    /// covers, the patch also lies below its corners' bilinear interpolant there (highest at a
+    /// corner of the part) plus [`Self::patch_slack`]. A cell as wide as the terrain (a slope is
+    /// one) has a stored bound as high as its highest corner, and every link sphere within it
+    /// was searched: on a 10 m slope of 5°, 1600 closest-point searches a step on PhantomX, the
+    /// step ten times slower than on level ground.
     pub fn ceiling_near(&self, x: f64, y: f64, r: f64) -> f64 {
+        let cells = self.nx - 1;
         self.cells_near(x, y, r)
-            .flat_map(|row| &self.ceilings[row])
-            .fold(f64::NEG_INFINITY, |m, &c| m.max(c))
+            .flatten()
+            .map(|c| {
+                let stored = self.ceilings[c];
+                let Some(slack) = self.patch_slack(c) else {
+                    return stored;
+                };
+                let (i, j) = (c / cells, c % cells);
+                let (x0, y0) = (self.x_at(j), self.y_at(i));
+                let span = |lo: f64, hi: f64, origin: f64, h: f64| {
+                    [
+                        ((lo - origin) / h).clamp(0.0, 1.0),
+                        ((hi - origin) / h).clamp(0.0, 1.0),
+                    ]
+                };
+                let (s, t) = (
+                    span(x - r, x + r, x0, self.dx),
+                    span(y - r, y + r, y0, self.dy),
+                );
+                let z = self.corners(i, j);
+                let mut top = f64::NEG_INFINITY;
+                for t in t {
+                    for s in s {
+                        let low = z[0][0] + s * (z[0][1] - z[0][0]);
+                        let high = z[1][0] + s * (z[1][1] - z[1][0]);
+                        top = top.max(low + t * (high - low));
+                    }
+                }
+                stored.min(top + slack)
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// How far above its corners' bilinear interpolant cell `c`'s patch may rise, or None where
+    /// only its stored bound holds (a grid with cliffs); a nanometre more for rounding, and for
+    /// bends below a nanometre, which [`Self::cell_bends`] stores as none. Bilinear: nothing
+    /// more. Catmull–Rom: in one
+    /// dimension the spline departs from the line through its middle samples by
+    /// −½·[D₁·t(1 − t)² + D₂·t²(1 − t)], D₁ and D₂ the second differences, so by at most
+    /// max|D|/8; across rows the same holds for the rows' splines, whose second differences are
+    /// the columns' blended by weights of magnitudes summing to at most 1.25: at most
+    /// (1 + 1.25)·B/8 with B the cell's largest second difference ([`Self::cell_bends`], rounded
+    /// up).
+    fn patch_slack(&self, c: usize) -> Option<f64> {
+        if self.cliffs.is_some() {
+            return None;
+        }
+        let bend = match self.interpolation {
+            Interpolation::Bilinear => 0.0,
+            Interpolation::Bicubic => 2.25 / 8.0 * decode_bend(self.bends[c]),
+        };
+        Some(bend + 1e-9)
     }
 
     /// The cells (as ranges of row-major cell indices, a row each) that the square of

@@ -45,13 +45,33 @@ fn the_ceiling_covers_catmull_rom_overshoot() {
 
 #[test]
 fn the_ceiling_is_tight_on_a_plane_cell_for_bilinear() {
-    // a plane's bilinear cell peaks at its highest corner, which is the bound
+    // a plane's bilinear patch over a point is the plane: the bound there is its height
     let grid = plane(Interpolation::Bilinear);
-    let (x, y) = (grid.x_at(4), grid.y_at(0));
-    assert_eq!(
-        grid.ceiling_near(x - 0.01, y + 0.01, 0.0),
-        grid.height(x, y)
+    let (x, y) = (grid.x_at(4) - 0.01, grid.y_at(0) + 0.01);
+    let (ceiling, height) = (grid.ceiling_near(x, y, 0.0), grid.height(x, y));
+    assert!(
+        ceiling >= height && ceiling - height < 2e-9,
+        "{ceiling} {height}"
     );
+}
+
+/// A slope is one cell as wide as the terrain: the bound near a point is the plane's highest
+/// over the square around it, not the cell's highest corner 5 m uphill, in both interpolations.
+#[test]
+fn the_ceiling_near_a_point_of_a_wide_plane_cell_is_the_plane_there() {
+    let rise = 5f64.to_radians().tan();
+    for interp in [Interpolation::Bilinear, Interpolation::Bicubic] {
+        let grid = HeightGrid::from_fn(2, 2, [-5.0, 5.0], [-5.0, 5.0], |x, _| rise * x)
+            .unwrap()
+            .with_interpolation(interp);
+        let (x, r) = (-1.0, 0.02);
+        let highest = grid.height(x + r, 0.0);
+        let ceiling = grid.ceiling_near(x, 0.3, r);
+        assert!(
+            ceiling >= highest && ceiling - highest < 1e-8,
+            "{interp:?}: ceiling {ceiling}, the plane's highest {highest}"
+        );
+    }
 }
 
 #[test]
