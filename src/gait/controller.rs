@@ -90,8 +90,9 @@ pub struct GaitController {
     warm_last: [Option<IkWarm>; 6],
     warm_grounded: [Option<IkWarm>; 6],
     /// How far each foot's standing target may be lowered and raised (m) and stay within the
-    /// leg's reach with room to spare and, raised, to lift a step (see [`Self::levelling`]).
-    vertical_room: [(f64, f64); 6],
+    /// leg's reach with room to spare and, raised, to lift a step (see [`Self::levelling`]), at
+    /// the stance's middle and its two ends ([`STANCE_TRACK`]).
+    vertical_room: [[(f64, f64); 3]; 6],
     /// The reactive gait's state, when on (see [`super::reactive`]).
     reactive: Option<Reactive>,
     /// How far each leg's target gives way to the force it feels, when on (see
@@ -120,6 +121,20 @@ pub struct GaitController {
 /// The share of a leg's vertical reach from its standing target that levelling may use: the rest
 /// is left for the stride, the servos' sag and the reach's own curvature.
 const LEVELLING_SHARE: f64 = 0.7;
+
+/// Where along a forward stance the vertical room is measured and levelling checks it, in
+/// strides forward of the neutral point: the middle, where the foot lands and where it lifts.
+/// A leg stretched fore or aft reaches less far down than at its neutral point, and on a slope
+/// the ground under the downhill end of the track is the lowest: levelled by the middle alone,
+/// PhantomX levelled 5° in full, its rear feet's targets at the end of each stance were 12.6 mm
+/// out of reach (perceptive, 18 906 steps out of reach), and those feet took no load and slid
+/// 0.75 m.
+const STANCE_TRACK: [f64; 3] = [0.0, 0.5, -0.5];
+
+/// The share of a leg's vertical reach that levelling may use at the ends of [`STANCE_TRACK`]:
+/// there the stride is taken already, and the foot is on the ground (no step's lift to keep);
+/// what is left is for the servos' sag and the reach's curvature.
+const TRACK_END_SHARE: f64 = 0.9;
 
 /// Starting guesses for the standing pose's inverse kinematics, tried in turn: knee bent one way,
 /// the other way, straight, and the two with the femur down (on the three joints that place the
@@ -280,7 +295,7 @@ impl GaitController {
             grounded: last,
             warm_last: [None; 6],
             warm_grounded: [None; 6],
-            vertical_room: [(0.0, 0.0); 6],
+            vertical_room: [[(0.0, 0.0); 3]; 6],
             reactive: None,
             compliance: None,
             foothold: [DVec3::ZERO; 6],
@@ -300,28 +315,37 @@ impl GaitController {
     }
 
     /// How far each foot's standing target may be lowered and raised and stay within the leg's
-    /// reach ([`Self::levelling`]): the farthest a target moves along z from the standing one and
-    /// is reached (bisected), times [`LEVELLING_SHARE`]; raised, less a step height.
-    fn measured_vertical_room(&self) -> [(f64, f64); 6] {
+    /// reach ([`Self::levelling`]), at each point of [`STANCE_TRACK`]: the farthest a target
+    /// moves along z from the standing one and is reached (bisected), times [`LEVELLING_SHARE`]
+    /// and, raised, less a step height; at the track's ends times [`TRACK_END_SHARE`].
+    fn measured_vertical_room(&self) -> [[(f64, f64); 3]; 6] {
         let spec = &self.spec;
         std::array::from_fn(|k| {
-            let reach = |dz: f64| {
-                let (mut lo, mut hi, mut guess) = (0.0, dz, self.last[k]);
-                for _ in 0..30 {
-                    let mid = 0.5 * (lo + hi);
-                    let answer = self.chains[k].solve(self.neutral[k] + DVec3::Z * mid, guess);
-                    if answer.error <= REACH_TOLERANCE {
-                        (lo, guess) = (mid, answer.angles);
-                    } else {
-                        hi = mid;
+            STANCE_TRACK.map(|along| {
+                let start = self.neutral[k] + DVec3::X * along * spec.stride_length;
+                let reach = |dz: f64| {
+                    let (mut lo, mut hi, mut guess) = (0.0, dz, self.last[k]);
+                    for _ in 0..30 {
+                        let mid = 0.5 * (lo + hi);
+                        let answer = self.chains[k].solve(start + DVec3::Z * mid, guess);
+                        if answer.error <= REACH_TOLERANCE {
+                            (lo, guess) = (mid, answer.angles);
+                        } else {
+                            hi = mid;
+                        }
                     }
-                }
-                lo.abs()
-            };
-            let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
-            let down = LEVELLING_SHARE * reach(-span);
-            let up = (LEVELLING_SHARE * reach(span) - spec.step_height).max(0.0);
-            (down, up)
+                    lo.abs()
+                };
+                let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
+                let (share, lift) = if along == 0.0 {
+                    (LEVELLING_SHARE, spec.step_height)
+                } else {
+                    (TRACK_END_SHARE, 0.0)
+                };
+                let down = share * reach(-span);
+                let up = (share * reach(span) - lift).max(0.0);
+                (down, up)
+            })
         })
     }
 
@@ -432,25 +456,36 @@ impl GaitController {
     /// On stairs the treads' departure from the flight's plane is followed in full and the
     /// flight's slope by λ: the body pitches with the stairs by the rest.
     ///
-    /// Each foot's rise is taken at `standing`, where it would stand ([`Self::standing_footholds`]).
+    /// Each foot's rise is taken at `standing`, where it would stand ([`Self::standing_footholds`]),
+    /// the plane's also half a stride fore and aft of it, where the foot lands and lifts
+    /// ([`STANCE_TRACK`]).
     pub fn levelling(
         &self,
         residual: impl Fn(DVec3) -> f64,
         planar: impl Fn(DVec3) -> f64,
         standing: &[DVec3; 6],
     ) -> f64 {
+        let stride = DVec3::X * self.spec.stride_length;
         (0..6).fold(1.0f64, |share, k| {
-            let (r, q) = (residual(standing[k]), planar(standing[k]));
-            let (down, up) = self.vertical_room[k];
-            // r + λ·q within [−down, up]
-            let most = if q > 0.0 {
-                (up - r) / q
-            } else if q < 0.0 {
-                (down + r) / -q
-            } else {
-                1.0
-            };
-            share.min(most.max(0.0))
+            // the terrain's departure from the plane where the foot stands (the foothold is
+            // chosen on one tread: a track's end may lie over the next), the plane's rise at
+            // each point of the track
+            let r = residual(standing[k]);
+            STANCE_TRACK.iter().zip(&self.vertical_room[k]).fold(
+                share,
+                |share, (&along, &(down, up))| {
+                    let q = planar(standing[k] + stride * along);
+                    // r + λ·q within [−down, up]
+                    let most = if q > 0.0 {
+                        (up - r) / q
+                    } else if q < 0.0 {
+                        (down + r) / -q
+                    } else {
+                        1.0
+                    };
+                    share.min(most.max(0.0))
+                },
+            )
         })
     }
 
@@ -562,7 +597,7 @@ impl GaitController {
                     lift,
                     self.spec.step_height,
                     -d.normalize_or_zero(),
-                    self.vertical_room[k],
+                    self.vertical_room[k][0],
                 );
                 let shift = reactive.shift(k, phase, progress, d, stance_time);
                 foot =
@@ -756,6 +791,46 @@ mod tests {
         let spec = crate::gait::tripod_for_tests();
         let gait = crate::gait::fit(&model, &spec).unwrap().gait;
         (model, gait)
+    }
+
+    /// Levelled on a slope, every point of a stance's track stays within its leg's reach: the
+    /// middle, where the foot lands and where it lifts, on hex18 and on PhantomX, whose rear
+    /// legs reach down less at the end of their stance than at its middle (levelled by the
+    /// middle alone, λ = 1 on 5°: the rear left foot's target there was 12.6 mm out of reach).
+    #[test]
+    fn levelled_on_a_slope_the_whole_stance_track_is_within_reach() {
+        let phantomx = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/third_party/phantomx_description/urdf/phantomx.urdf");
+        let spec = crate::gait::tripod_for_tests();
+        for model in [
+            crate::robot::hex18_for_tests(),
+            crate::robot::load(&phantomx).unwrap(),
+        ] {
+            let gait = crate::gait::fit(&model, &spec).unwrap().gait;
+            let c = GaitController::new(&model, gait.clone()).unwrap();
+            let standing = c.standing_footholds(&|_| 0.0);
+            for degrees in [5.0f64, 10.0, 20.0, 30.0] {
+                for ascent in [1.0, -1.0] {
+                    let rise = move |p: DVec3| ascent * degrees.to_radians().tan() * p.x;
+                    let share = c.levelling(|_| 0.0, rise, &standing);
+                    assert!(share > 0.0, "{degrees}°: nothing levelled");
+                    for (k, &standing) in standing.iter().enumerate() {
+                        for along in STANCE_TRACK {
+                            let p = standing + DVec3::X * along * gait.stride_length;
+                            let target = p + DVec3::Z * share * rise(p);
+                            let answer = c.chains[k].solve(target, c.last[k]);
+                            assert!(
+                                answer.error <= REACH_TOLERANCE,
+                                "{}: {degrees}° ({ascent}), λ {share:.3}, leg {k} at {along}: \
+                                 out of reach by {:.2} mm",
+                                model.name,
+                                answer.error * 1e3
+                            );
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// Perceptive, a stance foot's target sinks no faster than the gait lands
