@@ -2,8 +2,10 @@
 //! runaway speed) stops the run with when, where and the likely cause.
 
 use crate::contact::NormalLaw;
+use crate::metrics::walk::FALL_TILT;
 use crate::robot::RobotModel;
 use crate::sim::{BallSample, HexapodSample};
+use std::cell::Cell;
 
 /// Faster than a walking robot's body moves (a fall from 1 m lands at 4.4 m/s): the integration
 /// has run away.
@@ -26,6 +28,9 @@ pub struct Watchdog {
     weight: f64,
     /// The ball's total energy at the start (J).
     start_energy: Option<f64>,
+    /// When the body first tilted past [`FALL_TILT`] (simulation time, s): a foot driven
+    /// through the ground after it is a tumbling robot's impact, not the time step's doing.
+    fell_at: Cell<Option<f64>>,
 }
 
 impl Watchdog {
@@ -47,6 +52,7 @@ impl Watchdog {
             links: robot.links.iter().map(|l| l.name.clone()).collect(),
             weight: robot.total_mass() * gravity / 3.0, // a tripod carries it on three feet
             start_energy: None,
+            fell_at: Cell::new(None),
         }
     }
 
@@ -65,11 +71,16 @@ impl Watchdog {
             links: Vec::new(),
             weight: mass * gravity,
             start_energy: Some(start.total_energy()),
+            fell_at: Cell::new(None),
         }
     }
 
     /// Why a state is not physical, if it is not: what, and which body.
     pub fn check_walk(&self, s: &HexapodSample) -> Option<String> {
+        let up = s.body.matrix3.z_axis;
+        if self.fell_at.get().is_none() && up.z < FALL_TILT.cos() * up.length() {
+            self.fell_at.set(Some(s.time));
+        }
         if !(s.body.translation.is_finite()
             && s.body_velocity.is_finite()
             && s.body_angular_velocity.is_finite()
@@ -149,7 +160,12 @@ impl Watchdog {
             NormalLaw::SpringDamper { stiffness, .. }
             | NormalLaw::HuntCrossley { stiffness, .. } => stiffness,
         };
-        let cause = if self.dt > 0.5 * limit {
+        let cause = if let Some(fell) = self.fell_at.get() {
+            format!(
+                "the robot had fallen {:.2} s before (its body tilted past 45° at t = {fell:.4} s), and a tumbling robot's impacts drive a body deeper than a soft ground resolves; the walk had failed before it diverged",
+                time - fell
+            )
+        } else if self.dt > 0.5 * limit {
             format!(
                 "dt = {} s is at or above half the contact spring's stability limit {limit:.2e} s (2/√(k/m) for k = {stiffness} N/m on the {mass} kg {name}); reduce dt or the stiffness",
                 self.dt
@@ -168,5 +184,64 @@ impl Watchdog {
         format!(
             "the simulation diverged at t = {time:.4} s: {place}: {what}; likely cause: {cause}"
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::ContactForce;
+    use crate::terrain::GroundFrame;
+    use glam::{DAffine3, DVec3};
+
+    /// hex18's left front foot `depth` into the ground, the body at `body`, at `time`.
+    fn sample(time: f64, body: DAffine3, depth: f64) -> HexapodSample {
+        let mut s = HexapodSample {
+            time,
+            body,
+            ..Default::default()
+        };
+        s.foot_contacts[0] = (depth > 0.0).then(|| ContactForce {
+            point: DVec3::ZERO,
+            force: DVec3::Z,
+            normal_force: 1.0,
+            friction: DVec3::ZERO,
+            penetration: depth,
+            normal_velocity: 0.0,
+            slip: DVec3::ZERO,
+            sticking: true,
+            frame: GroundFrame::from_normal(DVec3::Z),
+        });
+        s
+    }
+
+    /// A foot through the ground after the body tilted past 45° is reported as the fall's
+    /// doing, with its time; the same foot on a robot that never fell keeps the time step's
+    /// advice.
+    #[test]
+    fn a_divergence_after_a_fall_names_the_fall() {
+        let model = crate::robot::hex18_for_tests();
+        let radius = model.legs[0].foot.radius;
+        let tilted = DAffine3::from_rotation_x(60f64.to_radians());
+        let fell = Watchdog::walk(&model, NormalLaw::default(), 1e-3, 9.81);
+        assert_eq!(fell.check_walk(&sample(1.5, tilted, 0.0)), None);
+        let report = fell
+            .check_walk(&sample(2.0, DAffine3::IDENTITY, 1.1 * radius))
+            .expect("a foot through the ground diverges");
+        assert!(
+            report.contains("fallen 0.50 s before (its body tilted past 45° at t = 1.5000 s)"),
+            "{report}"
+        );
+        assert!(!report.contains("reduce dt"), "{report}");
+
+        let upright = Watchdog::walk(&model, NormalLaw::default(), 1e-3, 9.81);
+        assert_eq!(
+            upright.check_walk(&sample(1.5, DAffine3::from_rotation_x(0.5), 0.0)),
+            None
+        );
+        let report = upright
+            .check_walk(&sample(2.0, DAffine3::IDENTITY, 1.1 * radius))
+            .expect("a foot through the ground diverges");
+        assert!(!report.contains("fallen"), "{report}");
     }
 }
