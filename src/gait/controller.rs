@@ -320,6 +320,7 @@ impl GaitController {
     /// and, raised, less a step height; at the track's ends times [`TRACK_END_SHARE`].
     fn measured_vertical_room(&self) -> [[(f64, f64); 3]; 6] {
         let spec = &self.spec;
+        let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
         std::array::from_fn(|k| {
             STANCE_TRACK.map(|along| {
                 let start = self.neutral[k] + DVec3::X * along * spec.stride_length;
@@ -336,7 +337,6 @@ impl GaitController {
                     }
                     lo.abs()
                 };
-                let span = 2.0 * spec.reach.max(spec.stance_height) + spec.step_height;
                 let (share, lift) = if along == 0.0 {
                     (LEVELLING_SHARE, spec.step_height)
                 } else {
@@ -466,27 +466,26 @@ impl GaitController {
         standing: &[DVec3; 6],
     ) -> f64 {
         let stride = DVec3::X * self.spec.stride_length;
-        (0..6).fold(1.0f64, |share, k| {
+        let mut share = 1.0f64;
+        for (k, &standing) in standing.iter().enumerate() {
             // the terrain's departure from the plane where the foot stands (the foothold is
             // chosen on one tread: a track's end may lie over the next), the plane's rise at
             // each point of the track
-            let r = residual(standing[k]);
-            STANCE_TRACK.iter().zip(&self.vertical_room[k]).fold(
-                share,
-                |share, (&along, &(down, up))| {
-                    let q = planar(standing[k] + stride * along);
-                    // r + λ·q within [−down, up]
-                    let most = if q > 0.0 {
-                        (up - r) / q
-                    } else if q < 0.0 {
-                        (down + r) / -q
-                    } else {
-                        1.0
-                    };
-                    share.min(most.max(0.0))
-                },
-            )
-        })
+            let r = residual(standing);
+            for (&along, &(down, up)) in STANCE_TRACK.iter().zip(&self.vertical_room[k]) {
+                let q = planar(standing + stride * along);
+                // r + λ·q within [−down, up]
+                let most = if q > 0.0 {
+                    (up - r) / q
+                } else if q < 0.0 {
+                    (down + r) / -q
+                } else {
+                    1.0
+                };
+                share = share.min(most.max(0.0));
+            }
+        }
+        share
     }
 
     /// Where each foot would stand at its neutral point on `ground`: off any edge (the foothold

@@ -285,6 +285,15 @@ fn slid(contact: &ContactForce, dt: f64) -> (f64, f64) {
 /// legged_gym's terrain curriculum and the terrain ladder count a fall).
 pub const FALL_TILT: f64 = std::f64::consts::FRAC_PI_4;
 
+/// How far a body whose orientation is `body` has tilted from upright: its z axis from the
+/// vertical (rad). Past [`FALL_TILT`] it has fallen (the metrics' `fell_at`, the watchdog's
+/// note of a fall).
+pub fn tilt(body: &glam::DMat3) -> f64 {
+    (body.z_axis.z / body.z_axis.length())
+        .clamp(-1.0, 1.0)
+        .acos()
+}
+
 /// How close to a limit a joint counts as at it (1°).
 pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
 
@@ -413,10 +422,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         self.walk_time = a.walk_steps as f64 * dt;
         self.mean_speed = self.distance / self.walk_time;
         self.heading_change_deg = a.yaw_total.to_degrees();
-        let tilt = (r.body.matrix3.z_axis.z / r.body.matrix3.z_axis.length())
-            .clamp(-1.0, 1.0)
-            .acos();
-        if tilt > FALL_TILT && self.fell_at.is_none() {
+        if tilt(&r.body.matrix3) > FALL_TILT && self.fell_at.is_none() {
             self.fell_at = Some(self.walk_time);
         }
         self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());

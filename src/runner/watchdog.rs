@@ -2,7 +2,7 @@
 //! runaway speed) stops the run with when, where and the likely cause.
 
 use crate::contact::NormalLaw;
-use crate::metrics::walk::FALL_TILT;
+use crate::metrics::walk::{FALL_TILT, tilt};
 use crate::robot::RobotModel;
 use crate::sim::{BallSample, HexapodSample};
 use std::cell::Cell;
@@ -77,8 +77,7 @@ impl Watchdog {
 
     /// Why a state is not physical, if it is not: what, and which body.
     pub fn check_walk(&self, s: &HexapodSample) -> Option<String> {
-        let up = s.body.matrix3.z_axis;
-        if self.fell_at.get().is_none() && up.z < FALL_TILT.cos() * up.length() {
+        if self.fell_at.get().is_none() && tilt(&s.body.matrix3) > FALL_TILT {
             self.fell_at.set(Some(s.time));
         }
         if !(s.body.translation.is_finite()

@@ -246,11 +246,10 @@ impl HeightGrid {
     /// How far above its corners' bilinear interpolant cell `c`'s patch may rise, or None where
     /// only its stored bound holds (a grid with cliffs); a nanometre more for rounding, and for
     /// bends below a nanometre, which [`Self::cell_bends`] stores as none. Bilinear: nothing
-    /// more. Catmull–Rom: in one
-    /// dimension the spline departs from the line through its middle samples by
-    /// −½·[D₁·t(1 − t)² + D₂·t²(1 − t)], D₁ and D₂ the second differences, so by at most
-    /// max|D|/8; across rows the same holds for the rows' splines, whose second differences are
-    /// the columns' blended by weights of magnitudes summing to at most 1.25: at most
+    /// more. Catmull–Rom: in one dimension the spline departs from the line through its middle
+    /// samples by −½·[D₁·t(1 − t)² + D₂·t²(1 − t)], D₁ and D₂ the second differences, so by at
+    /// most max|D|/8; across rows the same holds for the rows' splines, whose second differences
+    /// are the columns' blended by weights of magnitudes summing to at most 1.25: at most
     /// (1 + 1.25)·B/8 with B the cell's largest second difference ([`Self::cell_bends`], rounded
     /// up).
     fn patch_slack(&self, c: usize) -> Option<f64> {
