@@ -17,7 +17,9 @@ mod spec;
 
 pub use command::{CommandChange, CommandSchedule};
 pub use compliance::Compliance;
-pub use controller::{GaitController, GaitTargets, REACH_TOLERANCE, StanceError, VelocityCommand};
+pub use controller::{
+    GaitController, GaitTargets, REACH_TOLERANCE, StanceError, StanceTrack, VelocityCommand,
+};
 pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
 pub use foothold::away_from_edges;
 pub use heading::HeadingHold;
