@@ -124,8 +124,8 @@ const STANDING_TURN: f64 = 0.01;
 const TRACK_END_MOVE: f64 = 0.01;
 const TRACK_END_TURN: f64 = 0.05;
 
-/// Where the ground under the hips and the neutral feet is read when following the terrain
-/// (body level frame), and the body's level frame they were searched in.
+/// Where the ground under the hips and the feet's stance tracks is read when following the
+/// terrain (body level frame), and the body's level frame they were searched in.
 #[derive(Debug, Clone, Copy)]
 struct StandingPoints {
     center: DVec3,
@@ -366,7 +366,8 @@ impl Walker {
     /// the plane (a stair's treads, a bump) in full, the plane's own rise under the foot (a
     /// slope, a flight of stairs) by the share λ the legs reach. The rest of the plane's tilt
     /// the body takes: it pitches with a flight of stairs steeper than its legs can level. A body
-    /// set down tilted is brought to that share over [`LEVELLING_RAMP`].
+    /// set down tilted is brought to that share over [`LEVELLING_RAMP`]. Less the body's offset
+    /// over it ([`GaitController::body_offset`]): it crouches into dips its legs cannot reach.
     fn ground_within_reach<'a>(
         hexapod: &'a Hexapod,
         controller: &GaitController,
