@@ -26,8 +26,8 @@ use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
 use super::slew;
 use super::spec::{Gait, SwingShape};
-use crate::robot::RobotModel;
 use crate::robot::kinematics::{IkSolution, IkWarm, LegAngles, LegChain, LegStatics};
+use crate::robot::{ContactSphere, RobotModel};
 use glam::{DMat3, DQuat, DVec3};
 
 /// A velocity command in the body frame.
@@ -117,9 +117,11 @@ pub struct GaitController {
     joint_speed: [LegAngles; 6],
     last_angles: [LegAngles; 6],
     /// The body's contact spheres ([`crate::robot::Link::contacts`]) as the point under each
-    /// (body frame, z = 0) and how far its bottom stands above the ground the feet stand on
-    /// ([`Self::body_offset`]).
+    /// (body frame, z = 0) and how far its bottom stands above the ground the feet stand on, and
+    /// half the least of those, the clearance the body keeps ([`Self::body_offset`]). Empty when
+    /// the body has no clearance to keep.
     belly: Vec<(DVec3, f64)>,
+    belly_margin: f64,
 }
 
 /// A foot's points over a stance: the middle, where it lands and where it lifts
@@ -291,12 +293,17 @@ impl GaitController {
         }
         let radius = std::array::from_fn(|k| model.legs[k].foot.radius);
         let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]));
-        let ground = hips - spec.stance_height;
-        let belly = model.links[0]
-            .contacts
-            .iter()
-            .map(|c| (c.center.with_z(0.0), c.center.z - c.radius - ground))
-            .collect();
+        let feet_ground = hips - spec.stance_height;
+        let above = |c: &ContactSphere| c.center.z - c.radius - feet_ground;
+        let body = &model.links[0].contacts;
+        let clearance = body.iter().map(above).fold(f64::INFINITY, f64::min);
+        let belly = if clearance > 0.0 && clearance.is_finite() {
+            body.iter()
+                .map(|c| (c.center.with_z(0.0), above(c)))
+                .collect()
+        } else {
+            Vec::new()
+        };
         Ok(GaitController {
             offsets: spec.offsets,
             spec,
@@ -326,6 +333,7 @@ impl GaitController {
             }),
             last_angles: last,
             belly,
+            belly_margin: 0.5 * clearance,
         })
     }
 
@@ -550,13 +558,9 @@ impl GaitController {
         } else {
             0.5 * (lo + hi)
         };
-        let clearance = self.belly.iter().map(|b| b.1).fold(f64::INFINITY, f64::min);
-        if !(clearance > 0.0 && clearance.is_finite()) {
-            return within;
-        }
         self.belly
             .iter()
-            .map(|&(p, above)| ground(p) - above + 0.5 * clearance)
+            .map(|&(p, above)| ground(p) - above + self.belly_margin)
             .fold(within, f64::max)
     }
 
@@ -858,15 +862,8 @@ mod tests {
     /// middle alone, λ = 1 on 5°: the rear left foot's target there was 12.6 mm out of reach).
     #[test]
     fn levelled_on_a_slope_the_whole_stance_track_is_within_reach() {
-        let phantomx = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data/third_party/phantomx_description/urdf/phantomx.urdf");
-        let spec = crate::gait::tripod_for_tests();
-        for model in [
-            crate::robot::hex18_for_tests(),
-            crate::robot::load(&phantomx).unwrap(),
-        ] {
-            let gait = crate::gait::fit(&model, &spec).unwrap().gait;
-            let c = GaitController::new(&model, gait.clone()).unwrap();
+        for (model, c) in hex18_and_phantomx() {
+            let gait = &c.spec;
             let standing = c.standing_footholds(&|_| 0.0);
             for degrees in [5.0f64, 10.0, 20.0, 30.0] {
                 for ascent in [1.0, -1.0] {
