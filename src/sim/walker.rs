@@ -307,15 +307,21 @@ impl Walker {
     }
 
     /// The points off edges ([`away_from_edges`]) where the ground under each hip and each
-    /// neutral foot is read (body level frame), searched afresh only when the body has moved
-    /// [`STANDING_MOVE`] or turned [`STANDING_TURN`] since the last search, and held in between:
+    /// foot's stance track is read (body level frame), searched afresh only when the body has
+    /// moved [`STANDING_MOVE`] or turned [`STANDING_TURN`] since the last search (the tracks'
+    /// ends [`TRACK_END_MOVE`] or [`TRACK_END_TURN`]), and held in between:
     /// searched every step, they took nine tenths of a perceptive walk's time on 2 cm stepping
     /// stones (a footprint's edge test is a hundred terrain reads, the search up to 288 tests).
     fn standing_points(&mut self) -> StandingPoints {
         let (center, heading) = Self::level_frame(&self.hexapod);
+        let now = (center, heading);
         if let Some(held) = &self.standing
-            && (held.center - center).truncate().length() < STANDING_MOVE
-            && (held.heading.x_axis - heading.x_axis).length() < STANDING_TURN
+            && within(
+                (held.center, held.heading),
+                now,
+                STANDING_MOVE,
+                STANDING_TURN,
+            )
         {
             return *held;
         }
@@ -326,11 +332,9 @@ impl Walker {
             let (hip, radius) = (Self::hip(model, k), model.legs[k].foot.radius);
             hip + away_from_edges(&ground, hip, DVec3::X, radius, longest)
         });
-        let ends_held = self.standing.filter(|held| {
-            let (c, h) = held.ends_at;
-            (c - center).truncate().length() < TRACK_END_MOVE
-                && (h.x_axis - heading.x_axis).length() < TRACK_END_TURN
-        });
+        let ends_held = self
+            .standing
+            .filter(|held| within(held.ends_at, now, TRACK_END_MOVE, TRACK_END_TURN));
         let (tracks, ends, ends_at) = match ends_held {
             Some(held) => {
                 // the ends held where they are on the ground, seen from the body now
@@ -600,6 +604,12 @@ impl Walker {
         sample.gait = self.last_targets;
         sample.settling = t < 0.0;
     }
+}
+
+/// Whether the body's level frame `to` (centre, heading) is within `distance` (m, across the
+/// ground) and `turn` (of its x axis) of `from`.
+fn within(from: (DVec3, glam::DMat3), to: (DVec3, glam::DMat3), distance: f64, turn: f64) -> bool {
+    (from.0 - to.0).truncate().length() < distance && (from.1.x_axis - to.1.x_axis).length() < turn
 }
 
 /// The body's heading: the yaw of its x axis seen from above (rad, in (−π, π]).
