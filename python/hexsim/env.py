@@ -141,6 +141,7 @@ class HexapodVectorEnv(VectorEnv):
         self._sims = [env.sim for env in self.envs]
         self._tasks = [env.task for env in self.envs]
         self._autoreset = np.zeros(num_envs, dtype=np.bool_)
+        self._no_seeds = [None] * num_envs
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         if seed is None or isinstance(seed, int):
@@ -159,20 +160,28 @@ class HexapodVectorEnv(VectorEnv):
         return obs, self._infos(everyone, terrain, None, None, None)
 
     def step(self, actions):
-        actions = self._checked(actions)
+        actions = np.asarray(actions, dtype=np.float64)
         resetting = self._autoreset
-        terrain = self._draw_terrain_seeds(resetting)
+        if resetting.any():
+            self._check(actions)
+            terrain = self._draw_terrain_seeds(resetting)
+        else:
+            # the common step, kept short: its Python runs serially between the worlds' steps
+            terrain = self._no_seeds
         obs, rewards, terminations, truncations, work, x, diverged = step_tasks(
             self._sims, self._tasks, actions, terrain, threads=self.threads
         )
         self._autoreset = terminations | truncations
-        infos = self._infos(resetting, terrain, work, x, diverged)
+        if terrain is self._no_seeds and not any(diverged):
+            everyone = np.ones(self.num_envs, dtype=np.bool_)
+            infos = {"work": work, "_work": everyone, "x": x, "_x": everyone.copy()}
+        else:
+            infos = self._infos(resetting, terrain, work, x, diverged)
         return obs, rewards, terminations, truncations, infos
 
-    def _checked(self, actions) -> np.ndarray:
-        """The actions as float64, refused before any seed is drawn (``step_tasks`` checks them
-        too, but after the resetting worlds' terrain seeds are drawn)."""
-        actions = np.asarray(actions, dtype=np.float64)
+    def _check(self, actions: np.ndarray) -> None:
+        """Refuses the actions before any terrain seed is drawn (``step_tasks`` checks them too,
+        with the same messages, but after the resetting worlds' seeds are drawn)."""
         if actions.shape != self.action_space.shape:
             raise ValueError(f"action: shape {actions.shape}, expected {self.action_space.shape}")
         if np.isnan(actions).any():
@@ -181,7 +190,6 @@ class HexapodVectorEnv(VectorEnv):
                 f"action: NaN in world {world}'s action, component {component}; "
                 "expected numbers in [-1, 1]"
             )
-        return actions
 
     def _draw_terrain_seeds(self, resetting: np.ndarray) -> list[int | None]:
         """The terrain seeds of the worlds that reset (None for the others), each drawn from its

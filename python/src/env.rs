@@ -468,8 +468,7 @@ pub(crate) fn step_tasks<'py>(
             result: Ok(Outcome::default()),
         })
         .collect();
-    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-    py.detach(|| pool::for_each(&mut worlds, threads.unwrap_or(cores), World::run));
+    py.detach(|| pool::for_each(&mut worlds, threads.unwrap_or_else(pool::cores), World::run));
     let mut outcomes = Vec::with_capacity(n);
     for (i, world) in worlds.into_iter().enumerate() {
         outcomes.push(world.result.map_err(|e| {

@@ -567,8 +567,7 @@ fn step_many(
         })?;
         sessions.push(session);
     }
-    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-    let threads = threads.unwrap_or(cores);
+    let threads = threads.unwrap_or_else(pool::cores);
     let taken = py.detach(|| advance_all(&mut sessions, &counts, threads));
     for sim in &mut simulations {
         sim.finish_if_stopped()?;
