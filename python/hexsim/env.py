@@ -172,11 +172,7 @@ class HexapodVectorEnv(VectorEnv):
             self._sims, self._tasks, actions, terrain, threads=self.threads
         )
         self._autoreset = terminations | truncations
-        if terrain is self._no_seeds and not any(diverged):
-            everyone = np.ones(self.num_envs, dtype=np.bool_)
-            infos = {"work": work, "_work": everyone, "x": x, "_x": everyone.copy()}
-        else:
-            infos = self._infos(resetting, terrain, work, x, diverged)
+        infos = self._infos(resetting, terrain, work, x, diverged)
         return obs, rewards, terminations, truncations, infos
 
     def _check(self, actions: np.ndarray) -> None:
@@ -200,7 +196,10 @@ class HexapodVectorEnv(VectorEnv):
         """The infos as ``VectorEnv._add_info`` batches the single environments' (a value array
         and a ``_key`` mask per key, a key only if some world has it): ``terrain_seed`` for the
         worlds reset, ``work`` and ``x`` (and ``diverged``) for the worlds stepped."""
-        n = self.num_envs
+        if terrain is self._no_seeds and not any(diverged):
+            # the common step, every world stepped, none diverged: no mask arithmetic
+            everyone = np.ones(self.num_envs, dtype=np.bool_)
+            return {"work": work, "_work": everyone, "x": x, "_x": everyone.copy()}
         infos: dict[str, Any] = {}
         if resetting.any():
             infos["terrain_seed"] = np.array([s or 0 for s in terrain], dtype=int)
