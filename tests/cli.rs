@@ -723,8 +723,9 @@ fn the_paper_variant_names_what_is_hexsims_reading() {
 /// `hexsim robot` and `hexsim run` judge reach by one tally (`gait::reach`), the report planning
 /// the run's walk step by step on level ground: hex18 with a 0.19 m stride, which the report once
 /// called out of reach (a cycle sampled without the feet's rolling offset) while the run reached
-/// every target, and with 0.21 m, out of reach in most steps (18525 of 20000): the report's count
-/// is the run's `clamped_ik_steps` on flat ground, exactly.
+/// every target, and with 0.21 m, out of reach in 4582 steps of 20000 (18525 while a solve that
+/// missed stayed on the branch it had slid to, `gait::controller::solve_on_branch`): the report's
+/// count is the run's `clamped_ik_steps` on flat ground, exactly.
 #[test]
 fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
     let dir = scratch("reach");
@@ -784,7 +785,7 @@ fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
             "stride {stride}: {line}"
         );
         if stride == "0.21" {
-            assert!(reported > 10_000, "{line}");
+            assert!(reported > 2_000, "{line}");
         }
     }
 }
