@@ -332,6 +332,33 @@ fn a_fitted_tripod_reaches_every_target_over_the_cycle() {
     assert_eq!(flat["clamped_ik_steps"], 0);
 }
 
+/// Perceptive, a foothold moved off a trench's lip stays where the leg reaches it. ant_bot's
+/// workspace is little more than its stride: over 2 cm gaps its front and rear footholds, moved
+/// 5 cm fore and aft off the lips, lay out of reach through their stance (815 of 8 s's steps
+/// clamped; over 25 s a foot skated 0.58 m and the robot turned 16°, where blind it walked as
+/// commanded). The search now takes the nearest clear foothold the leg reaches.
+#[test]
+fn a_perceptive_foothold_off_an_edge_is_within_reach() {
+    let dir = scratch("third_party_reach");
+    let terrain = dir.path().join("gaps_2cm.toml");
+    std::fs::write(
+        &terrain,
+        "[source]\nkind = \"gaps\"\nwidth = 0.02\nspacing = 0.4\ndepth = 0.1\nfirst_gap = 0.5\nsize = [6.0, 4.0]\ncell = 0.01\n",
+    )
+    .unwrap();
+    let metrics = walk_with(
+        "tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf",
+        terrain.to_str().unwrap(),
+        "ant_bot_gaps",
+        &["--follow-terrain", "--start", "-0.5", "0"],
+    );
+    assert!(
+        metrics["forward_distance"].as_f64().unwrap() > 1.0,
+        "{metrics}"
+    );
+    assert_eq!(metrics["clamped_ik_steps"], 0, "{metrics}");
+}
+
 /// `hexsim robot` says what it fitted for the MushroomRL hexapod, whose legs do not reach hex18's
 /// stance (0.10 m high, 0.15 m out: missed by 11 mm before the fit).
 #[test]

@@ -769,8 +769,24 @@ impl GaitController {
                 // the ground that will be under the touch-down point when the foot lands
                 let landing = n - d * (0.5 + (1.0 - s) * ratio);
                 let longest = self.spec.stride_length.max(d.length());
-                self.next_foothold[k] =
-                    foothold::away_from_edges(ground, landing, -d, self.radius[k], longest);
+                // the leg reaches the foothold through the stance that follows: from where it
+                // lands (n − d/2 moved) to where it lifts (n + d/2 moved), on its ground
+                let (chain, home) = (&self.chains[k], &self.home[k]);
+                let reaches = |shift: DVec3| {
+                    let z = n.z + ground(landing + shift);
+                    [-0.5, 0.0, 0.5].iter().all(|&along| {
+                        let target = (n + d * along + shift).with_z(z);
+                        chain.solve(target, home).error <= REACH_TOLERANCE
+                    })
+                };
+                self.next_foothold[k] = foothold::away_from_edges_within(
+                    ground,
+                    landing,
+                    -d,
+                    self.radius[k],
+                    longest,
+                    reaches,
+                );
             }
             _ => {}
         }

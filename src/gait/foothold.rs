@@ -91,6 +91,37 @@ pub fn away_from_edges(
     radius: f64,
     longest: f64,
 ) -> DVec3 {
+    clear_of_edges(ground, p, direction, radius, longest, |_| true).unwrap_or(DVec3::ZERO)
+}
+
+/// [`away_from_edges`] for a foot the leg must reach: the shortest shift that clears an edge
+/// and that `reaches` accepts (given the shift), else the shortest that clears an edge as
+/// [`away_from_edges`] chooses it. A foothold moved off a trench's lip by most of a stride lies
+/// beyond the reach of a leg whose workspace is little more than its stride (ant_bot, 2 cm
+/// gaps: front and rear feet moved 5 cm fore and aft, out of reach by 3–4 cm through their
+/// stance, 10 750 steps in 25 s), and the foot that cannot stand on it skates.
+pub fn away_from_edges_within(
+    ground: &impl Fn(DVec3) -> f64,
+    p: DVec3,
+    direction: DVec3,
+    radius: f64,
+    longest: f64,
+    reaches: impl Fn(DVec3) -> bool,
+) -> DVec3 {
+    clear_of_edges(ground, p, direction, radius, longest, reaches)
+        .unwrap_or_else(|| away_from_edges(ground, p, direction, radius, longest))
+}
+
+/// The search of [`away_from_edges`] among the shifts `accept` takes (None: no shift within
+/// `longest` is clear and accepted).
+fn clear_of_edges(
+    ground: &impl Fn(DVec3) -> f64,
+    p: DVec3,
+    direction: DVec3,
+    radius: f64,
+    longest: f64,
+    accept: impl Fn(DVec3) -> bool,
+) -> Option<DVec3> {
     let ahead = DVec3::new(direction.x, direction.y, 0.0)
         .try_normalize()
         .unwrap_or(DVec3::X);
@@ -108,19 +139,20 @@ pub fn away_from_edges(
     ];
     for margin in [EDGE_MARGIN, 0.5 * EDGE_MARGIN, 0.0] {
         let half_width = radius + margin;
-        if !near_edge(ground, p, half_width) {
-            return DVec3::ZERO;
+        let clear = |shift: DVec3| !near_edge(ground, p + shift, half_width) && accept(shift);
+        if clear(DVec3::ZERO) {
+            return Some(DVec3::ZERO);
         }
         for i in 1..=SEARCH_STEPS {
             let along = longest * i as f64 / SEARCH_STEPS as f64;
             for way in ways {
-                if !near_edge(ground, p + way * along, half_width) {
-                    return way * along;
+                if clear(way * along) {
+                    return Some(way * along);
                 }
             }
         }
     }
-    DVec3::ZERO
+    None
 }
 
 #[cfg(test)]
@@ -172,6 +204,28 @@ mod tests {
             away_from_edges(&riser, p, DVec3::X, radius, 0.001),
             DVec3::ZERO
         );
+    }
+
+    /// A foothold the leg must reach moves the nearest way its reach allows: 1 cm short of a
+    /// riser, back onto the tread when the leg reaches back, else forward onto the next tread;
+    /// where it reaches no clear point, the shift is the one without reach.
+    #[test]
+    fn a_foothold_within_reach_moves_the_way_the_leg_reaches() {
+        let (radius, longest) = (0.01, 0.1);
+        let p = DVec3::new(0.29, 0.12, -0.1);
+        let back = away_from_edges(&riser, p, DVec3::X, radius, longest);
+        assert!(back.x < 0.0);
+        assert_eq!(
+            away_from_edges_within(&riser, p, DVec3::X, radius, longest, |_| true),
+            back
+        );
+        let forward = away_from_edges_within(&riser, p, DVec3::X, radius, longest, |s| {
+            s.x > -0.001 && s.y.abs() < 1e-9
+        });
+        assert!(forward.x > 0.0 && forward.y == 0.0, "{forward:?}");
+        assert!(!near_edge(&riser, p + forward, radius + EDGE_MARGIN));
+        let nowhere = away_from_edges_within(&riser, p, DVec3::X, radius, longest, |_| false);
+        assert_eq!(nowhere, back);
     }
 
     /// Where two trenches cross, the lines through the point run inside them and see no edge;
