@@ -94,9 +94,10 @@ pub fn away_from_edges(
     clear_of_edges(ground, p, direction, radius, longest, |_| true).unwrap_or(DVec3::ZERO)
 }
 
-/// [`away_from_edges`] for a foot the leg must reach: the shortest shift that clears an edge
-/// and that `reaches` accepts (given the shift), else the shortest that clears an edge as
-/// [`away_from_edges`] chooses it. A foothold moved off a trench's lip by most of a stride lies
+/// [`away_from_edges`] for a foot the leg must reach: the shortest shift (none, first) that
+/// clears an edge and that `reaches` accepts (given the shift), else the shortest that clears
+/// an edge as [`away_from_edges`] chooses it — so a foothold clear of edges but out of reach
+/// moves too, where a clear point within `longest` is reached. A foothold moved off a trench's lip by most of a stride lies
 /// beyond the reach of a leg whose workspace is little more than its stride (ant_bot, 2 cm
 /// gaps: front and rear feet moved 5 cm fore and aft, out of reach by 3–4 cm through their
 /// stance, 10 750 steps in 25 s), and the foot that cannot stand on it skates.
