@@ -91,16 +91,17 @@ pub fn away_from_edges(
     radius: f64,
     longest: f64,
 ) -> DVec3 {
-    clear_of_edges(ground, p, direction, radius, longest, |_| true).unwrap_or(DVec3::ZERO)
+    away_from_edges_within(ground, p, direction, radius, longest, |_| true)
 }
 
 /// [`away_from_edges`] for a foot the leg must reach: the shortest shift (none, first) that
 /// clears an edge and that `reaches` accepts (given the shift), else the shortest that clears
-/// an edge as [`away_from_edges`] chooses it — so a foothold clear of edges but out of reach
-/// moves too, where a clear point within `longest` is reached. A foothold moved off a trench's lip by most of a stride lies
-/// beyond the reach of a leg whose workspace is little more than its stride (ant_bot, 2 cm
-/// gaps: front and rear feet moved 5 cm fore and aft, out of reach by 3–4 cm through their
-/// stance, 10 750 steps in 25 s), and the foot that cannot stand on it skates.
+/// an edge, as [`away_from_edges`] chooses it — so a foothold clear of edges but out of reach
+/// moves too, where a clear point within `longest` is reached. A foothold moved off a trench's
+/// lip by most of a stride lies beyond the reach of a leg whose workspace is little more than
+/// its stride (ant_bot, 2 cm gaps: front and rear feet moved 5 cm fore and aft, out of reach by
+/// 3–4 cm through their stance, 10 750 steps in 25 s), and the foot that cannot stand on it
+/// skates.
 pub fn away_from_edges_within(
     ground: &impl Fn(DVec3) -> f64,
     p: DVec3,
@@ -109,20 +110,6 @@ pub fn away_from_edges_within(
     longest: f64,
     reaches: impl Fn(DVec3) -> bool,
 ) -> DVec3 {
-    clear_of_edges(ground, p, direction, radius, longest, reaches)
-        .unwrap_or_else(|| away_from_edges(ground, p, direction, radius, longest))
-}
-
-/// The search of [`away_from_edges`] among the shifts `accept` takes (None: no shift within
-/// `longest` is clear and accepted).
-fn clear_of_edges(
-    ground: &impl Fn(DVec3) -> f64,
-    p: DVec3,
-    direction: DVec3,
-    radius: f64,
-    longest: f64,
-    accept: impl Fn(DVec3) -> bool,
-) -> Option<DVec3> {
     let ahead = DVec3::new(direction.x, direction.y, 0.0)
         .try_normalize()
         .unwrap_or(DVec3::X);
@@ -138,22 +125,32 @@ fn clear_of_edges(
         (-ahead + side) * diagonal,
         (-ahead - side) * diagonal,
     ];
+    // the shifts in the order tried: none, then outwards a step at a time, every way each step
+    let shifts = || {
+        std::iter::once(DVec3::ZERO).chain((1..=SEARCH_STEPS).flat_map(move |i| {
+            let along = longest * i as f64 / SEARCH_STEPS as f64;
+            ways.map(|way| way * along)
+        }))
+    };
+    // the first clear shift, whatever the reach: what the search without `reaches` returns
+    let mut nearest_clear = None;
+    // shifts found clear and out of reach: clear by a wider margin, they are clear by a
+    // narrower one too, and their reach is not tested again
+    let mut unreached = [false; 1 + 8 * SEARCH_STEPS];
     for margin in [EDGE_MARGIN, 0.5 * EDGE_MARGIN, 0.0] {
         let half_width = radius + margin;
-        let clear = |shift: DVec3| !near_edge(ground, p + shift, half_width) && accept(shift);
-        if clear(DVec3::ZERO) {
-            return Some(DVec3::ZERO);
-        }
-        for i in 1..=SEARCH_STEPS {
-            let along = longest * i as f64 / SEARCH_STEPS as f64;
-            for way in ways {
-                if clear(way * along) {
-                    return Some(way * along);
-                }
+        for (n, shift) in shifts().enumerate() {
+            if unreached[n] || near_edge(ground, p + shift, half_width) {
+                continue;
             }
+            nearest_clear.get_or_insert(shift);
+            if reaches(shift) {
+                return shift;
+            }
+            unreached[n] = true;
         }
     }
-    None
+    nearest_clear.unwrap_or(DVec3::ZERO)
 }
 
 #[cfg(test)]
