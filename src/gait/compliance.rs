@@ -13,6 +13,17 @@
 //! ẏ = γ·(|F| − F_cap)·F̂), and the displacement returns to the plan over [`RELEASE_TIME`] once
 //! the force is below the cap. A walk whose legs stay under the cap is not touched: the default
 //! walk's feet peak at 2.7 weights as they land, and it is the same bit for bit with or without.
+//!
+//! Moving the foot target does not free a leg whose *links* are pressed: a shin against a
+//! stone's side with the foot hanging in the pit, a leg gripping a stone between its foot and
+//! its shin (the forces cancel in the sum, not in the ground), a hip pressed into a wall. On
+//! the ladders' stepping stones and stairs such legs pressed with 5–24 weights, their links
+//! 5–9 mm into the ground. So each leg also *yields* in joint space, as a servo with a torque
+//! limit backs off: past the cap, the leg's load — the magnitudes of its contacts' forces summed,
+//! so that a grip counts — moves a yield fraction y ∈ [0, 1] up at [`YIELD_RATE`] per weight of
+//! excess, and the leg's joint targets are sent that fraction of the way to the joints' angles
+//! (y = 1: the servos' springs hold nothing beyond the load feed-forward). Under the cap y decays
+//! over [`RELEASE_TIME`].
 
 use glam::DVec3;
 
@@ -27,11 +38,18 @@ pub const CAP: f64 = 3.0;
 pub const SPEED_PER_WEIGHT: f64 = 0.1;
 /// The time over which a leg's displacement goes back to its plan once under the cap (s).
 pub const RELEASE_TIME: f64 = 0.1;
+/// How fast a leg yields per unit of excess load: each weight over the cap raises its yield
+/// fraction by this much per second (a leg pressing with 5 weights, 2 over, yields fully in
+/// 10 ms). At 10 a second a leg pressing the stepping stones' walls with 5 weights still sank a
+/// foot 5.7 mm before it had yielded a quarter of the way.
+pub const YIELD_RATE: f64 = 50.0;
 
 /// Per leg, how far its foot target has given way (body frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Compliance {
     offset: [DVec3; 6],
+    /// Per leg, the fraction of the way its joint targets are sent to its joints' angles.
+    yielded: [f64; 6],
     weight: f64,
     /// The most a target gives way (m).
     longest: f64,
@@ -42,16 +60,28 @@ impl Compliance {
     pub fn new(weight: f64, longest: f64) -> Self {
         Compliance {
             offset: [DVec3::ZERO; 6],
+            yielded: [0.0; 6],
             weight,
             longest,
         }
     }
 
     /// Each leg's ground force over the last step (`forces`, body frame; its foot's and its
-    /// links' summed) moves its displacement on by `dt`.
-    pub fn feel(&mut self, forces: &[DVec3; 6], dt: f64) {
+    /// links' summed) moves its displacement on by `dt`, and its load (`loads`: the magnitudes
+    /// of those forces summed) its yield.
+    pub fn feel(&mut self, forces: &[DVec3; 6], loads: &[f64; 6], dt: f64) {
         let cap = CAP * self.weight;
         let decay = (-dt / RELEASE_TIME).exp();
+        for (yielded, &load) in self.yielded.iter_mut().zip(loads) {
+            if load > cap {
+                *yielded = (*yielded + YIELD_RATE * (load - cap) / self.weight * dt).min(1.0);
+            } else if *yielded != 0.0 {
+                *yielded *= decay;
+                if *yielded < 1e-6 {
+                    *yielded = 0.0;
+                }
+            }
+        }
         for (offset, force) in self.offset.iter_mut().zip(forces) {
             let magnitude = force.length();
             if magnitude > cap {
@@ -71,6 +101,11 @@ impl Compliance {
     pub fn offset(&self, k: usize) -> DVec3 {
         self.offset[k]
     }
+
+    /// The fraction of the way leg `k`'s joint targets go to its joints' angles.
+    pub fn yielded(&self, k: usize) -> f64 {
+        self.yielded[k]
+    }
 }
 
 #[cfg(test)]
@@ -82,9 +117,34 @@ mod tests {
         let mut c = Compliance::new(10.0, 0.05);
         let forces = [DVec3::new(3.0, -2.0, 29.7); 6];
         for _ in 0..1000 {
-            c.feel(&forces, 1e-3);
+            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
         }
-        assert!((0..6).all(|k| c.offset(k) == DVec3::ZERO));
+        assert!((0..6).all(|k| c.offset(k) == DVec3::ZERO && c.yielded(k) == 0.0));
+    }
+
+    #[test]
+    fn a_gripping_leg_yields_though_its_net_force_is_under_the_cap() {
+        let mut c = Compliance::new(10.0, 0.05);
+        // a stone gripped between foot and shin: 40 N each way, net zero; the load is 80 N,
+        // 5 weights over the cap of 30 N: the yield rises at 5·YIELD_RATE a second
+        let forces = [DVec3::ZERO; 6];
+        let mut loads = [0.0; 6];
+        loads[4] = 80.0;
+        c.feel(&forces, &loads, 1e-3);
+        assert!((c.yielded(4) - 5.0 * YIELD_RATE * 1e-3).abs() < 1e-12);
+        assert_eq!(c.offset(4), DVec3::ZERO);
+        assert!((0..6).filter(|&k| k != 4).all(|k| c.yielded(k) == 0.0));
+        // bounded at 1: the servos' springs hold nothing
+        for _ in 0..100 {
+            c.feel(&forces, &loads, 1e-3);
+        }
+        assert_eq!(c.yielded(4), 1.0);
+        // under the cap it decays over RELEASE_TIME
+        loads[4] = 29.0;
+        for _ in 0..100 {
+            c.feel(&forces, &loads, 1e-3);
+        }
+        assert!((c.yielded(4) - (-1.0f64).exp()).abs() < 1e-9);
     }
 
     #[test]
@@ -94,20 +154,20 @@ mod tests {
         // 2 weights over the cap along +x: 0.2 m/s
         forces[2] = DVec3::new(50.0, 0.0, 0.0);
         for _ in 0..100 {
-            c.feel(&forces, 1e-3);
+            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
         }
         let o = c.offset(2);
         assert!((o.x - 0.02).abs() < 1e-9 && o.y == 0.0 && o.z == 0.0, "{o}");
         assert_eq!(c.offset(0), DVec3::ZERO);
         // bounded
         for _ in 0..1000 {
-            c.feel(&forces, 1e-3);
+            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
         }
         assert!((c.offset(2).length() - 0.05).abs() < 1e-12);
         // released over RELEASE_TIME
         forces[2] = DVec3::ZERO;
         for _ in 0..100 {
-            c.feel(&forces, 1e-3);
+            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
         }
         let expected = 0.05 * (-1.0f64).exp();
         assert!((c.offset(2).length() - expected).abs() < 1e-9);

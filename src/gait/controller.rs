@@ -428,12 +428,18 @@ impl GaitController {
         self.compliance = compliance;
     }
 
-    /// Each leg's ground force over the last step (body frame), for leg compliance (ignored
-    /// when it is off).
-    pub fn feel_forces(&mut self, forces: &[DVec3; 6], dt: f64) {
+    /// Each leg's ground force over the last step (body frame) and its load (the magnitudes of
+    /// its contacts' forces summed), for leg compliance (ignored when it is off).
+    pub fn feel_forces(&mut self, forces: &[DVec3; 6], loads: &[f64; 6], dt: f64) {
         if let Some(compliance) = &mut self.compliance {
-            compliance.feel(forces, dt);
+            compliance.feel(forces, loads, dt);
         }
+    }
+
+    /// The fraction of the way leg `k`'s joint targets are to be sent to its joints' angles
+    /// (leg compliance's yield; 0 when it is off).
+    pub fn leg_yield(&self, k: usize) -> f64 {
+        self.compliance.as_ref().map_or(0.0, |c| c.yielded(k))
     }
 
     pub fn is_compliant(&self) -> bool {

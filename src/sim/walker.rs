@@ -48,6 +48,11 @@ pub struct Walker {
     /// Each leg's ground force in the last step, its foot's and its links' (body frame);
     /// summed only for leg compliance, the one that reads it.
     leg_forces: [DVec3; 6],
+    /// Each leg's load in the last step: the magnitudes of its contacts' forces summed.
+    leg_loads: [f64; 6],
+    /// The joints' angles after the last step (by model joint), for leg compliance's yield;
+    /// empty before the first step.
+    joint_angles: Vec<f64>,
     /// The leg each model link belongs to (None: the body, a link off the legs).
     leg_of_link: Vec<Option<usize>>,
     /// Joint targets given from outside (rad, by model joint), in place of the gait's.
@@ -193,6 +198,8 @@ impl Walker {
             feel: [FootFeel::default(); 6],
             feet: None,
             leg_forces: [DVec3::ZERO; 6],
+            leg_loads: [0.0; 6],
+            joint_angles: Vec::new(),
             leg_of_link,
             given_targets: None,
             legs_hold_every_link,
@@ -408,6 +415,19 @@ impl Walker {
         if self.load_feedforward {
             self.hold_load(stance);
         }
+        if !self.joint_angles.is_empty() {
+            // leg compliance's yield: the gait's angles sent part of the way to the joints'
+            // angles, the feed-forward's offset kept: fully yielded, a leg's servos hold the
+            // load planned for it and nothing beyond
+            for (k, (leg, angles)) in self.hexapod.model().legs.iter().zip(angles).enumerate() {
+                let y = self.controller.leg_yield(k);
+                if y > 0.0 {
+                    for (&j, &a) in leg.joints.iter().zip(angles) {
+                        self.targets_by_joint[j] += y * (self.joint_angles[j] - a);
+                    }
+                }
+            }
+        }
         let targets_by_joint = std::mem::take(&mut self.targets_by_joint);
         self.hexapod.set_targets(&targets_by_joint);
         self.targets_by_joint = targets_by_joint;
@@ -530,7 +550,7 @@ impl Walker {
             }
             self.controller.feel(self.feel);
             self.controller
-                .feel_forces(&self.leg_forces, self.hexapod.dt());
+                .feel_forces(&self.leg_forces, &self.leg_loads, self.hexapod.dt());
             let command = if self.hold_heading {
                 let hold = self.heading.get_or_insert_with(|| {
                     let gait = self.controller.gait();
@@ -595,11 +615,14 @@ impl Walker {
         });
         if self.compliant {
             self.leg_forces = self.feel.map(|f| f.force);
+            self.leg_loads = self.feel.map(|f| f.force.length());
             for contact in &robot.link_contacts {
                 if let Some(k) = self.leg_of_link[contact.link] {
                     self.leg_forces[k] += to_body * contact.force.force;
+                    self.leg_loads[k] += contact.force.force.length();
                 }
             }
+            self.joint_angles.clone_from(&robot.joint_angles);
         }
         sample.gait = self.last_targets;
         sample.settling = t < 0.0;
