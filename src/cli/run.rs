@@ -54,7 +54,8 @@ pub struct RunArgs {
     reactive: bool,
     /// Stiff legs: the servos press their targets to their effort, however hard the ground
     /// pushes back (default: a leg pressing with more than three times the robot's weight gives
-    /// way along the force and yields in its joints, as a force-controlled leg does).
+    /// way along the force and yields in its joints, as a force-controlled leg does, and legs
+    /// squeezing the ground between them past twice its weight all yield).
     #[arg(long)]
     stiff_legs: bool,
     /// Hold the heading: the commanded turn is corrected by the body's heading error (0.5 /s,

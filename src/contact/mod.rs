@@ -217,18 +217,23 @@ pub struct ContactForce {
     pub sticking: bool,
     /// The ground frame at the contact.
     pub frame: GroundFrame,
+    /// The magnitudes of its faces' forces summed (N): |`force`| for one face; for a body
+    /// pressing several (a foot wedged in a crack) more than the net force, whose opposed parts
+    /// cancel (what leg compliance reads as the load the ground carries).
+    pub load: f64,
 }
 
 impl ContactForce {
     /// One body's contact from several faces it presses into at once (a foot in a pit's
     /// corner): the forces and normal forces summed, the deepest face's point, frame, depth and
-    /// slip, sticking only if every face sticks.
+    /// slip, sticking only if every face sticks, the loads summed.
     pub fn merge(&mut self, other: &ContactForce) {
         let sticking = self.sticking && other.sticking;
-        let (force, normal_force, friction) = (
+        let (force, normal_force, friction, load) = (
             self.force + other.force,
             self.normal_force + other.normal_force,
             self.friction + other.friction,
+            self.load + other.load,
         );
         if other.penetration > self.penetration {
             *self = *other;
@@ -237,6 +242,7 @@ impl ContactForce {
         self.normal_force = normal_force;
         self.friction = friction;
         self.sticking = sticking;
+        self.load = load;
     }
 }
 
@@ -332,9 +338,10 @@ impl ContactModel {
         } else {
             DVec3::ZERO
         };
+        let force = pending.normal_force * frame.normal + friction;
         ContactForce {
             point: pending.point,
-            force: pending.normal_force * frame.normal + friction,
+            force,
             normal_force: pending.normal_force,
             friction,
             penetration: pending.penetration,
@@ -342,6 +349,7 @@ impl ContactModel {
             slip: slip_world,
             sticking: outcome.sticking,
             frame: *frame,
+            load: force.length(),
         }
     }
 
@@ -482,6 +490,36 @@ mod tests {
             demand: DVec2::ZERO,
             normal_change: 0.0,
         }
+    }
+
+    /// A foot wedged in a crack presses two opposed walls: their forces cancel in the net force,
+    /// not in its load, and the merged contact keeps the deeper face's geometry.
+    #[test]
+    fn a_wedged_foot_merges_to_the_net_force_and_the_summed_load() {
+        let face = |normal: DVec3, normal_force: f64, penetration: f64, sticking: bool| {
+            let force = normal * normal_force;
+            ContactForce {
+                point: -normal * 0.01,
+                force,
+                normal_force,
+                friction: DVec3::ZERO,
+                penetration,
+                normal_velocity: 0.0,
+                slip: DVec3::ZERO,
+                sticking,
+                frame: GroundFrame::from_normal(normal),
+                load: force.length(),
+            }
+        };
+        let mut foot = face(DVec3::X, 40.0, 2e-3, true);
+        foot.merge(&face(-DVec3::X, 30.0, 1.5e-3, false));
+        assert!((foot.force - DVec3::new(10.0, 0.0, 0.0)).length() < 1e-12);
+        assert_eq!((foot.normal_force, foot.load), (70.0, 70.0));
+        assert_eq!(
+            (foot.penetration, foot.point),
+            (2e-3, DVec3::new(-0.01, 0.0, 0.0))
+        );
+        assert!(!foot.sticking);
     }
 
     /// hex18's foot in a trench (measured): W_nn = 7.6 /kg and W_nt = (11.4, 10.5) /kg. Friction

@@ -24,6 +24,14 @@
 //! excess, and the leg's joint targets are sent that fraction of the way to the joints' angles
 //! (y = 1: the servos' springs hold nothing beyond the load feed-forward). Under the cap y decays
 //! over [`RELEASE_TIME`].
+//!
+//! A leg fully yielded can still be pressed by the others, through the body: two feet pinching
+//! a stone, three legs shoving the body onto a fourth whose force runs along its joints or into
+//! a joint limit (PhantomX on 8 cm stones: 6.0 mm with y = 1). So the legs' *squeeze* — the
+//! part of their loads that cancels in their net force, Σ|Fᵢ| − |ΣFᵢ| — past [`SQUEEZE_CAP`]
+//! weights yields every leg at the rate of its excess (each leg at the larger of its own excess
+//! and the squeeze's). A landing, however hard, squeezes nothing. A foot pressing several faces at
+//! once (wedged in a crack) counts each face's force ([`crate::contact::ContactForce::load`]).
 
 use glam::DVec3;
 
@@ -43,6 +51,12 @@ pub const RELEASE_TIME: f64 = 0.1;
 /// 10 ms). At 10 a second a leg pressing the stepping stones' walls with 5 weights still sank a
 /// foot 5.7 mm before it had yielded a quarter of the way.
 pub const YIELD_RATE: f64 = 50.0;
+/// How hard the legs may squeeze the ground between them, in robot weights: the part of their
+/// loads that cancels in their net force (Σ|Fᵢ| − |ΣFᵢ|). Past it every leg yields, as one leg
+/// past [`CAP`] does: legs that push against each other through the body (two feet pinching a
+/// stone, the body shoved by three legs onto a fourth pressed against a stone's side) carry
+/// forces no single leg's servos hold. A landing, all forces up, squeezes nothing.
+pub const SQUEEZE_CAP: f64 = 2.0;
 
 /// Per leg, how far its foot target has given way (body frame).
 #[derive(Debug, Clone, PartialEq)]
@@ -72,9 +86,12 @@ impl Compliance {
     pub fn feel(&mut self, forces: &[DVec3; 6], loads: &[f64; 6], dt: f64) {
         let cap = CAP * self.weight;
         let decay = (-dt / RELEASE_TIME).exp();
+        let net = forces.iter().sum::<DVec3>().length();
+        let robot_excess = loads.iter().sum::<f64>() - net - SQUEEZE_CAP * self.weight;
         for (yielded, &load) in self.yielded.iter_mut().zip(loads) {
-            if load > cap {
-                *yielded = (*yielded + YIELD_RATE * (load - cap) / self.weight * dt).min(1.0);
+            let excess = (load - cap).max(robot_excess);
+            if excess > 0.0 {
+                *yielded = (*yielded + YIELD_RATE * excess / self.weight * dt).min(1.0);
             } else if *yielded != 0.0 {
                 *yielded *= decay;
                 if *yielded < 1e-6 {
@@ -126,25 +143,54 @@ mod tests {
     fn a_gripping_leg_yields_though_its_net_force_is_under_the_cap() {
         let mut c = Compliance::new(10.0, 0.05);
         // a stone gripped between foot and shin: 40 N each way, net zero; the load is 80 N,
-        // 5 weights over the cap of 30 N: the yield rises at 5·YIELD_RATE a second
+        // 5 weights over the leg's cap of 30 N, and all of it squeezed, 6 weights over the
+        // squeeze's cap of 20 N: every leg's yield rises at 6·YIELD_RATE a second
         let forces = [DVec3::ZERO; 6];
         let mut loads = [0.0; 6];
         loads[4] = 80.0;
         c.feel(&forces, &loads, 1e-3);
-        assert!((c.yielded(4) - 5.0 * YIELD_RATE * 1e-3).abs() < 1e-12);
+        assert!((0..6).all(|k| (c.yielded(k) - 6.0 * YIELD_RATE * 1e-3).abs() < 1e-12));
         assert_eq!(c.offset(4), DVec3::ZERO);
-        assert!((0..6).filter(|&k| k != 4).all(|k| c.yielded(k) == 0.0));
         // bounded at 1: the servos' springs hold nothing
         for _ in 0..100 {
             c.feel(&forces, &loads, 1e-3);
         }
         assert_eq!(c.yielded(4), 1.0);
-        // under the cap it decays over RELEASE_TIME
-        loads[4] = 29.0;
+        // under both caps it decays over RELEASE_TIME
+        loads[4] = 19.0;
         for _ in 0..100 {
             c.feel(&forces, &loads, 1e-3);
         }
         assert!((c.yielded(4) - (-1.0f64).exp()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn legs_squeezing_the_ground_all_yield_though_each_is_under_the_cap() {
+        let w = 10.0;
+        let mut c = Compliance::new(w, 0.05);
+        // two feet pinching a stone (25 N each, mostly inwards) and four standing with 4 N:
+        // each leg under its cap of 30 N; the loads, 66 N, against a net force of 30 N up:
+        // 36 N squeezed, 1.6 weights over the squeeze cap of 20 N
+        let mut forces = [DVec3::new(0.0, 0.0, 4.0); 6];
+        forces[0] = DVec3::new(24.0, 0.0, 7.0);
+        forces[1] = DVec3::new(-24.0, 0.0, 7.0);
+        let loads = forces.map(|f| f.length());
+        assert!(loads.iter().all(|&l| l < CAP * w));
+        c.feel(&forces, &loads, 1e-3);
+        let rate = (66.0 - 30.0 - SQUEEZE_CAP * w) / w * YIELD_RATE;
+        assert!((0..6).all(|k| (c.yielded(k) - rate * 1e-3).abs() < 1e-12));
+        // a hard landing, every foot with 2.5 weights up (15 in all): nothing squeezed, no yield
+        let mut c = Compliance::new(w, 0.05);
+        let forces = [DVec3::new(0.0, 0.0, 25.0); 6];
+        c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
+        assert!((0..6).all(|k| c.yielded(k) == 0.0));
+        // a leg over its own cap yields at the larger of its excess and the squeeze's: a grip
+        // (60 N of load, no net force) is 3 weights over the leg's cap, 4 over the squeeze's
+        let mut c = Compliance::new(w, 0.05);
+        let mut loads = [0.0; 6];
+        loads[0] = 60.0;
+        c.feel(&[DVec3::ZERO; 6], &loads, 1e-3);
+        assert!((0..6).all(|k| (c.yielded(k) - 4.0 * YIELD_RATE * 1e-3).abs() < 1e-12));
     }
 
     #[test]

@@ -210,6 +210,7 @@ mod tests {
             slip: DVec3::ZERO,
             sticking: true,
             frame: GroundFrame::from_normal(DVec3::Z),
+            load: 1.0,
         });
         s
     }

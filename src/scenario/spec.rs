@@ -123,8 +123,9 @@ pub struct ScenarioSpec {
     #[serde(default)]
     pub reactive_gait: Option<bool>,
     /// Leg compliance: a leg pressing the ground with more than three times the robot's weight
-    /// gives way along the force and yields in its joints (default true; see
-    /// `gait::compliance`); false: the servos press their targets to their effort.
+    /// gives way along the force and yields in its joints, and legs squeezing the ground between
+    /// them past two weights all yield (default true; see `gait::compliance`); false: the servos
+    /// press their targets to their effort.
     #[serde(default)]
     pub compliant_legs: Option<bool>,
     /// Heading hold: the commanded turn corrected by the heading's error, as a robot with a gyro

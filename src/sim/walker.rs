@@ -615,11 +615,11 @@ impl Walker {
         });
         if self.compliant {
             self.leg_forces = self.feel.map(|f| f.force);
-            self.leg_loads = self.feel.map(|f| f.force.length());
+            self.leg_loads = robot.foot_contacts.map(|c| c.map_or(0.0, |c| c.load));
             for contact in &robot.link_contacts {
                 if let Some(k) = self.leg_of_link[contact.link] {
                     self.leg_forces[k] += to_body * contact.force.force;
-                    self.leg_loads[k] += contact.force.force.length();
+                    self.leg_loads[k] += contact.force.load;
                 }
             }
             self.joint_angles.clone_from(&robot.joint_angles);

@@ -20,6 +20,7 @@ fn a_contact_slides_whole_and_its_loaded_share_apart() {
         slip: DVec3::new(0.75f64.sqrt(), 0.0, 0.5) * 0.2,
         sticking: false,
         frame: GroundFrame::from_normal(normal),
+        load: normal_force,
     };
     let (whole, loaded) = slid(&contact(5.0), 1e-3);
     assert!((whole - 2e-4).abs() < 1e-15);
