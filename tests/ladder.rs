@@ -117,3 +117,55 @@ fn a_walk_that_holds_its_heading_turns_as_far_as_commanded() {
     );
     assert!((held - 60.0).abs() < 0.5, "held, it turned {held:.2}°");
 }
+
+/// hexaross stands tall: its centre of mass 0.2 m over its feet, 0.1 m inside its tripods'
+/// rear edges on level ground. Walking up 30° with its body parallel to the slope (blind: it
+/// follows its feet) or pitched with most of it (perceptive: its legs level 30° only in part),
+/// its plumb line fell 0.12 m downhill — behind those edges — and it went over backwards in
+/// both modes (hexsim 94a1d54: this ladder's runs ended 4.17 m and 4.35 m down the slope). The
+/// lean (`gait::lean`) lowers its body by up to 6.4 cm, its legs' room to fold up (its feet
+/// have 3.5 mm to move downhill), and it walks up: forward 2.48 m blind and 2.44 m perceptive,
+/// its body within 31° of level.
+#[test]
+fn a_tall_robot_leans_into_a_30_degree_slope_and_walks_up_it() {
+    let dir = scratch("ladder-lean");
+    let family = dir.join("slope_up.toml");
+    let ladder = std::fs::read_to_string(project_file("ladder/slope_up.toml")).unwrap();
+    let ladder = ladder
+        .replace(
+            "../gaits/tripod.toml",
+            &project_file("gaits/tripod.toml").display().to_string(),
+        )
+        .replace("[5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]", "[30.0]");
+    std::fs::write(&family, ladder).unwrap();
+    let out_dir = dir.join("out");
+    let out = hexsim()
+        .arg("ladder")
+        .arg(&family)
+        .arg("--robot")
+        .arg(project_file(
+            "tests/data/third_party/hexaross/hexapod_description/urdf/hexapod.urdf",
+        ))
+        .arg("-o")
+        .arg(&out_dir)
+        .arg("-q")
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("ladder.json")).unwrap())
+            .unwrap();
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2, "blind and perceptive");
+    for run in runs {
+        assert_eq!(run["level"], 30.0);
+        assert_ne!(run["outcome"], "fell", "{run}");
+        assert!(run["forward"].as_f64().unwrap() >= 1.5, "{run}");
+        assert!(run["max_tilt_deg"].as_f64().unwrap() < 35.0, "{run}");
+    }
+}

@@ -135,10 +135,13 @@ fn a_robot_too_weak_to_stand_rests_on_its_links_and_the_run_says_so() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
-    // and it is no walk: its feet slide far more than it creeps, and it turns off its heading
+    // and it is no walk: its feet slide far more than it creeps, and it goes off its course —
+    // how it comes down decides which way (measured: turned, and since the body leans as it
+    // tilts, drifted sideways)
     assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
     assert!(
-        stderr.contains("error: not the walk commanded (skated, ") && stderr.contains("turned)"),
+        stderr.contains("error: not the walk commanded (skated, ")
+            && (stderr.contains("turned)") || stderr.contains("drifted sideways)")),
         "{stderr}"
     );
     let m: serde_json::Value =

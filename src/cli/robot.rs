@@ -444,6 +444,11 @@ fn describe(file: &Path, model: &RobotModel, gait: &GaitSpec) -> String {
                 model.joints[joint].name,
                 deg(room)
             );
+            if let Ok(controller) = hexsim::gait::GaitController::new(model, fitted.gait.clone())
+                && let Some(lean) = controller.lean_on_slopes()
+            {
+                let _ = writeln!(out, "  lean on slopes: {}", lean.describe());
+            }
         }
     }
     let (ground, fitted) = hexsim::setup::ground::fit(

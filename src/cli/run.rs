@@ -25,7 +25,7 @@ pub struct RunArgs {
             "speed", "sideways", "turn", "start", "heading", "on_ground", "seed",
             "servo_stiffness", "servo_damping", "no_feedforward", "no_rolling", "articulation",
             "solver_iterations", "pgs_iterations", "log_rate", "allow_unstable_dt",
-            "stiff_legs", "hold_heading",
+            "stiff_legs", "no_lean", "hold_heading",
         ]
     )]
     scenario: Option<PathBuf>,
@@ -58,6 +58,11 @@ pub struct RunArgs {
     /// squeezing the ground between them past twice its weight all yield).
     #[arg(long)]
     stiff_legs: bool,
+    /// No lean on slopes: the body stands over its feet as on level ground (default: past a
+    /// quarter of the gait's support margin the feet move downhill and the body crouches, so that
+    /// the centre of mass's plumb line keeps inside the feet's support).
+    #[arg(long)]
+    no_lean: bool,
     /// Hold the heading: the commanded turn is corrected by the body's heading error (0.5 /s,
     /// bounded), as a robot with a gyro walks (default: the gait turns open loop, and a slipping
     /// foot turns the body for good).
@@ -209,6 +214,7 @@ fn spec(args: &RunArgs) -> ScenarioSpec {
         rolling_feet: args.no_rolling.then_some(false),
         reactive_gait: Some(args.reactive),
         compliant_legs: args.stiff_legs.then_some(false),
+        lean_on_slopes: args.no_lean.then_some(false),
         hold_heading: args.hold_heading.then_some(true),
         articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),

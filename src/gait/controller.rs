@@ -22,13 +22,14 @@
 use super::clearance::{self, SwingGround};
 use super::compliance::Compliance;
 use super::foothold;
+use super::lean::{self, HorizontalRoom, Lean};
 use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
 use super::slew;
 use super::spec::{Gait, SwingShape};
 use crate::robot::kinematics::{IkSolution, IkWarm, LegAngles, LegChain, LegStatics};
 use crate::robot::{ContactSphere, RobotModel};
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DMat3, DQuat, DVec2, DVec3};
 
 /// A velocity command in the body frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -98,6 +99,9 @@ pub struct GaitController {
     vertical_room: [[(f64, f64); 3]; 6],
     /// The reactive gait's state, when on (see [`super::reactive`]).
     reactive: Option<Reactive>,
+    /// The body's lean on a slope ([`super::lean`]): none in a controller for the nominal
+    /// cycle ([`Self::for_cycle`]), and nothing leaned until gravity is felt off the body's z.
+    lean: Option<Lean>,
     /// How far each leg's target gives way to the force it feels, when on (see
     /// [`super::compliance`]).
     compliance: Option<Compliance>,
@@ -178,6 +182,9 @@ fn centre_of_mass(model: &RobotModel, angles: &[LegAngles; 6]) -> DVec3 {
     model.centre_of_mass(&model.link_poses(&model.pose_from_legs(angles)))
 }
 
+/// Instants of a cycle at which the support margin is measured ([`GaitController::support_margin`]).
+const SUPPORT_SAMPLES: usize = 64;
+
 /// Farther than this from its target (m), an IK answer counts as clamped.
 pub const REACH_TOLERANCE: f64 = 1e-4;
 
@@ -187,6 +194,7 @@ impl GaitController {
         let mut controller = Self::for_cycle(model, spec)?;
         controller.vertical_room = controller.measured_vertical_room();
         controller.joint_speed = controller.nominal_joint_speeds();
+        controller.lean = Some(controller.measured_lean(model));
         Ok(controller)
     }
 
@@ -322,6 +330,7 @@ impl GaitController {
             warm_grounded: [None; 6],
             vertical_room: [[(0.0, 0.0); 3]; 6],
             reactive: None,
+            lean: None,
             compliance: None,
             foothold: [DVec3::ZERO; 6],
             next_foothold: [DVec3::ZERO; 6],
@@ -374,6 +383,117 @@ impl GaitController {
                 (down, up)
             })
         })
+    }
+
+    /// The lean on slopes ([`super::lean`]) for this stance: the centre of mass's height over the
+    /// feet's ground, the support's margin around it, the feet's horizontal room, and how far
+    /// the body may crouch — the least room any leg has to fold up along its track (the
+    /// levelling's share of it), and no lower than the body's clearance allows
+    /// ([`Self::body_offset`]'s margin).
+    fn measured_lean(&self, model: &RobotModel) -> Lean {
+        let centre = centre_of_mass(model, &self.last);
+        let ground = (0..6)
+            .map(|k| self.neutral[k].z - self.radius[k])
+            .sum::<f64>()
+            / 6.0;
+        let folds = self
+            .vertical_room
+            .iter()
+            .flatten()
+            .map(|&(_, up)| up)
+            .fold(f64::INFINITY, f64::min);
+        let crouch = if self.belly.is_empty() {
+            folds
+        } else {
+            folds.min(self.belly_margin)
+        };
+        Lean::new(
+            centre.z - ground,
+            self.support_margin(centre.truncate()),
+            self.measured_horizontal_room(),
+            crouch,
+        )
+    }
+
+    /// How far all six stance tracks ([`STANCE_TRACK`]) may move together along each of the
+    /// body's horizontal axes and every point stay within its leg's reach, for the lean
+    /// ([`super::lean`]): per leg the farthest move that reaches all three points (bisected),
+    /// the least over the legs, times [`LEVELLING_SHARE`] (the rest for the levelling, the
+    /// stride's lift and the servos' sag).
+    fn measured_horizontal_room(&self) -> HorizontalRoom {
+        let spec = &self.spec;
+        let span = 2.0 * spec.reach.max(spec.stance_height);
+        let room = |direction: DVec3| {
+            (0..6)
+                .map(|k| {
+                    let track = STANCE_TRACK
+                        .map(|along| self.neutral[k] + DVec3::X * along * spec.stride_length);
+                    let (mut lo, mut hi) = (0.0, span);
+                    for _ in 0..20 {
+                        let mid = 0.5 * (lo + hi);
+                        let reached = track.iter().all(|&p| {
+                            self.chains[k]
+                                .solve(p + direction * mid, self.last[k])
+                                .error
+                                <= REACH_TOLERANCE
+                        });
+                        if reached {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    lo
+                })
+                .fold(f64::INFINITY, f64::min)
+                * LEVELLING_SHARE
+        };
+        HorizontalRoom {
+            back: room(DVec3::NEG_X),
+            fore: room(DVec3::X),
+            right: room(DVec3::NEG_Y),
+            left: room(DVec3::Y),
+        }
+    }
+
+    /// How far the centre of mass's plumb line may move from `centre` (body frame) along each of
+    /// the body's horizontal axes and stay inside every support polygon of a cycle at the
+    /// gait's nominal stride on level ground (the stance feet's points), for the lean
+    /// ([`super::lean`]): the least over [`SUPPORT_SAMPLES`] instants.
+    fn support_margin(&self, centre: DVec2) -> HorizontalRoom {
+        let spec = &self.spec;
+        let stride = DVec3::NEG_X * spec.stride_length;
+        let directions = [DVec2::NEG_X, DVec2::X, DVec2::NEG_Y, DVec2::Y];
+        let mut margin = [f64::INFINITY; 4];
+        let mut points = Vec::with_capacity(6);
+        for i in 0..SUPPORT_SAMPLES {
+            let t = spec.period * i as f64 / SUPPORT_SAMPLES as f64;
+            points.clear();
+            for k in 0..6 {
+                if let LegPhase::Stance(s) =
+                    leg_phase(t, spec.period, spec.duty_factor, self.offsets[k])
+                {
+                    points.push((self.neutral[k] + stride * (s - 0.5)).truncate());
+                }
+            }
+            for (m, &direction) in margin.iter_mut().zip(&directions) {
+                *m = m.min(lean::support_margin(&points, centre, direction));
+            }
+        }
+        let [back, fore, right, left] = margin;
+        HorizontalRoom {
+            back,
+            fore,
+            right,
+            left,
+        }
+    }
+
+    /// Leg `k`'s vertical room ([`Self::measured_vertical_room`]) less the lean's crouch
+    /// ([`super::lean`]): crouched by c, a target has c more to go down and c less up.
+    fn room_left(&self, k: usize) -> [(f64, f64); 3] {
+        let crouch = self.lean().z;
+        self.vertical_room[k].map(|(down, up)| (down + crouch, (up - crouch).max(0.0)))
     }
 
     /// Each joint's fastest rate (rad/s) over one cycle of the gait at its nominal speed on
@@ -438,6 +558,25 @@ impl GaitController {
 
     /// The fraction of the way leg `k`'s joint targets are to be sent to its joints' angles
     /// (leg compliance's yield; 0 when it is off).
+    /// Gravity as the body feels it (body frame, any length: an IMU's reading), for the lean
+    /// ([`super::lean`]), one step of `dt` (s).
+    pub fn feel_gravity(&mut self, down: DVec3, dt: f64) {
+        if let Some(lean) = &mut self.lean {
+            lean.follow(down, dt);
+        }
+    }
+
+    /// The lean on slopes, as measured for this stance ([`super::lean`]); none in a controller
+    /// for the nominal cycle.
+    pub fn lean_on_slopes(&self) -> Option<&Lean> {
+        self.lean.as_ref()
+    }
+
+    /// The lean's move of every foot target (body frame, horizontal; [`super::lean`]).
+    pub fn lean(&self) -> DVec3 {
+        self.lean.as_ref().map_or(DVec3::ZERO, Lean::shift)
+    }
+
     pub fn leg_yield(&self, k: usize) -> f64 {
         self.compliance.as_ref().map_or(0.0, |c| c.yielded(k))
     }
@@ -505,7 +644,7 @@ impl GaitController {
             // chosen on one tread: a track's end may lie over the next), the plane's rise at
             // each point of the track
             let r = residual(standing);
-            for (&along, &(down, up)) in STANCE_TRACK.iter().zip(&self.vertical_room[k]) {
+            for (&along, &(down, up)) in STANCE_TRACK.iter().zip(&self.room_left(k)) {
                 let q = planar(standing + stride * along);
                 // r + λ·q within [−down, up]
                 let most = if q > 0.0 {
@@ -537,7 +676,7 @@ impl GaitController {
 
     /// Leg `k`'s foothold `along` strides forward of its neutral point, off any edge.
     fn foothold_near(&self, ground: &impl Fn(DVec3) -> f64, k: usize, along: f64) -> DVec3 {
-        let p = self.neutral[k] + DVec3::X * along * self.spec.stride_length;
+        let p = self.neutral[k] + self.lean() + DVec3::X * along * self.spec.stride_length;
         let longest = self.spec.stride_length;
         p + foothold::away_from_edges(ground, p, DVec3::X, self.radius[k], longest)
     }
@@ -556,8 +695,9 @@ impl GaitController {
     /// to reach a stair's lower tread and sat on the upper one.
     pub fn body_offset(&self, ground: impl Fn(DVec3) -> f64, track: &[StanceTrack; 6]) -> f64 {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        for (points, room) in track.iter().zip(&self.vertical_room) {
-            for (&p, &(down, up)) in points.iter().zip(room) {
+        for (k, points) in track.iter().enumerate() {
+            let room = self.room_left(k);
+            for (&p, (down, up)) in points.iter().zip(room) {
                 let v = ground(p);
                 lo = lo.max(v - up);
                 hi = hi.min(v + down);
@@ -568,9 +708,11 @@ impl GaitController {
         } else {
             0.5 * (lo + hi)
         };
+        // the lean's crouch lowers the body too
+        let crouch = self.lean().z;
         self.belly
             .iter()
-            .map(|&(p, above)| ground(p) - above + self.belly_margin)
+            .map(|&(p, above)| ground(p) - above + self.belly_margin + crouch)
             .fold(within, f64::max)
     }
 
@@ -638,8 +780,9 @@ impl GaitController {
         // how far a target may move since the last call (the first one is free)
         let elapsed = self.last_time.map(|last| t - last).filter(|&dt| dt > 0.0);
         self.last_time = Some(t);
+        let lean = self.lean();
         for (k, &phase) in phases.iter().enumerate() {
-            let n = self.neutral[k];
+            let n = self.neutral[k] + lean;
             // ground displacement under the foot over one stance, seen from the body
             let d = -(v + omega.cross(n)) * stance_time * blend;
             if let Some(ground) = &ground {
@@ -661,6 +804,7 @@ impl GaitController {
                 };
             }
             out.grounded[k] = phase.is_stance();
+            let down_room = self.room_left(k)[0];
             if let Some(reactive) = &mut self.reactive {
                 let base = foot - DVec3::Z * lift;
                 let height = reactive.offset(
@@ -670,7 +814,7 @@ impl GaitController {
                     lift,
                     self.spec.step_height,
                     -d.normalize_or_zero(),
-                    self.vertical_room[k][0],
+                    down_room,
                 );
                 let shift = reactive.shift(k, phase, progress, d, stance_time);
                 foot =

@@ -8,6 +8,7 @@ mod controller;
 mod fit;
 mod foothold;
 mod heading;
+mod lean;
 mod margins;
 pub mod reach;
 mod reactive;
@@ -23,6 +24,7 @@ pub use controller::{
 pub use fit::{FitError, Fitted, Origin, Origins, ServoLoad, TORQUE_SHARE, fit};
 pub use foothold::away_from_edges;
 pub use heading::HeadingHold;
+pub use lean::Lean;
 pub use margins::{CycleMargins, Unreached, cycle_margins};
 pub use reactive::{FootFeel, Reactive};
 pub use schedule::{LegPhase, leg_phase, minimum_support};

@@ -55,6 +55,8 @@ pub struct WalkSwitches {
     /// Legs give way to more than three times the robot's weight (see [`crate::gait`]'s
     /// `compliance`).
     pub compliant_legs: bool,
+    /// The body leans on slopes (see [`crate::gait`]'s `lean`).
+    pub lean_on_slopes: bool,
     /// Hold the commanded heading against what turns the body (see [`crate::gait`]'s
     /// `heading`).
     pub hold_heading: bool,
@@ -145,6 +147,7 @@ impl WalkRun {
         walker.load_feedforward = self.switches.feedforward;
         walker.reactive = self.switches.reactive_gait;
         walker.compliant = self.switches.compliant_legs;
+        walker.lean = self.switches.lean_on_slopes;
         walker.hold_heading = self.switches.hold_heading;
         let every = decimation(self.log_rate, dt);
 

@@ -128,6 +128,11 @@ pub struct ScenarioSpec {
     /// press their targets to their effort.
     #[serde(default)]
     pub compliant_legs: Option<bool>,
+    /// The body's lean on slopes: past a quarter of the gait's support margin the plumb line's
+    /// offset is taken back by moving the feet downhill and crouching (default true; see
+    /// `gait::lean`); false: the body stands over its feet as on level ground.
+    #[serde(default)]
+    pub lean_on_slopes: Option<bool>,
     /// Heading hold: the commanded turn corrected by the heading's error, as a robot with a gyro
     /// walks (default false: the gait turns open loop; see `gait::heading`).
     #[serde(default)]
@@ -167,7 +172,7 @@ pub const DEFAULT_DT: f64 = crate::setup::time_step::DEFAULT_DT;
 
 impl ScenarioSpec {
     /// A walk's fields, each with whether it is set: a ball scenario must set none.
-    pub fn walk_fields(&self) -> [(&'static str, bool); 14] {
+    pub fn walk_fields(&self) -> [(&'static str, bool); 15] {
         [
             ("robot", self.robot.is_some()),
             ("gait", self.gait.is_some()),
@@ -176,6 +181,7 @@ impl ScenarioSpec {
             ("rolling_feet", self.rolling_feet.is_some()),
             ("reactive_gait", self.reactive_gait.is_some()),
             ("compliant_legs", self.compliant_legs.is_some()),
+            ("lean_on_slopes", self.lean_on_slopes.is_some()),
             ("hold_heading", self.hold_heading.is_some()),
             ("articulation", self.articulation.is_some()),
             ("solver_iterations", self.solver_iterations.is_some()),
@@ -193,6 +199,7 @@ impl ScenarioSpec {
             rolling_feet: self.rolling_feet.unwrap_or(true),
             reactive_gait: self.reactive_gait.unwrap_or(false),
             compliant_legs: self.compliant_legs.unwrap_or(true),
+            lean_on_slopes: self.lean_on_slopes.unwrap_or(true),
             hold_heading: self.hold_heading.unwrap_or(false),
             feedforward: self.servo.and_then(|s| s.feedforward).unwrap_or(true),
         }

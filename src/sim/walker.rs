@@ -37,6 +37,9 @@ pub struct Walker {
     /// Leg compliance (`gait::compliance`): a leg pressing the ground with more than three
     /// times the robot's weight gives way; off: the servos press their targets to their effort.
     pub compliant: bool,
+    /// The body's lean on slopes (`gait::lean`), from its attitude; off: it stands over its
+    /// feet as on level ground.
+    pub lean: bool,
     /// Heading hold (`gait::heading`): the command's turn corrected by the heading error; off:
     /// the gait turns open loop.
     pub hold_heading: bool,
@@ -193,6 +196,7 @@ impl Walker {
             load_feedforward: true,
             reactive: false,
             compliant: true,
+            lean: true,
             hold_heading: false,
             heading: None,
             feel: [FootFeel::default(); 6],
@@ -549,8 +553,14 @@ impl Walker {
                     .set_compliance(self.compliant.then(|| Compliance::new(weight, longest)));
             }
             self.controller.feel(self.feel);
+            let dt = self.hexapod.dt();
             self.controller
-                .feel_forces(&self.leg_forces, &self.leg_loads, self.hexapod.dt());
+                .feel_forces(&self.leg_forces, &self.leg_loads, dt);
+            if self.lean {
+                let body = self.hexapod.body_frame().matrix3;
+                self.controller
+                    .feel_gravity(body.transpose() * DVec3::NEG_Z, dt);
+            }
             let command = if self.hold_heading {
                 let hold = self.heading.get_or_insert_with(|| {
                     let gait = self.controller.gait();
