@@ -124,7 +124,7 @@ fn a_walk_that_holds_its_heading_turns_as_far_as_commanded() {
 /// its plumb line fell 0.12 m downhill — behind those edges — and it went over backwards in
 /// both modes (hexsim 94a1d54: this ladder's runs ended 4.17 m and 4.35 m down the slope). The
 /// lean (`gait::lean`) lowers its body by up to 6.4 cm, its legs' room to fold up (its feet
-/// have 3.5 mm to move downhill), and it walks up: forward 2.48 m blind and 2.44 m perceptive,
+/// have 3.5 mm to move downhill), and it walks up: forward 2.48 m both ways (blind and perceptive),
 /// its body within 31° of level.
 #[test]
 fn a_tall_robot_leans_into_a_30_degree_slope_and_walks_up_it() {

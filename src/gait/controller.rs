@@ -490,7 +490,8 @@ impl GaitController {
     }
 
     /// Leg `k`'s vertical room ([`Self::measured_vertical_room`]) less the lean's crouch
-    /// ([`super::lean`]): crouched by c, a target has c more to go down and c less up.
+    /// ([`super::lean`]): crouched by c, a target has c more to go down and c less up. What the
+    /// body's offset and the blind search go by; the levelling keeps the stance's own.
     fn room_left(&self, k: usize) -> [(f64, f64); 3] {
         let crouch = self.lean().z;
         self.vertical_room[k].map(|(down, up)| (down + crouch, (up - crouch).max(0.0)))
@@ -644,7 +645,10 @@ impl GaitController {
             // chosen on one tread: a track's end may lie over the next), the plane's rise at
             // each point of the track
             let r = residual(standing);
-            for (&along, &(down, up)) in STANCE_TRACK.iter().zip(&self.room_left(k)) {
+            // the stance's own room, not the crouch's (`room_left`): given c more to go down,
+            // PhantomX levelled more of 30° than its legs reached (2 720 steps out of reach)
+            // and skated 35 % of its walk
+            for (&along, &(down, up)) in STANCE_TRACK.iter().zip(&self.vertical_room[k]) {
                 let q = planar(standing + stride * along);
                 // r + λ·q within [−down, up]
                 let most = if q > 0.0 {
