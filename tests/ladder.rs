@@ -4,6 +4,33 @@
 mod common;
 use common::*;
 
+/// Runs `hexsim ladder FAMILY [extra] -o OUT -q`, which must exit 0, and returns its standard
+/// output and its `ladder.json`.
+fn run_ladder(
+    family: &std::path::Path,
+    extra: &[std::path::PathBuf],
+    out_dir: &std::path::Path,
+) -> (String, serde_json::Value) {
+    let out = hexsim()
+        .arg("ladder")
+        .arg(family)
+        .args(extra)
+        .arg("-o")
+        .arg(out_dir)
+        .arg("-q")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json = std::fs::read_to_string(out_dir.join("ladder.json")).unwrap();
+    (stdout, serde_json::from_str(&json).unwrap())
+}
+
 /// A short ladder on slopes: 5° is walked up, 38° (friction holds to 42°, the gait does not
 /// climb it) is not, and the table, the JSON and the batch's records say so.
 #[test]
@@ -22,24 +49,7 @@ fn a_ladder_reports_the_highest_level_crossed_and_what_stopped_the_robot() {
     )
     .unwrap();
     let out_dir = dir.join("out");
-    let out = hexsim()
-        .arg("ladder")
-        .arg(&family)
-        .arg("-o")
-        .arg(&out_dir)
-        .arg("-q")
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("ladder.json")).unwrap())
-            .unwrap();
+    let (stdout, json) = run_ladder(&family, &[], &out_dir);
     let summary = &json["families"][0];
     assert_eq!(summary["family"], "slope");
     assert_eq!(summary["blind"], 5.0, "{summary}");
@@ -138,28 +148,9 @@ fn a_tall_robot_leans_into_a_30_degree_slope_and_walks_up_it() {
         )
         .replace("[5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]", "[30.0]");
     std::fs::write(&family, ladder).unwrap();
-    let out_dir = dir.join("out");
-    let out = hexsim()
-        .arg("ladder")
-        .arg(&family)
-        .arg("--robot")
-        .arg(project_file(
-            "tests/data/third_party/hexaross/hexapod_description/urdf/hexapod.urdf",
-        ))
-        .arg("-o")
-        .arg(&out_dir)
-        .arg("-q")
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out_dir.join("ladder.json")).unwrap())
-            .unwrap();
+    let robot =
+        project_file("tests/data/third_party/hexaross/hexapod_description/urdf/hexapod.urdf");
+    let (_, json) = run_ladder(&family, &["--robot".into(), robot], &dir.join("out"));
     let runs = json["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 2, "blind and perceptive");
     for run in runs {

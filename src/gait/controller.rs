@@ -476,8 +476,9 @@ impl GaitController {
                     points.push((self.neutral[k] + stride * (s - 0.5)).truncate());
                 }
             }
+            let hull = lean::convex_hull(&points);
             for (m, &direction) in margin.iter_mut().zip(&directions) {
-                *m = m.min(lean::support_margin(&points, centre, direction));
+                *m = m.min(lean::support_margin(&hull, centre, direction));
             }
         }
         let [back, fore, right, left] = margin;

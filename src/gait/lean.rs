@@ -68,11 +68,10 @@ impl HorizontalRoom {
     }
 }
 
-/// How far from `from` along the unit `direction` the edge of the convex hull of `points` is
-/// (m; 0 when `from` is outside it or there are fewer than three points): a ray cast against
-/// each edge of the hull.
-pub fn support_margin(points: &[DVec2], from: DVec2, direction: DVec2) -> f64 {
-    let hull = convex_hull(points);
+/// How far from `from` along the unit `direction` the edge of a convex `hull` ([`convex_hull`])
+/// is (m; 0 when `from` is outside it or the hull has fewer than three points): a ray cast
+/// against each edge.
+pub fn support_margin(hull: &[DVec2], from: DVec2, direction: DVec2) -> f64 {
     if hull.len() < 3 {
         return 0.0;
     }
@@ -93,19 +92,16 @@ pub fn support_margin(points: &[DVec2], from: DVec2, direction: DVec2) -> f64 {
     if nearest.is_finite() { nearest } else { 0.0 }
 }
 
-/// The convex hull of a few points, counter-clockwise (Andrew's monotone chain).
-fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+/// The convex hull of a few points, counter-clockwise (Andrew's monotone chain: the lower
+/// chain over the points sorted by x, the upper over them in reverse). parry's 2-D hull is not
+/// built into the 3-D crate.
+pub fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
     let mut sorted = points.to_vec();
     sorted.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
     let mut hull: Vec<DVec2> = Vec::with_capacity(2 * sorted.len());
-    for pass in [false, true] {
+    for _ in 0..2 {
         let start = hull.len();
-        let ordered: Box<dyn Iterator<Item = &DVec2>> = if pass {
-            Box::new(sorted.iter().rev())
-        } else {
-            Box::new(sorted.iter())
-        };
-        for &p in ordered {
+        for &p in &sorted {
             while hull.len() >= start + 2 {
                 let (a, b) = (hull[hull.len() - 2], hull[hull.len() - 1]);
                 if (b - a).perp_dot(p - a) <= 0.0 {
@@ -117,6 +113,7 @@ fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
             hull.push(p);
         }
         hull.pop(); // the last point starts the other chain
+        sorted.reverse();
     }
     hull
 }
@@ -266,15 +263,20 @@ mod tests {
             (0.2, 0.3),
         ]
         .map(|(x, y)| DVec2::new(x, y));
-        let margin = |from: DVec2, d: DVec2| support_margin(&square, from, d.normalize());
+        let hull = convex_hull(&square);
+        let margin = |from: DVec2, d: DVec2| support_margin(&hull, from, d.normalize());
         assert!((margin(DVec2::ZERO, DVec2::X) - 1.0).abs() < 1e-12);
         assert!((margin(DVec2::ZERO, DVec2::new(1.0, 1.0)) - 2f64.sqrt()).abs() < 1e-12);
         assert!((margin(DVec2::new(0.5, 0.0), DVec2::NEG_X) - 1.5).abs() < 1e-12);
         // outside, or with no polygon to stand in, no margin
         assert_eq!(margin(DVec2::new(1.5, 0.0), DVec2::NEG_X), 0.0);
-        assert_eq!(support_margin(&square[..2], DVec2::ZERO, DVec2::X), 0.0);
+        assert_eq!(
+            support_margin(&convex_hull(&square[..2]), DVec2::ZERO, DVec2::X),
+            0.0
+        );
         // a tripod's triangle: from its centroid towards a vertex, a third of the way beyond
         let tripod = [(0.0, 2.0), (-1.5, -1.0), (1.5, -1.0)].map(|(x, y)| DVec2::new(x, y));
+        let tripod = convex_hull(&tripod);
         assert!((support_margin(&tripod, DVec2::ZERO, DVec2::Y) - 2.0).abs() < 1e-12);
         assert!((support_margin(&tripod, DVec2::ZERO, DVec2::NEG_Y) - 1.0).abs() < 1e-12);
     }
