@@ -903,7 +903,8 @@ impl GaitController {
     }
 
     /// Perceptive: at the start of leg `k`'s swing, where its foot will land, moved off any edge
-    /// ([`foothold::away_from_edges`]) and held through the swing; at touch-down, that foothold
+    /// and out of any pit deeper than the gait's step ([`foothold::away_from_pits_within`]) and
+    /// held through the swing; at touch-down, that foothold
     /// becomes the stance's. `ratio` is the swing's time over the stance's.
     fn choose_foothold(
         &mut self,
@@ -934,12 +935,13 @@ impl GaitController {
                         chain.solve(target, home).error <= REACH_TOLERANCE
                     })
                 };
-                self.next_foothold[k] = foothold::away_from_edges_within(
+                self.next_foothold[k] = foothold::away_from_pits_within(
                     ground,
                     landing,
                     -d,
                     self.radius[k],
                     longest,
+                    self.spec.step_height,
                     reaches,
                 );
             }
