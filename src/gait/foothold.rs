@@ -112,8 +112,7 @@ pub fn away_from_edges_within(
     longest: f64,
     reaches: impl Fn(DVec3) -> bool,
 ) -> DVec3 {
-    let (reached, nearest_clear) = search(ground, p, direction, radius, longest, reaches);
-    reached.or(nearest_clear).unwrap_or(DVec3::ZERO)
+    search(ground, p, direction, radius, longest, reaches, |_| true)
 }
 
 /// [`away_from_edges_within`], a pit avoided: the shortest shift that clears an edge, that
@@ -135,11 +134,8 @@ pub fn away_from_pits_within(
     pit_depth: f64,
     reaches: impl Fn(DVec3) -> bool,
 ) -> DVec3 {
-    let on_top = |shift: DVec3| !in_pit(ground, p + shift, longest, pit_depth) && reaches(shift);
-    if let (Some(shift), _) = search(ground, p, direction, radius, longest, on_top) {
-        return shift;
-    }
-    away_from_edges_within(ground, p, direction, radius, longest, reaches)
+    let on_top = |shift: DVec3| !in_pit(ground, p + shift, longest, pit_depth);
+    search(ground, p, direction, radius, longest, reaches, on_top)
 }
 
 /// Whether `p` lies more than `depth` below the ground `across` away on both sides of it, along
@@ -157,8 +153,9 @@ pub fn in_pit(ground: &impl Fn(DVec3) -> f64, p: DVec3, across: f64, depth: f64)
     .any(|&a| ground(p + a * across) - here > depth && ground(p - a * across) - here > depth)
 }
 
-/// The search of [`away_from_edges_within`]: the shortest clear shift that `reaches` accepts,
-/// and the shortest clear shift.
+/// The search of [`away_from_edges_within`]: the shortest clear shift that `reaches` and
+/// `prefers` both accept, else the shortest clear shift that `reaches` accepts, else the
+/// shortest clear shift. Each shift's reach is tested once.
 fn search(
     ground: &impl Fn(DVec3) -> f64,
     p: DVec3,
@@ -166,7 +163,8 @@ fn search(
     radius: f64,
     longest: f64,
     reaches: impl Fn(DVec3) -> bool,
-) -> (Option<DVec3>, Option<DVec3>) {
+    prefers: impl Fn(DVec3) -> bool,
+) -> DVec3 {
     let ahead = DVec3::new(direction.x, direction.y, 0.0)
         .try_normalize()
         .unwrap_or(DVec3::X);
@@ -189,25 +187,29 @@ fn search(
             ways.map(|way| way * along)
         }))
     };
-    // the first clear shift, whatever the reach: what the search without `reaches` returns
-    let mut nearest_clear = None;
-    // shifts found clear and out of reach: clear by a wider margin, they are clear by a
-    // narrower one too, and their reach is not tested again
-    let mut unreached = [false; 1 + 8 * SEARCH_STEPS];
+    // the first clear shift, whatever the reach: what the search without `reaches` returns;
+    // and the first clear one reached, whether preferred or not
+    let (mut nearest_clear, mut nearest_reached) = (None, None);
+    // shifts found clear and tested: clear by a wider margin, they are clear by a narrower one
+    // too, and neither their reach nor the preference is tested again
+    let mut tested = [false; 1 + 8 * SEARCH_STEPS];
     for margin in [EDGE_MARGIN, 0.5 * EDGE_MARGIN, 0.0] {
         let half_width = radius + margin;
         for (n, shift) in shifts().enumerate() {
-            if unreached[n] || near_edge(ground, p + shift, half_width) {
+            if tested[n] || near_edge(ground, p + shift, half_width) {
                 continue;
             }
+            tested[n] = true;
             nearest_clear.get_or_insert(shift);
             if reaches(shift) {
-                return (Some(shift), nearest_clear);
+                if prefers(shift) {
+                    return shift;
+                }
+                nearest_reached.get_or_insert(shift);
             }
-            unreached[n] = true;
         }
     }
-    (None, nearest_clear)
+    nearest_reached.or(nearest_clear).unwrap_or(DVec3::ZERO)
 }
 
 #[cfg(test)]
