@@ -167,6 +167,18 @@ pub struct LegStatics {
 /// The IK answer is accepted as reaching the target within this distance (m).
 pub const IK_TOLERANCE: f64 = 1e-6;
 
+/// The damped least squares' damping λ² (m²): small, it keeps the step finite where the leg
+/// is stretched (singular) and leaves it Gauss–Newton's elsewhere.
+const LAMBDA2: f64 = 1e-6;
+
+/// The most a solve that makes no progress raises λ² to before it stops (m²): against the
+/// squared lever arms of a leg's joints (10⁻³–10⁻¹ m²), a step then a short one along the
+/// gradient. Near a target out of reach the error is nearly flat along the poses closest to
+/// it, and a Gauss–Newton step there overshoots; the damped one goes on down to the closest
+/// pose next to the last, where a solve that stopped short left the next one to start from a
+/// pose no better than another branch's (see `gait::controller::solve_on_branch`).
+const LAMBDA2_MAX: f64 = 1e-1;
+
 /// Joint positions and axes in the body frame, as [`LegChain::frames`] gives them.
 pub(super) type JointFrames = [(DVec3, DVec3); MAX_LEG_JOINTS];
 
@@ -324,6 +336,43 @@ impl LegChain {
         (joints, frame.transform_point3(self.foot), frame.matrix3)
     }
 
+    /// The damped least-squares step (Δq = Jᵀ(JJᵀ + λ²I)⁻¹e) towards a foot error `e` from `q`,
+    /// with every joint that sits at a limit the step would push it past held there: its
+    /// column of J taken out and the step solved again for the others (an active set, as
+    /// box-constrained least squares does). Clamping the full step instead bends it off the
+    /// descent direction where the closest pose to a target out of reach leans on a limit
+    /// (ant_bot's femur at its upper limit), and the solve stops short of that pose. Away from
+    /// the limits it is the plain step.
+    fn step_within_limits(&self, j: DMat3, q: [f64; 3], error: DVec3, lambda2: f64) -> DVec3 {
+        let dls = |j: DMat3| {
+            j.transpose()
+                * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
+                * error
+        };
+        let mut step = dls(j);
+        let mut held = [false; 3];
+        loop {
+            let mut changed = false;
+            for i in 0..3 {
+                let pushed = (q[i] >= self.upper[i] && step[i] > 0.0)
+                    || (q[i] <= self.lower[i] && step[i] < 0.0);
+                if pushed && !held[i] {
+                    held[i] = true;
+                    changed = true;
+                }
+            }
+            if !changed || held.iter().all(|&h| h) {
+                break;
+            }
+            let column = |i: usize| if held[i] { DVec3::ZERO } else { j.col(i) };
+            step = dls(DMat3::from_cols(column(0), column(1), column(2)));
+        }
+        if held.iter().all(|&h| h) {
+            return DVec3::ZERO;
+        }
+        step
+    }
+
     fn jacobian_of(joints: &[(DVec3, DVec3); 3], foot: DVec3) -> DMat3 {
         DMat3::from_cols(
             joints[0].1.cross(foot - joints[0].0),
@@ -358,13 +407,22 @@ impl LegChain {
     /// also keeps its extra joints near their rest angles. (The gait solves six legs every
     /// step: each trial's forward kinematics also gives the next iteration's Jacobian.)
     pub fn solve(&self, target: DVec3, guess: impl AsRef<[f64]>) -> IkSolution {
-        self.solve_within(target, guess, &mut None, IK_TOLERANCE * 0.1)
+        self.solve_within(target, guess, &mut None, IK_TOLERANCE * 0.1, false)
+    }
+
+    /// [`Self::solve`], never crossing a singular pose on the way (see [`same_branch`]): the
+    /// answer is on the knee's branch of `guess`, the closest pose of that branch where the
+    /// target is out of its reach. The gait starts a leg's solve again from its standing pose
+    /// with it (`gait::controller::solve_on_branch`).
+    pub fn solve_on_branch(&self, target: DVec3, guess: impl AsRef<[f64]>) -> IkSolution {
+        self.solve_within(target, guess, &mut None, IK_TOLERANCE * 0.1, true)
     }
 
     /// [`Self::solve`], taking a 3-joint leg's forward kinematics of `guess` from `warm` when it
     /// holds them (the last answer's, bit for bit the same as computing them again: a fifth of
     /// the gait's instructions on hex18's walk), and leaving this answer's there for the next
-    /// solve. A redundant leg's solve keeps no such state.
+    /// solve. A redundant leg's solve keeps no such state. Like [`Self::solve_on_branch`] it
+    /// stays on the branch of `guess`: the answer follows the last one.
     ///
     /// It stops within [`IK_TOLERANCE`] (1 µm) of the target, where a cold [`Self::solve`] goes
     /// on to 0.1 µm: the gait solves every leg twice a step, each from its own last answer a
@@ -378,16 +436,17 @@ impl LegChain {
         guess: impl AsRef<[f64]>,
         warm: &mut Option<IkWarm>,
     ) -> IkSolution {
-        self.solve_within(target, guess, warm, IK_TOLERANCE)
+        self.solve_within(target, guess, warm, IK_TOLERANCE, true)
     }
 
-    /// [`Self::solve_warm`] to `tolerance` (m).
+    /// [`Self::solve_warm`] to `tolerance` (m), on the branch of `guess` if `follow`.
     fn solve_within(
         &self,
         target: DVec3,
         guess: impl AsRef<[f64]>,
         warm: &mut Option<IkWarm>,
         tolerance: f64,
+        follow: bool,
     ) -> IkSolution {
         let guess = self.angles(guess.as_ref());
         if self.is_redundant() {
@@ -409,31 +468,45 @@ impl LegChain {
             now,
         } = warm.as_mut().expect("set above");
         let mut error = target - frames[*now].1;
-        for _ in 0..50 {
+        let mut lambda2 = LAMBDA2;
+        'solve: for _ in 0..50 {
             if error.length() < tolerance {
                 break;
             }
             let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
-            // a small damping keeps the step finite where the leg is stretched (singular)
-            let lambda2 = 1e-6;
-            let step = j.transpose()
-                * (j * j.transpose() + DMat3::from_diagonal(DVec3::splat(lambda2))).inverse()
-                * error;
             let trial = 1 - *now;
-            let mut next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-            self.frames3_into(next, &mut frames[trial]);
-            if (target - frames[trial].1).length() >= error.length() {
-                // no progress: try a half step once, then stop
-                next = self.clamp3([
-                    q[0] + 0.5 * step.x,
-                    q[1] + 0.5 * step.y,
-                    q[2] + 0.5 * step.z,
-                ]);
+            let next = loop {
+                let step = self.step_within_limits(j, q, error, lambda2);
+                let next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
                 self.frames3_into(next, &mut frames[trial]);
-                if (target - frames[trial].1).length() >= error.length() {
-                    break;
+                if (target - frames[trial].1).length() < error.length()
+                    && (!follow || same_branch(j, &frames[trial]))
+                {
+                    lambda2 = (lambda2 * 0.1).max(LAMBDA2);
+                    break next;
                 }
-            }
+                if lambda2 == LAMBDA2 {
+                    // no progress: try a half step
+                    let half = self.clamp3([
+                        q[0] + 0.5 * step.x,
+                        q[1] + 0.5 * step.y,
+                        q[2] + 0.5 * step.z,
+                    ]);
+                    self.frames3_into(half, &mut frames[trial]);
+                    if (target - frames[trial].1).length() < error.length()
+                        && (!follow || same_branch(j, &frames[trial]))
+                    {
+                        break half;
+                    }
+                }
+                // still none: damp harder (Levenberg–Marquardt), towards the gradient's
+                // direction, until the step is too short to matter; a solve that need not
+                // follow its guess stops here, as the stance fit was tuned on
+                lambda2 *= 10.0;
+                if !follow || lambda2 > LAMBDA2_MAX {
+                    break 'solve;
+                }
+            };
             q = next;
             *now = trial;
             error = target - frames[*now].1;
@@ -488,4 +561,19 @@ impl LegChain {
             .truncate()
             .length()
     }
+}
+
+/// Whether the pose of `frames` is on the same side of the leg's singular poses as the one
+/// whose Jacobian is `j`: det J changes sign where the leg passes through one (stretched,
+/// or its foot on the coxa's axis), and a knee's two branches have opposite signs. A step
+/// across is refused: a target out of reach is closest at the stretched pose, and a solve
+/// free to cross it comes back on either branch (ant_bot's knee, folded past 2 rad on its
+/// femur's limit, then missed targets its usual branch reaches).
+fn same_branch(j: DMat3, frames: &Frames) -> bool {
+    let (from, to) = (
+        j.determinant(),
+        LegChain::jacobian_of(&frames.0, frames.1).determinant(),
+    );
+    // a pose on the singular set itself (a straight leg at zero angles) belongs to neither
+    from == 0.0 || from * to > 0.0
 }
