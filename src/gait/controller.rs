@@ -884,8 +884,8 @@ impl GaitController {
             self.last[k] = solution.angles;
             let mut angles = solution.angles;
             if let Some(dt) = elapsed {
-                // an inverse kinematics that answers a target out of reach with the closest
-                // pose may flip from one such pose to another: the joints are bounded too
+                // a leg solved again from its standing pose may change branch: the joints
+                // are bounded too
                 let scale = (d.length() / self.spec.stride_length).max(1.0);
                 for (j, angle) in angles.iter_mut().enumerate() {
                     let longest = slew::joint_speed_limit(&self.joint_speed[k], j) * scale * dt;

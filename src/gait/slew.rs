@@ -45,9 +45,9 @@ pub fn landing_speed(gait: &Gait) -> f64 {
 /// The fastest joint `j` of a leg may move its target (rad/s), from the leg's joints' fastest
 /// rates over a nominal cycle (`nominal`): [`SPEED_FACTOR`] times its own, or a quarter of its
 /// leg's fastest where its own is smaller (a joint the straight walk hardly turns, as a coxa,
-/// turns in a curve). The joint targets are bounded as well as the foot's: an inverse
-/// kinematics that answers a target out of reach with the closest pose may flip between two
-/// such poses from one step to the next, however slowly the target moves.
+/// turns in a curve). The joint targets are bounded as well as the foot's: a leg that misses
+/// its target is solved again from its standing pose and may land on another branch, a radian
+/// or more away, however slowly the target moves (`controller::solve_on_branch`).
 pub fn joint_speed_limit(nominal: &[f64], j: usize) -> f64 {
     let fastest = nominal.iter().copied().fold(0.0, f64::max);
     if fastest > 0.0 {
