@@ -686,6 +686,29 @@ fn missing_meshes_are_drawn_as_collision_shapes() {
     );
 }
 
+/// PhantomX ships its body's collision mesh but not its visual one: the body is drawn as that
+/// mesh, where it was a 1 cm sphere (the recording showed six legs around a dot).
+#[test]
+fn a_missing_visual_mesh_is_drawn_as_the_collision_mesh() {
+    use hexsim::robot::Shape;
+    let model = hexsim::robot::load(std::path::Path::new(
+        "tests/data/third_party/phantomx_description/urdf/phantomx.urdf",
+    ))
+    .unwrap();
+    // MP_BODY hangs from base_link by a fixed joint, and is merged into it
+    let body = model
+        .links
+        .iter()
+        .find(|l| l.merged.iter().any(|m| m == "MP_BODY"))
+        .unwrap();
+    let shapes: Vec<_> = body.visuals.iter().map(|v| &v.shape).collect();
+    assert_eq!(shapes.len(), 1, "{shapes:?}");
+    match shapes[0] {
+        Shape::Mesh { path, .. } => assert!(path.ends_with("meshes/body_coll.STL"), "{path:?}"),
+        other => panic!("the body is drawn as {other:?}"),
+    }
+}
+
 /// `text` with every number of the attribute `name` multiplied by `factor`.
 fn scale_attribute(text: &str, name: &str, factor: f64) -> String {
     let key = format!(" {name}=\"");

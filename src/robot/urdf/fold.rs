@@ -222,13 +222,18 @@ impl<'a> Bodies<'a> {
             frame.transform_point3(com),
             frame.matrix3 * inertia * frame.matrix3.transpose(),
         );
-        // the first collision primitive, drawn (at its own origin) for a visual mesh that cannot be
-        let collision_shape = urdf_link.collision.iter().find_map(|c| {
-            let ignored = &mut MeshProblems::default();
-            let shape = shape(&c.geometry, self.base, &urdf_link.name, false, ignored)
-                .filter(|s| !matches!(s, Shape::Mesh { .. }))?;
-            Some((frame * pose(&c.origin), shape))
-        });
+        // drawn (at its own origin) for a visual mesh that cannot be: the first collision
+        // primitive, else the first collision mesh the recording can draw (PhantomX ships its
+        // body's collision mesh but not its visual one: a small sphere hid the body plate)
+        let collision_shape = |primitive: bool| {
+            urdf_link.collision.iter().find_map(|c| {
+                let ignored = &mut MeshProblems::default();
+                let shape = shape(&c.geometry, self.base, &urdf_link.name, false, ignored)
+                    .filter(|s| matches!(s, Shape::Mesh { .. }) != primitive)?;
+                Some((frame * pose(&c.origin), shape))
+            })
+        };
+        let collision_shape = collision_shape(true).or_else(|| collision_shape(false));
         for visual in &urdf_link.visual {
             let origin = frame * pose(&visual.origin);
             let drawn = shape(
