@@ -225,15 +225,22 @@ impl<'a> Bodies<'a> {
         // drawn (at its own origin) for a visual mesh that cannot be: the first collision
         // primitive, else the first collision mesh the recording can draw (PhantomX ships its
         // body's collision mesh but not its visual one: a small sphere hid the body plate)
-        let collision_shape = |primitive: bool| {
-            urdf_link.collision.iter().find_map(|c| {
+        // (one pass: each collision mesh is resolved once)
+        let mut first_mesh = None;
+        let collision_shape = urdf_link
+            .collision
+            .iter()
+            .find_map(|c| {
                 let ignored = &mut MeshProblems::default();
-                let shape = shape(&c.geometry, self.base, &urdf_link.name, false, ignored)
-                    .filter(|s| matches!(s, Shape::Mesh { .. }) != primitive)?;
-                Some((frame * pose(&c.origin), shape))
+                let shape = shape(&c.geometry, self.base, &urdf_link.name, false, ignored)?;
+                let placed = (frame * pose(&c.origin), shape);
+                if matches!(placed.1, Shape::Mesh { .. }) {
+                    first_mesh.get_or_insert(placed);
+                    return None;
+                }
+                Some(placed)
             })
-        };
-        let collision_shape = collision_shape(true).or_else(|| collision_shape(false));
+            .or(first_mesh);
         for visual in &urdf_link.visual {
             let origin = frame * pose(&visual.origin);
             let drawn = shape(
