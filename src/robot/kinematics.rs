@@ -361,16 +361,15 @@ impl LegChain {
                     changed = true;
                 }
             }
-            if !changed || held.iter().all(|&h| h) {
-                break;
+            if !changed {
+                return step;
+            }
+            if held == [true; 3] {
+                return DVec3::ZERO;
             }
             let column = |i: usize| if held[i] { DVec3::ZERO } else { j.col(i) };
             step = dls(DMat3::from_cols(column(0), column(1), column(2)));
         }
-        if held.iter().all(|&h| h) {
-            return DVec3::ZERO;
-        }
-        step
     }
 
     fn jacobian_of(joints: &[(DVec3, DVec3); 3], foot: DVec3) -> DMat3 {
@@ -475,13 +474,15 @@ impl LegChain {
             }
             let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
             let trial = 1 - *now;
+            // a trial is taken if it comes closer and, following, stays on the branch
+            let progress = |frames: &Frames| {
+                (target - frames.1).length() < error.length() && (!follow || same_branch(j, frames))
+            };
             let next = loop {
                 let step = self.step_within_limits(j, q, error, lambda2);
                 let next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
                 self.frames3_into(next, &mut frames[trial]);
-                if (target - frames[trial].1).length() < error.length()
-                    && (!follow || same_branch(j, &frames[trial]))
-                {
+                if progress(&frames[trial]) {
                     lambda2 = (lambda2 * 0.1).max(LAMBDA2);
                     break next;
                 }
@@ -493,9 +494,7 @@ impl LegChain {
                         q[2] + 0.5 * step.z,
                     ]);
                     self.frames3_into(half, &mut frames[trial]);
-                    if (target - frames[trial].1).length() < error.length()
-                        && (!follow || same_branch(j, &frames[trial]))
-                    {
+                    if progress(&frames[trial]) {
                         break half;
                     }
                 }
