@@ -1069,11 +1069,7 @@ mod tests {
     /// standing pose, it is reached, and a target out of reach keeps the closer answer.
     #[test]
     fn a_solve_stuck_on_another_branch_starts_again_from_the_standing_pose() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf"
-        );
-        let model = crate::robot::load(std::path::Path::new(path)).unwrap();
+        let model = ant_bot();
         let chain = LegChain::new(&model, &model.legs[2]);
         let stuck = chain.from_three([-0.0672, 0.55, 2.0073]);
         let home = chain.from_three(STANDING_GUESSES[0]);
@@ -1099,11 +1095,7 @@ mod tests {
     /// 1.3 rad between two steps (2.4 rad in a walk over 8 cm stones, traced).
     #[test]
     fn a_target_swept_out_of_reach_and_back_is_followed_without_jumps() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf"
-        );
-        let model = crate::robot::load(std::path::Path::new(path)).unwrap();
+        let model = ant_bot();
         let (mut worst, mut at) = (0.0_f64, String::new());
         for leg in &model.legs {
             let chain = LegChain::new(&model, leg);
@@ -1134,6 +1126,15 @@ mod tests {
             }
         }
         assert!(worst < 0.3, "an answer jumped {worst:.3} rad: {at}");
+    }
+
+    /// ant_bot, from `tests/data/third_party`.
+    fn ant_bot() -> RobotModel {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf"
+        );
+        crate::robot::load(std::path::Path::new(path)).unwrap()
     }
 
     /// hex18 and the tripod fitted to it.
