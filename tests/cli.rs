@@ -505,9 +505,10 @@ fn bench_measures_both_articulations_and_says_what_it_measured() {
 }
 
 /// `bench --mujoco PYTHON` runs the built-in MuJoCo script with that Python, as many steps as
-/// the walk, and prints the walk as a multiple of MuJoCo's figure. A stand-in "Python" that
-/// checks its arguments and writes the figures the real script writes keeps the test free of
-/// MuJoCo; a Python that cannot run is an error that says how to get one.
+/// the walk, once a round beside one walk, and prints the walk as a multiple of MuJoCo's figure:
+/// the median of the rounds' ratios. A stand-in "Python" that checks its arguments and writes
+/// the figures the real script writes keeps the test free of MuJoCo; a Python that cannot run is
+/// an error that says how to get one.
 #[test]
 #[cfg(unix)]
 fn bench_times_mujoco_beside_itself() {
@@ -526,14 +527,17 @@ fn bench_times_mujoco_beside_itself() {
              --json) json=$2;;\n\
            esac; shift\n\
          done\n\
+         echo run >> \"$(dirname \"$0\")/calls\"\n\
          printf '{\"mujoco_version\":\"9.9\",\"steps\":%s,\"repeats\":1,\"loop_steps_per_second\":1000.0,\"rollout_steps_per_second\":2000.0,\"base_end\":[0,0,0.1],\"tilt_deg\":1.0}' \"$steps\" > \"$json\"\n",
     )
     .unwrap();
     std::fs::set_permissions(&python, std::fs::Permissions::from_mode(0o755)).unwrap();
     let out = hexsim()
         .args(["bench", "--articulation", "multibody", "--duration", "0.3"])
-        .args(["--repeats", "1", "--jobs", "1", "--mujoco"])
+        .args(["--repeats", "2", "--jobs", "1", "--mujoco"])
         .arg(&python)
+        .arg("--json")
+        .arg(dir.join("bench.json"))
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -555,6 +559,20 @@ fn bench_times_mujoco_beside_itself() {
         times > 1.0,
         "hexsim's walk against a stand-in 2000 steps/s: {ratio}"
     );
+    assert!(ratio.contains("median of 2 rounds"), "{ratio}");
+    // one MuJoCo run a round, each beside one walk
+    let calls = std::fs::read_to_string(dir.join("calls")).unwrap();
+    assert_eq!(calls.lines().count(), 2, "{calls}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("bench.json")).unwrap()).unwrap();
+    let pairs = json["mujoco"]["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 2, "{pairs:?}");
+    for pair in pairs {
+        assert_eq!(pair["articulation"], "multibody");
+        assert_eq!(pair["mujoco"], 2000.0);
+        assert!(pair["hexsim"].as_f64().unwrap() > 2000.0, "{pair}");
+    }
+    assert_eq!(json["mujoco"]["figures"]["repeats"], 2);
     let missing = hexsim()
         .args(["bench", "--articulation", "multibody", "--duration", "0.1"])
         .args(["--repeats", "1", "--mujoco"])

@@ -72,9 +72,10 @@ impl Figure {
 pub struct BenchReport {
     pub configuration: Vec<(String, String)>,
     pub figures: Vec<Figure>,
-    /// MuJoCo's equivalent of the walk on the same machine (`hexsim bench --mujoco`).
+    /// MuJoCo's equivalent of the walk on the same machine (`hexsim bench --mujoco`), measured
+    /// round by round beside the walks.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub mujoco: Option<mujoco::MujocoFigures>,
+    pub mujoco: Option<mujoco::Comparison>,
 }
 
 /// The terrain the walk crosses (for MuJoCo's copy of the workload).
@@ -232,10 +233,28 @@ pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Res
     })?;
     push(ball, &mut figures);
     let mujoco = match &options.mujoco {
-        // as many steps as the walk: 1 s settling and the duration, at 1 ms
+        // as many steps as the walk: 1 s settling and the duration, at 1 ms; one walk of each
+        // articulation beside each of MuJoCo's runs
         Some(python) => {
             let steps = ((options.duration + 1.0) * 1000.0).round() as u64;
-            Some(mujoco::measure(python, steps, options.repeats)?)
+            let scenarios = options
+                .articulations
+                .iter()
+                .map(|&a| resolve(walk_spec(a, options.duration)?, "bench walk"))
+                .collect::<Result<Vec<_>>>()?;
+            let articulations: Vec<(usize, String)> = options
+                .articulations
+                .iter()
+                .enumerate()
+                .map(|(i, a)| (i, a.name().to_string()))
+                .collect();
+            Some(mujoco::Comparison::measure(
+                python,
+                steps,
+                options.repeats,
+                &articulations,
+                |i| run(&scenarios[i], None).map(|r| r.steps_per_second),
+            )?)
         }
         None => None,
     };

@@ -1,6 +1,12 @@
 //! MuJoCo beside hexsim in one `hexsim bench`: its equivalent of the walk (`bench/mujoco`, built
 //! into the binary) timed by Python on the same machine, in the same invocation, so a figure
 //! always comes with its comparison — these machines differ by 30 % from one CPU to the next.
+//!
+//! On a shared machine the speed also drifts, by a third or more within a minute, so two blocks
+//! of runs timed one after the other compare two different machines: three `hexsim bench
+//! --mujoco` in one spell put the multibody walk at 1.10×, 1.27× and 1.41× MuJoCo's rollout.
+//! The comparison is therefore made in rounds ([`Pair`]): each of MuJoCo's runs beside one run
+//! of each of hexsim's walks, the order alternating, and the ratio read per round.
 
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
@@ -31,6 +37,116 @@ impl MujocoFigures {
         self.rollout_steps_per_second
             .unwrap_or(self.loop_steps_per_second)
     }
+
+    /// The figures of several runs as one: the best of each, the last run's end.
+    fn merged(runs: &[MujocoFigures]) -> Option<MujocoFigures> {
+        let last = runs.last()?;
+        let best =
+            |f: fn(&MujocoFigures) -> Option<f64>| runs.iter().filter_map(f).reduce(f64::max);
+        Some(MujocoFigures {
+            repeats: runs.iter().map(|r| r.repeats).sum(),
+            loop_steps_per_second: best(|r| Some(r.loop_steps_per_second))?,
+            rollout_steps_per_second: best(|r| r.rollout_steps_per_second),
+            ..last.clone()
+        })
+    }
+}
+
+/// One round of the comparison: one of hexsim's walks and MuJoCo's run beside it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Pair {
+    pub articulation: String,
+    /// hexsim's walk in this round (steps/s).
+    pub hexsim: f64,
+    /// MuJoCo's best figure in the same round (steps/s; [`MujocoFigures::best`]).
+    pub mujoco: f64,
+}
+
+impl Pair {
+    pub fn ratio(&self) -> f64 {
+        self.hexsim / self.mujoco.max(1e-9)
+    }
+}
+
+/// MuJoCo measured beside hexsim's walks, round by round.
+#[derive(Debug, Clone, Serialize)]
+pub struct Comparison {
+    /// MuJoCo's figures over all rounds (the best of each).
+    pub figures: MujocoFigures,
+    /// Each round's walk against MuJoCo, for every articulation measured.
+    pub pairs: Vec<Pair>,
+}
+
+/// The median of `values` and their range (NaN for none).
+pub fn median_and_range(mut values: Vec<f64>) -> (f64, f64, f64) {
+    values.sort_by(f64::total_cmp);
+    match (values.first(), values.last()) {
+        (Some(&lo), Some(&hi)) => (values[values.len() / 2], lo, hi),
+        _ => (f64::NAN, f64::NAN, f64::NAN),
+    }
+}
+
+impl Comparison {
+    /// `rounds` rounds: in each, MuJoCo's walk once and `walk` once for each of `articulations`,
+    /// MuJoCo first in even rounds and last in odd ones (so neither always runs on a cache, a
+    /// clock or a neighbour the other left).
+    pub fn measure<A: Copy>(
+        python: &Path,
+        steps: u64,
+        rounds: usize,
+        articulations: &[(A, String)],
+        mut walk: impl FnMut(A) -> Result<f64>,
+    ) -> Result<Comparison> {
+        let mut runs = Vec::new();
+        let mut pairs = Vec::new();
+        for round in 0..rounds.max(1) {
+            let mujoco_first = round % 2 == 0;
+            let mut ours = Vec::new();
+            if mujoco_first {
+                runs.push(measure(python, steps, 1, true)?);
+            }
+            for (articulation, name) in articulations {
+                ours.push((name.clone(), walk(*articulation)?));
+            }
+            if !mujoco_first {
+                runs.push(measure(python, steps, 1, true)?);
+            }
+            let theirs = runs.last().expect("a run this round").best();
+            pairs.extend(ours.into_iter().map(|(articulation, hexsim)| Pair {
+                articulation,
+                hexsim,
+                mujoco: theirs,
+            }));
+        }
+        let figures = MujocoFigures::merged(&runs).expect("at least one round");
+        Ok(Comparison { figures, pairs })
+    }
+
+    /// The ratios of `articulation`'s rounds: median, lowest, highest.
+    pub fn ratios(&self, articulation: &str) -> (f64, f64, f64) {
+        median_and_range(
+            self.pairs
+                .iter()
+                .filter(|p| p.articulation == articulation)
+                .map(Pair::ratio)
+                .collect(),
+        )
+    }
+
+    /// The medians of `articulation`'s own figures and of MuJoCo's over its rounds.
+    pub fn medians(&self, articulation: &str) -> (f64, f64) {
+        let of = |f: fn(&Pair) -> f64| {
+            median_and_range(
+                self.pairs
+                    .iter()
+                    .filter(|p| p.articulation == articulation)
+                    .map(f)
+                    .collect(),
+            )
+            .0
+        };
+        (of(|p| p.hexsim), of(|p| p.mujoco))
+    }
 }
 
 /// A scratch folder, removed when dropped.
@@ -44,9 +160,9 @@ impl Drop for Scratch {
 
 /// Runs the MuJoCo equivalent of the walk with `python` (which needs `mujoco` and `numpy`):
 /// hex18 and the bench's natural terrain written to a scratch folder, `steps` steps, best of
-/// `repeats`. Its output goes to stderr as it comes; a missing Python or MuJoCo is an error that
+/// `repeats` (after one untimed run of each, if `warmup`). Its output goes to stderr as it comes; a missing Python or MuJoCo is an error that
 /// says how to get them.
-pub fn measure(python: &Path, steps: u64, repeats: usize) -> Result<MujocoFigures> {
+pub fn measure(python: &Path, steps: u64, repeats: usize, warmup: bool) -> Result<MujocoFigures> {
     let dir = std::env::temp_dir().join(format!("hexsim-bench-mujoco-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let scratch = Scratch(dir);
@@ -64,6 +180,7 @@ pub fn measure(python: &Path, steps: u64, repeats: usize) -> Result<MujocoFigure
         .args(["--size", &(x1 - x0).to_string()])
         .args(["--steps", &steps.to_string()])
         .args(["--repeats", &repeats.max(1).to_string()])
+        .args(warmup.then_some("--warmup"))
         .arg("--urdf")
         .arg(at("hex18.urdf"))
         .arg("--json")

@@ -24,7 +24,8 @@ pub struct BenchArgs {
     json: Option<PathBuf>,
     /// Also time MuJoCo's equivalent of the walk (bench/mujoco, built in) on this machine, now,
     /// with this Python (default python3; it needs `pip install mujoco numpy`), and print
-    /// hexsim's walks as multiples of it.
+    /// hexsim's walks as multiples of it: in rounds, each of MuJoCo's runs beside one run of
+    /// each walk, the median ratio and its range (a shared machine's speed drifts).
     #[arg(long, value_name = "PYTHON", num_args = 0..=1, default_missing_value = "python3")]
     mujoco: Option<PathBuf>,
 }
@@ -98,7 +99,8 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             );
         }
     }
-    if let Some(m) = &report.mujoco {
+    if let Some(comparison) = &report.mujoco {
+        let m = &comparison.figures;
         println!(
             "MuJoCo {} on this machine, the same walk's {} steps: rollout {}, Python loop {:.0} \
              steps/s (best of {}; its base ended at x = {:.2} m, tilted {:.1}°)",
@@ -111,17 +113,19 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             m.base_end[0],
             m.tilt_deg,
         );
-        for f in report.figures.iter().filter(|f| f.workload == "walk") {
+        let theirs = if m.rollout_steps_per_second.is_some() {
+            "rollout"
+        } else {
+            "Python loop"
+        };
+        for a in &args.articulation {
+            let (median, lo, hi) = comparison.ratios(a.name());
+            let (ours, mujoco) = comparison.medians(a.name());
             println!(
-                "{} walk: {:.2}× MuJoCo's {} (best against best: {:.2}×)",
-                f.articulation.as_deref().unwrap_or("-"),
-                f.steps_per_second / m.best(),
-                if m.rollout_steps_per_second.is_some() {
-                    "rollout"
-                } else {
-                    "Python loop"
-                },
-                f.best_steps_per_second / m.best(),
+                "{} walk: {median:.2}× MuJoCo's {theirs} (median of {} rounds, each run beside \
+                 MuJoCo's: {lo:.2}–{hi:.2}×; {ours:.0} against {mujoco:.0} steps/s)",
+                a.name(),
+                m.repeats,
             );
         }
     }
