@@ -867,9 +867,11 @@ impl GaitController {
                 };
             }
             if let (Some(dt), Some(_), LegPhase::Stance(_)) = (elapsed, &ground, phase) {
-                // perceptive: a standing foot's target sinks no faster than a swing lands
-                let lowest = self.last_planned[k].z - slew::landing_speed(&self.spec) * dt;
-                foot.z = foot.z.max(lowest);
+                // perceptive: a standing foot's target sinks or rises no faster than a swing
+                // lands ([`slew::landing_speed`])
+                let most = slew::landing_speed(&self.spec) * dt;
+                let last = self.last_planned[k].z;
+                foot.z = foot.z.max(last - most).min(last + most);
             }
             if let Some(dt) = elapsed {
                 let stride = d.length();
@@ -1280,8 +1282,23 @@ mod tests {
     /// not held to it.
     #[test]
     fn a_stance_target_sinks_at_the_landing_speed() {
+        stance_targets_follow_a_step_at_the_landing_speed(0.05);
+    }
+
+    /// … and rises no faster: a stance target that rises in the body's frame lowers the body,
+    /// and lowered faster than it falls the body leaves its feet (hexaross perceptive at the
+    /// top of 10 cm stairs: the body crouched 7 cm in 0.1 s with every foot unloaded).
+    #[test]
+    fn a_stance_target_rises_at_the_landing_speed() {
+        stance_targets_follow_a_step_at_the_landing_speed(-0.05);
+    }
+
+    /// The ground planned under the feet steps down by `depth` (up where negative) 20 ms into
+    /// the first stance that begins: the stance targets follow at the landing speed, the
+    /// swings faster.
+    fn stance_targets_follow_a_step_at_the_landing_speed(depth: f64) {
         let (model, gait) = hex18_tripod();
-        let (command, h, depth) = (VelocityCommand::default(), 1e-3, 0.05);
+        let (command, h) = (VelocityCommand::default(), 1e-3);
         let mut c = GaitController::new(&model, gait.clone()).unwrap();
         let level = std::cell::Cell::new(0.0);
         let landing = slew::landing_speed(&gait);
@@ -1299,7 +1316,8 @@ mod tests {
             }
             let now = c.targets_on(t, command, 1.0, |_| level.get());
             for k in 0..6 {
-                let sink = before.feet[k].z - now.feet[k].z;
+                // along the step
+                let sink = (before.feet[k].z - now.feet[k].z) * depth.signum();
                 let standing_still = before.phases[k].is_stance() && now.phases[k].is_stance();
                 if standing_still {
                     assert!(sink <= landing * h + 1e-12, "leg {k} at {t}: {sink}");
@@ -1316,7 +1334,7 @@ mod tests {
                 }
             }
             if let Some((at, legs)) = &drop
-                && (t - at - depth / landing - 0.01).abs() < 0.5 * h
+                && (t - at - depth.abs() / landing - 0.01).abs() < 0.5 * h
             {
                 for &k in legs {
                     assert!(now.phases[k].is_stance(), "leg {k} left its stance");

@@ -28,15 +28,17 @@ pub fn speed_limit(gait: &Gait, stride: f64) -> f64 {
     SPEED_FACTOR * along.hypot(up).max(floor) / swing_time
 }
 
-/// How fast a perceptive stance foot's target may sink (m/s): the gait's landing speed,
+/// How fast a perceptive stance foot's target may sink or rise (m/s): the gait's landing speed,
 /// π·h/T_swing (its sine swing's at touch-down, [`Gait::touchdown_speed`], what the time step is
 /// fitted to: `setup::time_step`). A stance target follows the ground planned under it, which
 /// steps by a riser's height where that point crosses an edge or the body's reference moves;
 /// followed at [`speed_limit`]'s pace, a target 3 cm down in 20 ms drove PhantomX's rf foot,
 /// in the air over a lower tread, into it at 0.8 m/s and 7.1 mm deep (its radius 7 mm: the run
 /// diverged), and a foot on the ground drives the body up as fast. Sinking at the landing
-/// speed, a stance foot meets its ground as a swing does. Rising is bounded by
-/// [`speed_limit`] alone.
+/// speed, a stance foot meets its ground as a swing does. Rising, it lowers the body: at
+/// [`speed_limit`]'s pace hexaross, crouching 7 cm to reach the tread below the top of a 10 cm
+/// flight, drew its feet up faster than its body could fall after them, every foot unloaded for
+/// 0.1 s, and it tumbled down the flight; at the landing speed the body follows its feet down.
 pub fn landing_speed(gait: &Gait) -> f64 {
     let swing_time = (1.0 - gait.duty_factor) * gait.period;
     std::f64::consts::PI * gait.step_height / swing_time
