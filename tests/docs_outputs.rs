@@ -177,3 +177,50 @@ fn the_outputs_page_lists_every_key_of_a_batch_record() {
         "{metadata}"
     );
 }
+
+/// The benchmark's JSON: its top-level keys are the section's rows, and every key of a figure
+/// is named in the `figures[]` row.
+#[test]
+fn the_outputs_page_lists_every_key_of_the_benchmark() {
+    let dir = Scratch::new("hexsim-docs-bench-");
+    run(
+        &dir,
+        &[
+            "bench",
+            "--articulation",
+            "multibody",
+            "--duration",
+            "0.2",
+            "--repeats",
+            "1",
+            "--jobs",
+            "1",
+            "--json",
+            "bench.json",
+        ],
+    );
+    let bench: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("bench.json")).unwrap()).unwrap();
+    let listed: BTreeSet<String> = documented("Benchmark")
+        .into_iter()
+        .map(|k| k.trim_end_matches("[]").to_string())
+        .collect();
+    let written: BTreeSet<String> = bench.as_object().unwrap().keys().cloned().collect();
+    // `mujoco` only with --mujoco
+    let mut expected = written.clone();
+    expected.insert("mujoco".into());
+    assert_eq!(listed, expected);
+    let page =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/outputs.md"))
+            .unwrap();
+    let row = page
+        .lines()
+        .find(|l| l.starts_with("| `figures[]`"))
+        .expect("a row for the figures");
+    for key in bench["figures"][0].as_object().unwrap().keys() {
+        assert!(
+            row.contains(&format!("`{key}`")),
+            "figure key `{key}` not documented"
+        );
+    }
+}
