@@ -242,17 +242,12 @@ pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Res
                 .iter()
                 .map(|&a| resolve(walk_spec(a, options.duration)?, "bench walk"))
                 .collect::<Result<Vec<_>>>()?;
-            let articulations: Vec<(usize, String)> = options
-                .articulations
-                .iter()
-                .enumerate()
-                .map(|(i, a)| (i, a.name().to_string()))
-                .collect();
+            let names: Vec<&str> = options.articulations.iter().map(|a| a.name()).collect();
             Some(mujoco::Comparison::measure(
                 python,
                 steps,
                 options.repeats,
-                &articulations,
+                &names,
                 |i| run(&scenarios[i], None).map(|r| r.steps_per_second),
             )?)
         }

@@ -78,7 +78,7 @@ pub struct Comparison {
 }
 
 /// The median of `values` and their range (NaN for none).
-pub fn median_and_range(mut values: Vec<f64>) -> (f64, f64, f64) {
+fn median_and_range(mut values: Vec<f64>) -> (f64, f64, f64) {
     values.sort_by(f64::total_cmp);
     match (values.first(), values.last()) {
         (Some(&lo), Some(&hi)) => (values[values.len() / 2], lo, hi),
@@ -87,33 +87,33 @@ pub fn median_and_range(mut values: Vec<f64>) -> (f64, f64, f64) {
 }
 
 impl Comparison {
-    /// `rounds` rounds: in each, MuJoCo's walk once and `walk` once for each of `articulations`,
-    /// MuJoCo first in even rounds and last in odd ones (so neither always runs on a cache, a
-    /// clock or a neighbour the other left).
-    pub fn measure<A: Copy>(
+    /// `rounds` rounds: in each, MuJoCo's walk once and `walk(i)` once for each of the walks
+    /// `names[i]`, MuJoCo first in even rounds and last in odd ones (so neither always runs on
+    /// a cache, a clock or a neighbour the other left).
+    pub fn measure(
         python: &Path,
         steps: u64,
         rounds: usize,
-        articulations: &[(A, String)],
-        mut walk: impl FnMut(A) -> Result<f64>,
+        names: &[&str],
+        mut walk: impl FnMut(usize) -> Result<f64>,
     ) -> Result<Comparison> {
+        let script = Script::new(python, steps)?;
         let mut runs = Vec::new();
         let mut pairs = Vec::new();
         for round in 0..rounds.max(1) {
             let mujoco_first = round % 2 == 0;
-            let mut ours = Vec::new();
             if mujoco_first {
-                runs.push(measure(python, steps, 1, true)?);
+                runs.push(script.run(1, true)?);
             }
-            for (articulation, name) in articulations {
-                ours.push((name.clone(), walk(*articulation)?));
-            }
+            let ours = (0..names.len())
+                .map(&mut walk)
+                .collect::<Result<Vec<_>>>()?;
             if !mujoco_first {
-                runs.push(measure(python, steps, 1, true)?);
+                runs.push(script.run(1, true)?);
             }
             let theirs = runs.last().expect("a run this round").best();
-            pairs.extend(ours.into_iter().map(|(articulation, hexsim)| Pair {
-                articulation,
+            pairs.extend(names.iter().zip(ours).map(|(name, hexsim)| Pair {
+                articulation: name.to_string(),
                 hexsim,
                 mujoco: theirs,
             }));
@@ -122,30 +122,28 @@ impl Comparison {
         Ok(Comparison { figures, pairs })
     }
 
-    /// The ratios of `articulation`'s rounds: median, lowest, highest.
-    pub fn ratios(&self, articulation: &str) -> (f64, f64, f64) {
+    /// `f` of `articulation`'s rounds: median, lowest, highest.
+    fn over(&self, articulation: &str, f: impl Fn(&Pair) -> f64) -> (f64, f64, f64) {
         median_and_range(
             self.pairs
                 .iter()
                 .filter(|p| p.articulation == articulation)
-                .map(Pair::ratio)
+                .map(f)
                 .collect(),
         )
     }
 
+    /// The ratios of `articulation`'s rounds: median, lowest, highest.
+    pub fn ratios(&self, articulation: &str) -> (f64, f64, f64) {
+        self.over(articulation, Pair::ratio)
+    }
+
     /// The medians of `articulation`'s own figures and of MuJoCo's over its rounds.
     pub fn medians(&self, articulation: &str) -> (f64, f64) {
-        let of = |f: fn(&Pair) -> f64| {
-            median_and_range(
-                self.pairs
-                    .iter()
-                    .filter(|p| p.articulation == articulation)
-                    .map(f)
-                    .collect(),
-            )
-            .0
-        };
-        (of(|p| p.hexsim), of(|p| p.mujoco))
+        (
+            self.over(articulation, |p| p.hexsim).0,
+            self.over(articulation, |p| p.mujoco).0,
+        )
     }
 }
 
@@ -158,50 +156,77 @@ impl Drop for Scratch {
     }
 }
 
-/// Runs the MuJoCo equivalent of the walk with `python` (which needs `mujoco` and `numpy`):
-/// hex18 and the bench's natural terrain written to a scratch folder, `steps` steps, best of
-/// `repeats` (after one untimed run of each, if `warmup`). Its output goes to stderr as it comes; a missing Python or MuJoCo is an error that
-/// says how to get them.
-pub fn measure(python: &Path, steps: u64, repeats: usize, warmup: bool) -> Result<MujocoFigures> {
-    let dir = std::env::temp_dir().join(format!("hexsim-bench-mujoco-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let scratch = Scratch(dir);
-    let at = |name: &str| scratch.0.join(name);
-    std::fs::write(at("hex18_mujoco.py"), SCRIPT)?;
-    std::fs::write(at("hex18.urdf"), crate::scenario::builtin::HEX18.text)?;
-    let terrain = super::bench_terrain()?;
-    crate::terrain::io::write_csv(&terrain, &at("natural.csv"))
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .context("writing the bench's terrain for MuJoCo")?;
-    let [x0, x1] = terrain.x_range();
-    let status = Command::new(python)
-        .arg(at("hex18_mujoco.py"))
-        .arg(at("natural.csv"))
-        .args(["--size", &(x1 - x0).to_string()])
-        .args(["--steps", &steps.to_string()])
-        .args(["--repeats", &repeats.max(1).to_string()])
-        .args(warmup.then_some("--warmup"))
-        .arg("--urdf")
-        .arg(at("hex18.urdf"))
-        .arg("--json")
-        .arg(at("figures.json"))
-        .stdout(std::process::Stdio::inherit())
-        .status()
-        .with_context(|| {
-            format!(
-                "--mujoco: cannot run {}: give a Python with MuJoCo (pip install mujoco), e.g. \
-                 --mujoco .venv/bin/python",
-                python.display()
-            )
-        })?;
-    if !status.success() {
-        bail!(
-            "--mujoco: {} {} failed ({status}); it needs `pip install mujoco numpy`",
-            python.display(),
-            at("hex18_mujoco.py").display()
-        );
+/// The MuJoCo equivalent of the walk, ready to run with `python` (which needs `mujoco` and
+/// `numpy`): the script, hex18 and the bench's natural terrain written once to a scratch folder
+/// (removed when dropped), and run once a round.
+struct Script {
+    scratch: Scratch,
+    python: PathBuf,
+    steps: u64,
+    /// The terrain's side (m).
+    size: f64,
+}
+
+impl Script {
+    fn new(python: &Path, steps: u64) -> Result<Script> {
+        let dir = std::env::temp_dir().join(format!("hexsim-bench-mujoco-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+        let scratch = Scratch(dir);
+        std::fs::write(scratch.0.join("hex18_mujoco.py"), SCRIPT)?;
+        std::fs::write(
+            scratch.0.join("hex18.urdf"),
+            crate::scenario::builtin::HEX18.text,
+        )?;
+        let terrain = super::bench_terrain()?;
+        crate::terrain::io::write_csv(&terrain, &scratch.0.join("natural.csv"))
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .context("writing the bench's terrain for MuJoCo")?;
+        let [x0, x1] = terrain.x_range();
+        Ok(Script {
+            scratch,
+            python: python.to_path_buf(),
+            steps,
+            size: x1 - x0,
+        })
     }
-    let text = std::fs::read_to_string(at("figures.json"))
-        .context("--mujoco: the script wrote no figures")?;
-    serde_json::from_str(&text).context("--mujoco: reading the script's figures")
+
+    /// `steps` steps, best of `repeats` (after one untimed run of each, if `warmup`). Its output
+    /// goes to stderr as it comes; a missing Python or MuJoCo is an error that says how to get
+    /// them.
+    fn run(&self, repeats: usize, warmup: bool) -> Result<MujocoFigures> {
+        let at = |name: &str| self.scratch.0.join(name);
+        let python = &self.python;
+        // not a stale round's
+        let _ = std::fs::remove_file(at("figures.json"));
+        let status = Command::new(python)
+            .arg(at("hex18_mujoco.py"))
+            .arg(at("natural.csv"))
+            .args(["--size", &self.size.to_string()])
+            .args(["--steps", &self.steps.to_string()])
+            .args(["--repeats", &repeats.max(1).to_string()])
+            .args(warmup.then_some("--warmup"))
+            .arg("--urdf")
+            .arg(at("hex18.urdf"))
+            .arg("--json")
+            .arg(at("figures.json"))
+            .stdout(std::process::Stdio::inherit())
+            .status()
+            .with_context(|| {
+                format!(
+                    "--mujoco: cannot run {}: give a Python with MuJoCo (pip install mujoco), \
+                     e.g. --mujoco .venv/bin/python",
+                    python.display()
+                )
+            })?;
+        if !status.success() {
+            bail!(
+                "--mujoco: {} {} failed ({status}); it needs `pip install mujoco numpy`",
+                python.display(),
+                at("hex18_mujoco.py").display()
+            );
+        }
+        let text = std::fs::read_to_string(at("figures.json"))
+            .context("--mujoco: the script wrote no figures")?;
+        serde_json::from_str(&text).context("--mujoco: reading the script's figures")
+    }
 }
