@@ -160,3 +160,57 @@ fn a_tall_robot_leans_into_a_30_degree_slope_and_walks_up_it() {
         assert!(run["max_tilt_deg"].as_f64().unwrap() < 35.0, "{run}");
     }
 }
+
+/// hexaross perceptive down the ladder's 10 cm stairs: as its front hips pass the top's edge the
+/// ground the legs reach for is planned afresh — the hips' plane tilts, the crouch eases — and
+/// the body's reference steps. Its stance feet followed at the landing speed, its swinging feet
+/// in full: two landed 4.6–8.1 mm under the top landing (8, 10 and 12 cm risers) and threw the
+/// body up at 0.34–0.68 m/s, and at 10 and 12 cm it tumbled down the flight. The reference now
+/// moves at the landing speed under every foot (`sim::walker`'s `BodyReference`). Measured to
+/// 6.3 s, past the first edge: the late swings' targets at most 0.84 mm under the ground, the
+/// body rising at 0.11 m/s at most.
+#[test]
+fn perceptive_swings_land_on_the_ground_as_the_body_pitches_over_an_edge() {
+    use hexsim::gait::LegPhase;
+    let dir = scratch("ladder-edge");
+    let robot =
+        project_file("tests/data/third_party/hexaross/hexapod_description/urdf/hexapod.urdf");
+    let file = dir.join("stairs_down.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "robot = {:?}\ngait = {:?}\nfollow_terrain = true\nduration = 5.3\n\
+             [terrain.source]\nkind = \"steps\"\nstep_height = -0.1\nstep_length = 0.3\n\
+             first_step = 0.3\nsize = [6.0, 4.0]\ncell = 0.01\n[start]\nx = -0.5\ny = 0.0\n",
+            robot,
+            project_file("gaits/tripod.toml")
+        ),
+    )
+    .unwrap();
+    let scenario = &hexsim::scenario::load_file(&file).unwrap()[0];
+    let model = scenario.robot().unwrap().clone();
+    let terrain = scenario.build_terrain().unwrap();
+    let mut walk = scenario.start_walk(hexsim::record::Outputs::new()).unwrap();
+    let (mut deepest, mut rise) = (0.0f64, 0.0f64);
+    while walk.remaining() > 0 {
+        walk.advance(1);
+        let sample = walk.sample().unwrap();
+        rise = rise.max(sample.robot.body_velocity.z);
+        let Some(gait) = &sample.gait else { continue };
+        for (k, phase) in gait.phases.iter().enumerate() {
+            if matches!(phase, LegPhase::Swing(s) if *s > 0.5) {
+                let target = sample.robot.body.transform_point3(gait.feet[k]);
+                let ground = terrain.height(target.x, target.y) + model.legs[k].foot.radius;
+                deepest = deepest.max(ground - target.z);
+            }
+        }
+    }
+    assert!(walk.failure().is_none());
+    println!(
+        "late swings' targets {:.2} mm under the ground at most; body rising {:.2} m/s at most",
+        deepest * 1e3,
+        rise
+    );
+    assert!(deepest < 0.002, "a target {:.1} mm under", deepest * 1e3);
+    assert!(rise < 0.25, "the body rose at {rise:.2} m/s");
+}

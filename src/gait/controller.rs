@@ -598,6 +598,12 @@ impl GaitController {
         }
     }
 
+    /// The fastest a perceptive stance target sinks or rises (m/s): the nominal swing's speed at
+    /// touch-down ([`slew::landing_speed`]).
+    pub fn landing_speed(&self) -> f64 {
+        slew::landing_speed(&self.spec)
+    }
+
     pub fn gait(&self) -> &Gait {
         &self.spec
     }

@@ -76,6 +76,9 @@ pub struct Walker {
     /// Its rate of change (m/s), for the tracker, and its slope along the world's x and y.
     ground_rate: f64,
     world_slope: glam::DVec2,
+    /// The body's reference ground as the last step planned it ([`BodyReference`]); None until
+    /// the first step that follows the terrain.
+    reference: Option<BodyReference>,
     /// The body started tilted (set down parallel to a slope: `Attitude::Ground`): following
     /// the terrain, the levelling is ramped in over [`LEVELLING_RAMP`] from it.
     tilted_start: bool,
@@ -111,6 +114,43 @@ impl GroundPlane {
     /// The plane's rise above its level under a body-frame point.
     fn rise(&self, p: DVec3) -> f64 {
         self.slope.dot(p.truncate() - self.centre)
+    }
+}
+
+/// The ground the legs' targets are measured from when following the terrain: a plane of world
+/// heights, `height` at the world point `at`, rising by `slope` (world x, y). A foot's target
+/// stands `terrain − reference` above its neutral height, so the plane is the body's planned
+/// height and attitude: its level, the share of the flight's slope the body takes, its crouch.
+/// Moved no faster at any foot than a swing lands ([`GaitController::landing_speed`]), for the
+/// stance and the swing feet alike (see [`Walker::body_reference`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct BodyReference {
+    at: glam::DVec2,
+    height: f64,
+    slope: glam::DVec2,
+}
+
+impl BodyReference {
+    fn height_at(&self, w: glam::DVec2) -> f64 {
+        self.height + self.slope.dot(w - self.at)
+    }
+
+    /// `self` moved towards `next` as far as moves no point of `points` (world) more than `most`.
+    fn towards(&self, next: &Self, points: impl Iterator<Item = glam::DVec2>, most: f64) -> Self {
+        let moved = points
+            .map(|w| (next.height_at(w) - self.height_at(w)).abs())
+            .fold(0.0, f64::max);
+        if moved <= most {
+            return *next;
+        }
+        // the change is affine in the point, so a share of it moves each point by that share
+        let share = most / moved;
+        let here = self.height_at(next.at);
+        BodyReference {
+            at: next.at,
+            height: here + share * (next.height - here),
+            slope: self.slope + share * (next.slope - self.slope),
+        }
     }
 }
 
@@ -214,6 +254,7 @@ impl Walker {
             standing: None,
             ground_rate: 0.0,
             world_slope: glam::DVec2::ZERO,
+            reference: None,
             tilted_start,
         }
     }
@@ -376,36 +417,72 @@ impl Walker {
         held
     }
 
-    /// How far the terrain under a body-frame point lies above the body's ground `plane`, split
-    /// as the legs can follow it ([`GaitController::levelling`]): the terrain's departure from
-    /// the plane (a stair's treads, a bump) in full, the plane's own rise under the foot (a
-    /// slope, a flight of stairs) by the share λ the legs reach. The rest of the plane's tilt
-    /// the body takes: it pitches with a flight of stairs steeper than its legs can level. A body
-    /// set down tilted is brought to that share over [`LEVELLING_RAMP`]. Less the body's offset
-    /// over it ([`GaitController::body_offset`]): it crouches into dips its legs cannot reach.
-    fn ground_within_reach<'a>(
-        hexapod: &'a Hexapod,
-        controller: &GaitController,
-        plane: GroundPlane,
-        standing: &StandingPoints,
-        tilted_start: bool,
-    ) -> impl Fn(DVec3) -> f64 + 'a {
+    /// The body's reference ([`BodyReference`]): the terrain under a body-frame point less the
+    /// reference is how far its foot reaches up or down. Split as the legs can follow it
+    /// ([`GaitController::levelling`]): the terrain's departure from the body's ground `plane`
+    /// (a stair's treads, a bump) in full, the plane's own rise under the foot (a slope, a
+    /// flight of stairs) by the share λ the legs reach. The rest of the plane's tilt the body
+    /// takes: it pitches with a flight of stairs steeper than its legs can level. A body set
+    /// down tilted is brought to that share over [`LEVELLING_RAMP`]. Less the body's offset over
+    /// it ([`GaitController::body_offset`]): it crouches into dips its legs cannot reach.
+    ///
+    /// The reference moves no faster at any point of the feet's stance tracks than a swing
+    /// lands. It steps as a hip crosses a riser (the plane's fit, the share λ, the crouch): on
+    /// 12 cm stairs down hexaross's share fell from 1 to 0 as its front hips passed the top's
+    /// edge, and the reference pitched at 0.3 m/s at its rear feet and rose 7 cm in 0.12 s. The
+    /// stance feet followed at the landing speed (theirs is bounded,
+    /// [`GaitController::targets_on`]), the swinging feet in full: two landed 7 mm under the top
+    /// landing and threw the body up, the front one 2 cm over the tread below, and the robot
+    /// tumbled down the flight.
+    fn body_reference(&mut self, plane: GroundPlane, standing: &StandingPoints) -> BodyReference {
+        let hexapod = &self.hexapod;
+        let controller = &self.controller;
         let terrain = Self::terrain_under(hexapod);
         // the plane through the hips' ground as it is now, at the tracked slope: its level
         // lags while the body lands or slides, and that lag is the body's, levelled by λ with
         // the rest (followed in full, it pushed hex18 11 mm down a 30° slope while standing)
-        let residual = move |p: DVec3| terrain(p) - plane.measured - plane.rise(p);
-        let planar = move |p: DVec3| plane.measured - plane.level + plane.rise(p);
+        let residual = |p: DVec3| terrain(p) - plane.measured - plane.rise(p);
+        let planar = |p: DVec3| plane.measured - plane.level + plane.rise(p);
         // a body set down tilted is brought to it over LEVELLING_RAMP
-        let ramp = if tilted_start {
+        let ramp = if self.tilted_start {
             (hexapod.time() / LEVELLING_RAMP).min(1.0)
         } else {
             1.0
         };
-        let share = ramp * controller.levelling(&residual, planar, &standing.feet());
-        let followed = move |p: DVec3| residual(p) + share * planar(p);
-        let raised = controller.body_offset(&followed, &standing.tracks);
-        move |p| followed(p) - raised
+        let share = ramp * controller.levelling(residual, planar, &standing.feet());
+        let followed = |p: DVec3| residual(p) + share * planar(p);
+        let raised = controller.body_offset(followed, &standing.tracks);
+        // terrain − followed + raised, a plane: (1 − λ)·(measured + rise) + λ·level + raised
+        let (center, heading) = Self::level_frame(hexapod);
+        let to_world = |p: glam::DVec2| center.truncate() + heading.transform_vector2(p);
+        let next = BodyReference {
+            at: to_world(plane.centre),
+            height: (1.0 - share) * plane.measured + share * plane.level + raised,
+            slope: heading.transform_vector2((1.0 - share) * plane.slope),
+        };
+        let reference = match self.reference {
+            None => next,
+            Some(last) => {
+                let most = controller.landing_speed() * hexapod.dt();
+                let points = standing.tracks.iter().flatten();
+                last.towards(&next, points.map(|p| to_world(p.truncate())), most)
+            }
+        };
+        self.reference = Some(reference);
+        reference
+    }
+
+    /// How far the terrain under a body-frame point lies above the body's `reference`.
+    fn ground_within_reach(
+        hexapod: &Hexapod,
+        reference: BodyReference,
+    ) -> impl Fn(DVec3) -> f64 + '_ {
+        let terrain = Self::terrain_under(hexapod);
+        let (center, heading) = Self::level_frame(hexapod);
+        move |p: DVec3| {
+            let w = center.truncate() + heading.transform_vector2(p.truncate());
+            terrain(p) - reference.height_at(w)
+        }
     }
 
     /// Sets the servos' targets to the legs' `angles`, held against the load of the feet in
@@ -581,13 +658,8 @@ impl Walker {
                 }
                 let standing = self.standing_points();
                 let plane = self.ground_reference(&standing);
-                let ground = Self::ground_within_reach(
-                    &self.hexapod,
-                    &self.controller,
-                    plane,
-                    &standing,
-                    self.tilted_start,
-                );
+                let reference = self.body_reference(plane, &standing);
+                let ground = Self::ground_within_reach(&self.hexapod, reference);
                 self.controller.targets_on(t, command, blend, ground)
             } else {
                 self.controller.targets(t, command, blend)
@@ -599,13 +671,8 @@ impl Walker {
             // stand level from the start, so the walk does not begin tilted with the ground
             let standing = self.standing_points();
             let plane = self.ground_reference(&standing);
-            let ground = Self::ground_within_reach(
-                &self.hexapod,
-                &self.controller,
-                plane,
-                &standing,
-                self.tilted_start,
-            );
+            let reference = self.body_reference(plane, &standing);
+            let ground = Self::ground_within_reach(&self.hexapod, reference);
             let angles = self.controller.standing_on(ground);
             self.set_leg_targets(&angles, [true; 6]);
         } else if self.load_feedforward {
@@ -648,4 +715,59 @@ fn within(from: (DVec3, glam::DMat3), to: (DVec3, glam::DMat3), distance: f64, t
 /// The body's heading: the yaw of its x axis seen from above (rad, in (−π, π]).
 fn heading_of(body: &glam::DMat3) -> f64 {
     body.x_axis.y.atan2(body.x_axis.x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::BodyReference;
+    use glam::DVec2;
+
+    /// A step of the reference towards a plan pitched 0.3 and raised 7 cm (hexaross's first edge
+    /// of 12 cm stairs down): the foot it moves most moves the bound, every foot moves by the
+    /// same share of its own change, and a step within the bound is taken whole.
+    #[test]
+    fn the_reference_moves_no_foot_faster_than_the_bound() {
+        let last = BodyReference {
+            at: DVec2::ZERO,
+            height: 0.10,
+            slope: DVec2::ZERO,
+        };
+        let next = BodyReference {
+            at: DVec2::new(0.01, 0.0),
+            height: 0.17,
+            slope: DVec2::new(-0.3, 0.05),
+        };
+        let feet = [
+            (-0.2, 0.15),
+            (0.0, 0.2),
+            (0.2, 0.15),
+            (-0.2, -0.15),
+            (0.0, -0.2),
+        ]
+        .map(|(x, y)| DVec2::new(x, y));
+        let most = 0.19e-3;
+        let moved = last.towards(&next, feet.into_iter(), most);
+        let shares: Vec<f64> = feet
+            .iter()
+            .map(|&w| {
+                let step = moved.height_at(w) - last.height_at(w);
+                assert!(step.abs() <= most * (1.0 + 1e-12), "moved {step} at {w}");
+                step / (next.height_at(w) - last.height_at(w))
+            })
+            .collect();
+        assert!(
+            shares.iter().all(|s| (s - shares[0]).abs() < 1e-9),
+            "{shares:?}"
+        );
+        let worst = feet
+            .iter()
+            .map(|&w| (moved.height_at(w) - last.height_at(w)).abs())
+            .fold(0.0, f64::max);
+        assert!((worst - most).abs() < 1e-12, "the worst foot moved {worst}");
+        let near = BodyReference {
+            height: 0.1001,
+            ..last
+        };
+        assert_eq!(last.towards(&near, feet.into_iter(), most), near);
+    }
 }
