@@ -908,7 +908,7 @@ impl GaitController {
             if let (Some(dt), Some(_), LegPhase::Stance(_)) = (elapsed, &ground, phase) {
                 // perceptive: a standing foot's target sinks or rises no faster than a swing
                 // lands ([`slew::landing_speed`])
-                let most = slew::landing_speed(&self.spec) * dt;
+                let most = self.landing_speed() * dt;
                 let last = self.last_planned[k].z;
                 foot.z = foot.z.max(last - most).min(last + most);
             }

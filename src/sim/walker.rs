@@ -477,11 +477,12 @@ impl Walker {
         hexapod: &Hexapod,
         reference: BodyReference,
     ) -> impl Fn(DVec3) -> f64 + '_ {
-        let terrain = Self::terrain_under(hexapod);
+        // the point turned into the world once, for the terrain and the reference both
+        let terrain = hexapod.terrain();
         let (center, heading) = Self::level_frame(hexapod);
         move |p: DVec3| {
-            let w = center.truncate() + heading.transform_vector2(p.truncate());
-            terrain(p) - reference.height_at(w)
+            let w = center + heading * p;
+            terrain.height(w.x, w.y) - reference.height_at(w.truncate())
         }
     }
 
