@@ -177,6 +177,25 @@ fn walker_with(
     settle: f64,
     articulation: Articulation,
 ) -> Walker {
+    walker_on(
+        model,
+        ground,
+        placement,
+        controller,
+        settle,
+        settings(articulation),
+    )
+}
+
+/// [`walker_with`] with settings of its own.
+fn walker_on(
+    model: Arc<RobotModel>,
+    ground: HeightGrid,
+    placement: Placement,
+    controller: GaitController,
+    settle: f64,
+    settings: HexapodSettings,
+) -> Walker {
     let command = VelocityCommand {
         forward: controller.gait().nominal_speed(),
         ..Default::default()
@@ -186,7 +205,7 @@ fn walker_with(
         model,
         Arc::new(ground),
         ContactModel::default(),
-        settings(articulation),
+        settings,
         placement,
         &pose,
     );
@@ -448,20 +467,7 @@ fn creep_on_a_30_degree_slope_with(settings: HexapodSettings, levelled: bool, ya
     };
     // standing all the while: the gait would start after 60 s
     let controller = GaitController::new(&model, tripod()).unwrap();
-    let pose = standing_pose(&model, &controller);
-    let hexapod = Hexapod::new(
-        model,
-        Arc::new(ground),
-        ContactModel::default(),
-        settings,
-        place,
-        &pose,
-    );
-    let command = VelocityCommand {
-        forward: controller.gait().nominal_speed(),
-        ..Default::default()
-    };
-    let mut walker = Walker::new(hexapod, controller, command, 60.0);
+    let mut walker = walker_on(model, ground, place, controller, 60.0, settings);
     walker.terrain_following = levelled;
     let landing: Vec<HexapodSample> = (0..1000).map(|_| walker.step().robot).collect();
     let start = landing.last().unwrap().body.translation;
