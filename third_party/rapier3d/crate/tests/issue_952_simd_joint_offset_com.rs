@@ -5,9 +5,10 @@
 //! body whose CoM is offset from its origin was pinned at the CoM instead of at the anchor,
 //! displacing the body by exactly the CoM offset.
 //!
-//! The SIMD joint path only kicks in once a single constraint color holds at least
-//! `JOINT_BATCH * LAYOUT_REF_WORKERS / 2` (= 64) joints, so the scene must be big enough:
-//! with fewer joints everything falls back to the (correct) scalar path and the bug hides.
+//! The SIMD joint path kicks in once a single constraint color holds at least
+//! `JOINT_BATCH * LAYOUT_REF_WORKERS / 2` (= 64) joints, so the scene is made big enough. (In
+//! an island of fewer joints a color of two or more is chunked too since hexsim's patch 0014;
+//! `tests/small_island_simd_joints.rs` checks that case.)
 
 use rapier3d::prelude::*;
 
@@ -65,7 +66,7 @@ fn max_anchor_error(n: usize) -> f32 {
 
 #[test]
 fn simd_joints_respect_offset_center_of_mass() {
-    // Small scene: scalar path only. Establishes the reference accuracy.
+    // Small scene: chunked too since hexsim's patch 0014 (its 8 joints share one color).
     let scalar_err = max_anchor_error(8);
     assert!(
         scalar_err < 1.0e-2,

@@ -124,6 +124,7 @@ impl StagedIslandSolver {
 
             // Calibrated for LAYOUT_REF_WORKERS, NOT the pool size (see that constant's docs).
             let min_color_joints = JOINT_BATCH * LAYOUT_REF_WORKERS / 2;
+            let num_joints = joints.two_body_interactions.len();
             let num_groups = self.groups.len();
 
             // Slot -> group-index table; a joint's group is the max group index over its awake
@@ -168,7 +169,7 @@ impl StagedIslandSolver {
                         continue;
                     }
                     // Color 128 is the "couldn't color" bucket: always serial.
-                    if color_bit < 128 && subset.len() >= min_color_joints {
+                    if simd_color(color_bit, subset.len(), num_joints, min_color_joints) {
                         parallel_by_group[gi].push((color_bit, subset.clone()));
                     } else {
                         scalar_by_group[gi].extend_from_slice(subset);
@@ -356,7 +357,12 @@ impl StagedIslandSolver {
             let color = self.joint_colors.group(color_id);
             let color_bit = self.joint_colors.group_color(color_id);
             // Color 128 is the "couldn't color" bucket: always serial overflow.
-            let parallel = color_bit < 128 && color.len() >= min_color_joints;
+            let parallel = simd_color(
+                color_bit,
+                color.len(),
+                joints.two_body_interactions.len(),
+                min_color_joints,
+            );
             if !parallel {
                 self.joint_overflow_workspace.extend_from_slice(color);
                 continue;
@@ -558,4 +564,15 @@ fn body_contact_color_mask(contact_color_masks: &[u128], h: RigidBodyHandle) -> 
         .get(h.into_raw_parts().0 as usize)
         .copied()
         .unwrap_or(0)
+}
+
+/// Whether a joint color is laid out in SIMD chunks, a solver stage of its own, rather than in
+/// worker 0's scalar overflow. A color large enough to share among workers always is. So is any
+/// color of two joints or more when the island has too few joints for any color to be that large
+/// (a robot's 18 leg joints): a chunk solves up to `SIMD_WIDTH` joints for one scalar joint's
+/// instructions, and a scene that small has no parallel stage for the extra stages to slow down.
+/// The rule reads the island, never the pool, so the layout stays the same on any thread count.
+fn simd_color(color_bit: u8, color_len: usize, num_joints: usize, min_color_joints: usize) -> bool {
+    color_bit < 128
+        && (color_len >= min_color_joints || (num_joints < min_color_joints && color_len >= 2))
 }
