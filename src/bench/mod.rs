@@ -369,6 +369,8 @@ pub const RAPIER_PATCHES: &[(&str, &[u8])] = &[
     patch!("0011-multibody-skip-the-start-of-step-writeback-when-noth.patch"),
     patch!("0012-multibody-factorise-along-the-tree-without-re-listin.patch"),
     patch!("0013-multibody-optionally-integrate-the-Coriolis-forces-e.patch"),
+    patch!("0014-solver-lay-small-joint-colors-out-in-SIMD-chunks-in-.patch"),
+    patch!("0015-solver-read-a-joint-s-body-velocities-once-for-all-i.patch"),
 ];
 
 /// The patch series in a line: how many, the first and last number, and the first 12 hex digits

@@ -6,7 +6,6 @@ use crate::dynamics::{
 use crate::math::{ANG_DIM, DIM, Real, SPATIAL_DIM};
 use crate::utils::{ComponentMul, DotProduct, ScalarType, SimdRealCopy};
 
-use crate::dynamics::solver::solver_body::SolverBodies;
 use crate::math::{SIMD_WIDTH, SimdReal};
 use na::SimdValue;
 use parry::math::Pose;
@@ -357,26 +356,6 @@ impl JointConstraint<Real, 1> {
         len
     }
 
-    pub fn solve(&mut self, solver_vels: &mut SolverBodies) {
-        let mut solver_vel1 = solver_vels.get_vel(self.solver_vel1[0]);
-        let mut solver_vel2 = solver_vels.get_vel(self.solver_vel2[0]);
-
-        self.solve_generic(&mut solver_vel1, &mut solver_vel2);
-
-        solver_vels.set_vel(self.solver_vel1[0], solver_vel1);
-        solver_vels.set_vel(self.solver_vel2[0], solver_vel2);
-    }
-
-    pub fn warmstart(&mut self, solver_vels: &mut SolverBodies) {
-        let mut solver_vel1 = solver_vels.get_vel(self.solver_vel1[0]);
-        let mut solver_vel2 = solver_vels.get_vel(self.solver_vel2[0]);
-
-        self.warmstart_generic(&mut solver_vel1, &mut solver_vel2);
-
-        solver_vels.set_vel(self.solver_vel1[0], solver_vel1);
-        solver_vels.set_vel(self.solver_vel2[0], solver_vel2);
-    }
-
     pub fn writeback_impulses(&self, joints_all: &mut [JointGraphEdge]) {
         let joint = &mut joints_all[self.joint_id[0]].weight;
         match self.writeback_id {
@@ -504,26 +483,6 @@ impl JointConstraint<SimdReal, SIMD_WIDTH> {
 
         JointConstraintHelper::finalize_constraints(&mut out[group_start..len]);
         len
-    }
-
-    pub fn solve(&mut self, solver_vels: &mut SolverBodies) {
-        let mut solver_vel1 = solver_vels.gather_vels(self.solver_vel1);
-        let mut solver_vel2 = solver_vels.gather_vels(self.solver_vel2);
-
-        self.solve_generic(&mut solver_vel1, &mut solver_vel2);
-
-        solver_vels.scatter_vels(self.solver_vel1, solver_vel1);
-        solver_vels.scatter_vels(self.solver_vel2, solver_vel2);
-    }
-
-    pub fn warmstart(&mut self, solver_vels: &mut SolverBodies) {
-        let mut solver_vel1 = solver_vels.gather_vels(self.solver_vel1);
-        let mut solver_vel2 = solver_vels.gather_vels(self.solver_vel2);
-
-        self.warmstart_generic(&mut solver_vel1, &mut solver_vel2);
-
-        solver_vels.scatter_vels(self.solver_vel1, solver_vel1);
-        solver_vels.scatter_vels(self.solver_vel2, solver_vel2);
     }
 
     pub fn writeback_impulses(&self, joints_all: &mut [JointGraphEdge]) {

@@ -101,21 +101,34 @@ pub(super) unsafe fn solve_pass(
 
     // Helpers solving one scalar joint (all its rows), one SIMD joint chunk, or
     // one contact chunk.
+    //
+    // A joint's rows (or a chunk's) all act on the same two bodies (lanes of bodies): their
+    // velocities are read once before the rows and written once after them, instead of around
+    // every row. The same arithmetic: each row reads what the row before it wrote.
     let solve_joint = |joint_id: usize| {
         // SAFETY: constraints of a same color (or claimed by worker 0's exclusive
         // overflow stage) touch bodies no other concurrent constraint touches.
         let vs = unsafe { &mut *ctx.velocity_solver };
         let joints = unsafe { &mut *ctx.joint_constraints };
-        for row in ctx.joint_rows[joint_id].clone() {
+        let rows = ctx.joint_rows[joint_id].clone();
+        let Some(first) = joints.velocity_constraints.get(rows.start) else {
+            return;
+        };
+        let (body1, body2) = (first.solver_vel1[0], first.solver_vel2[0]);
+        let mut vel1 = vs.solver_bodies.get_vel(body1);
+        let mut vel2 = vs.solver_bodies.get_vel(body2);
+        for row in rows {
             let c = &mut joints.velocity_constraints[row];
             if wo_bias {
                 c.remove_bias_from_rhs();
             }
             if warmstart_joints {
-                c.warmstart(&mut vs.solver_bodies);
+                c.warmstart_generic(&mut vel1, &mut vel2);
             }
-            c.solve(&mut vs.solver_bodies);
+            c.solve_generic(&mut vel1, &mut vel2);
         }
+        vs.solver_bodies.set_vel(body1, vel1);
+        vs.solver_bodies.set_vel(body2, vel2);
     };
     let solve_joint_chunk = |chunk_id: usize| {
         // SAFETY: same argument as `solve_joint`; the lanes of a chunk share a color, so are
@@ -123,16 +136,25 @@ pub(super) unsafe fn solve_pass(
         // values, so their duplicated scatter is value-identical).
         let vs = unsafe { &mut *ctx.velocity_solver };
         let joints = unsafe { &mut *ctx.joint_constraints };
-        for row in ctx.joint_chunk_rows[chunk_id].clone() {
+        let rows = ctx.joint_chunk_rows[chunk_id].clone();
+        let Some(first) = joints.simd_velocity_constraints.get(rows.start) else {
+            return;
+        };
+        let (bodies1, bodies2) = (first.solver_vel1, first.solver_vel2);
+        let mut vels1 = vs.solver_bodies.gather_vels(bodies1);
+        let mut vels2 = vs.solver_bodies.gather_vels(bodies2);
+        for row in rows {
             let c = &mut joints.simd_velocity_constraints[row];
             if wo_bias {
                 c.remove_bias_from_rhs();
             }
             if warmstart_joints {
-                c.warmstart(&mut vs.solver_bodies);
+                c.warmstart_generic(&mut vels1, &mut vels2);
             }
-            c.solve(&mut vs.solver_bodies);
+            c.solve_generic(&mut vels1, &mut vels2);
         }
+        vs.solver_bodies.scatter_vels(bodies1, vels1);
+        vs.solver_bodies.scatter_vels(bodies2, vels2);
     };
     let solve_chunk = |chunk_id: usize| {
         // SAFETY: same argument as `solve_joint`.
