@@ -34,13 +34,16 @@ pub enum Articulation {
 }
 
 /// Constraint-solver sweeps per substep for impulse joints by default.
-pub const IMPULSE_PGS_ITERATIONS: usize = 3;
+pub const IMPULSE_PGS_ITERATIONS: usize = 5;
 
 impl Articulation {
     /// Constraint-solver sweeps per substep unless set: the multibody has no constraints to
-    /// solve (its servos are implicit springs), so one; impulse joints are held by the solver:
-    /// with 3 sweeps a foot slides at most 2.3 mm per stance on V12 (4: 1.7 mm; 6: 1.3 mm), with
-    /// 2 the legs shake loose and the feet slide metres (measured; see docs/performance.md).
+    /// solve (its servos are implicit springs), so one; impulse joints are held by the solver,
+    /// and 5 sweeps hold a levelled stance on 30° (V21) where on 3 a lightly loaded foot falls
+    /// into a period-2 oscillation with the joints and the stance slides 2.4 m (4: it slides
+    /// facing up or down the slope). On V12 a foot slides at most 1.3 mm per stance with 5
+    /// sweeps, 2.3 mm with 3; with 2 the legs shake loose and the feet slide metres. Since rapier
+    /// patches 0014–0015 5 sweeps cost less than 3 did before (docs/performance.md).
     pub fn default_pgs_iterations(self) -> usize {
         match self {
             Articulation::Multibody => 1,
