@@ -122,8 +122,6 @@ impl StagedIslandSolver {
             self.joint_overflow_workspace.clear();
             self.staged_group_joint_layout.clear();
 
-            // Calibrated for LAYOUT_REF_WORKERS, NOT the pool size (see that constant's docs).
-            let min_color_joints = JOINT_BATCH * LAYOUT_REF_WORKERS / 2;
             let num_joints = joints.two_body_interactions.len();
             let num_groups = self.groups.len();
 
@@ -169,7 +167,7 @@ impl StagedIslandSolver {
                         continue;
                     }
                     // Color 128 is the "couldn't color" bucket: always serial.
-                    if simd_color(color_bit, subset.len(), num_joints, min_color_joints) {
+                    if simd_color(color_bit, subset.len(), num_joints) {
                         parallel_by_group[gi].push((color_bit, subset.clone()));
                     } else {
                         scalar_by_group[gi].extend_from_slice(subset);
@@ -345,8 +343,7 @@ impl StagedIslandSolver {
         self.joint_chunk_rows.clear();
         self.joint_overflow_workspace.clear();
 
-        // Calibrated for LAYOUT_REF_WORKERS, NOT the pool size (see that constant's docs).
-        let min_color_joints = JOINT_BATCH * LAYOUT_REF_WORKERS / 2;
+        let num_joints = joints.two_body_interactions.len();
 
         // Pass 1 (SIMD): parallel colors -> SIMD chunk lanes, cut at row-signature boundaries
         // (stable sort keeps in-color order deterministic); ineligible joints fall back to the
@@ -357,12 +354,7 @@ impl StagedIslandSolver {
             let color = self.joint_colors.group(color_id);
             let color_bit = self.joint_colors.group_color(color_id);
             // Color 128 is the "couldn't color" bucket: always serial overflow.
-            let parallel = simd_color(
-                color_bit,
-                color.len(),
-                joints.two_body_interactions.len(),
-                min_color_joints,
-            );
+            let parallel = simd_color(color_bit, color.len(), num_joints);
             if !parallel {
                 self.joint_overflow_workspace.extend_from_slice(color);
                 continue;
@@ -566,13 +558,16 @@ fn body_contact_color_mask(contact_color_masks: &[u128], h: RigidBodyHandle) -> 
         .unwrap_or(0)
 }
 
-/// Whether a joint color is laid out in SIMD chunks, a solver stage of its own, rather than in
-/// worker 0's scalar overflow. A color large enough to share among workers always is. So is any
-/// color of two joints or more when the island has too few joints for any color to be that large
-/// (a robot's 18 leg joints): a chunk solves up to `SIMD_WIDTH` joints for one scalar joint's
-/// instructions, and a scene that small has no parallel stage for the extra stages to slow down.
-/// The rule reads the island, never the pool, so the layout stays the same on any thread count.
-fn simd_color(color_bit: u8, color_len: usize, num_joints: usize, min_color_joints: usize) -> bool {
+/// Whether a joint color of `color_len` joints, among `num_joints` to lay out, goes in SIMD
+/// chunks, a solver stage of its own, rather than in worker 0's scalar overflow. A color large
+/// enough to share among workers always does. So does any color of two joints or more when there
+/// are too few joints for any color to be that large (a robot's 18 leg joints): a chunk solves up
+/// to `SIMD_WIDTH` joints for about one scalar joint's instructions. (With the `parallel` feature
+/// each such stage is one more wait at a barrier; a scene that small is not worth sharing.) The
+/// rule reads the joints, never the pool, so the layout is the same on any thread count.
+fn simd_color(color_bit: u8, color_len: usize, num_joints: usize) -> bool {
+    // Calibrated for LAYOUT_REF_WORKERS, NOT the pool size (see that constant's docs).
+    let min_color_joints = JOINT_BATCH * LAYOUT_REF_WORKERS / 2;
     color_bit < 128
         && (color_len >= min_color_joints || (num_joints < min_color_joints && color_len >= 2))
 }
