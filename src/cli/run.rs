@@ -126,8 +126,8 @@ pub struct RunArgs {
     #[arg(long, default_value_t = hexsim::sim::DEFAULT_SOLVER_ITERATIONS)]
     solver_iterations: usize,
     /// Constraint-solver sweeps per substep. Default: 1 for the multibody (it has no
-    /// constraints), 3 for impulse joints (the joints are held by the solver: with 2 the legs
-    /// shake loose)
+    /// constraints), 5 for impulse joints (the joints are held by the solver: with 2 the legs
+    /// shake loose, and a stance levelled on a 30° slope needs 5)
     #[arg(long)]
     pgs_iterations: Option<usize>,
     /// Recording file (.rrd) for the rerun viewer.

@@ -143,7 +143,7 @@ pub struct ScenarioSpec {
     /// rapier substeps per step (default 1).
     #[serde(default)]
     pub solver_iterations: Option<usize>,
-    /// Constraint-solver sweeps per substep (default: 1 for the multibody, 3 for impulse joints).
+    /// Constraint-solver sweeps per substep (default: 1 for the multibody, 5 for impulse joints).
     #[serde(default)]
     pub pgs_iterations: Option<usize>,
     #[serde(default)]
