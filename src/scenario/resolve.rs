@@ -42,10 +42,13 @@ impl Scenario {
         let mut warnings = Vec::new();
         let setup = match spec.kind {
             Kind::Ball => Setup::Ball(resolve_ball(&spec, &contact).map_err(fail)?),
-            Kind::Walk => Setup::Walk(Box::new(
-                resolve_walk(&spec, &mut contact, base, &mut inputs, &mut warnings)
-                    .map_err(fail)?,
-            )),
+            Kind::Walk => {
+                let walls = impulse_against_walls(&spec, &terrain).map_err(fail)?;
+                Setup::Walk(Box::new(
+                    resolve_walk(&spec, &mut contact, base, walls, &mut inputs, &mut warnings)
+                        .map_err(fail)?,
+                ))
+            }
         };
         if let Setup::Walk(w) = &setup {
             // the step the walk chose (smaller than the default for a robot with light legs)
@@ -338,11 +341,26 @@ fn check_ball_scale(b: &super::spec::BallSpec) -> Result<(), String> {
     Ok(())
 }
 
-/// A walk's robot, gait, commands and settings.
+/// Whether a walk's feet are impulse joints' and its terrain has walls (cliffs), where the time
+/// step has a bound of its own (`time_step::wall_step`). The terrain is built to be asked, once
+/// more than the run builds it, and only for impulse walks.
+fn impulse_against_walls(spec: &ScenarioSpec, terrain: &TerrainSource) -> Result<bool, String> {
+    if spec.articulation != Some(crate::sim::Articulation::Impulse) {
+        return Ok(false);
+    }
+    let grid = terrain
+        .spec
+        .build(&terrain.origin)
+        .map_err(|e| format!("terrain: {e}"))?;
+    Ok(grid.has_cliffs())
+}
+
+/// A walk's robot, gait, commands and settings. `walls`: its impulse joints' feet meet walls.
 fn resolve_walk(
     spec: &ScenarioSpec,
     contact: &mut ContactModel,
     base: &Path,
+    walls: bool,
     inputs: &mut Inputs,
     warnings: &mut Vec<String>,
 ) -> Result<WalkSetup, String> {
@@ -377,7 +395,7 @@ fn resolve_walk(
         dt: spec.dt,
         allow_unstable: spec.allow_unstable_dt,
     };
-    let contact_step = time_step::contact_step(
+    let mut contact_step = time_step::contact_step(
         requested,
         &robot,
         contact,
@@ -385,6 +403,12 @@ fn resolve_walk(
         support,
         given.stiffness,
     )?;
+    if walls
+        && let Some(wall) = time_step::wall_step(&robot, contact)
+        && wall.limit < contact_step.limit
+    {
+        contact_step = wall;
+    }
     let settle = spec.settle.unwrap_or(DEFAULT_SETTLE);
     check_number(settle, Range::NonNegative, "s").map_err(|e| format!("settle: {e}"))?;
     let most = crate::limits::MAX_ITERATIONS;
@@ -568,4 +592,55 @@ fn resolve_commands(spec: &ScenarioSpec, gait: &Gait) -> Result<CommandSchedule,
             .collect(),
     };
     CommandSchedule::new(changes)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    /// The step a walk scenario resolves to, and its warnings.
+    fn step_of(text: &str) -> (f64, Vec<String>) {
+        let table: toml::Table = text.parse().unwrap();
+        let scenario =
+            super::super::from_table(table, "t".into(), Path::new("/nonexistent/t.toml")).unwrap();
+        (scenario.spec.dt(), scenario.warnings)
+    }
+
+    const STAIRS: &str = r#"
+        duration = 1.0
+        [terrain.source]
+        kind = "steps"
+        step_height = 0.06
+        step_length = 0.3
+        first_step = 0.3
+        size = [3.0, 2.0]
+        cell = 0.01
+    "#;
+
+    /// hex18's impulse feet against stairs' risers get half the step, said in a warning; on
+    /// the default terrain (no walls) they keep 1 ms, and so does the multibody on stairs.
+    #[test]
+    fn impulse_joints_on_terrain_with_walls_halve_the_step() {
+        let (dt, warnings) = step_of(&format!("articulation = \"impulse\"\n{STAIRS}"));
+        assert_eq!(dt, 0.0005);
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.starts_with("dt: 0.500 ms") && w.contains("walls")),
+            "{warnings:?}"
+        );
+        let (dt, warnings) = step_of(&format!("articulation = \"multibody\"\n{STAIRS}"));
+        assert_eq!(dt, 0.001, "{warnings:?}");
+        let (dt, warnings) = step_of("articulation = \"impulse\"\nduration = 1.0");
+        assert_eq!(dt, 0.001, "{warnings:?}");
+        // a step given is kept, with the bound named
+        let (dt, warnings) = step_of(&format!("articulation = \"impulse\"\ndt = 0.001\n{STAIRS}"));
+        assert_eq!(dt, 0.001);
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains("larger than hexsim would choose (0.500 ms)")),
+            "{warnings:?}"
+        );
+    }
 }

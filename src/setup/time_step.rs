@@ -9,6 +9,7 @@ use crate::limits::num;
 use crate::robot::RobotModel;
 use crate::robot::statics::foot_load;
 use crate::sim::{Articulation, STANDARD_GRAVITY, ServoGains};
+use rapier3d::na;
 
 /// The default step (s), and the one hexsim divides when a bound asks for less.
 pub const DEFAULT_DT: f64 = 1e-3;
@@ -122,6 +123,55 @@ pub fn contact_step(
         step = touchdown;
     }
     Ok(step)
+}
+
+/// The step the contact spring allows impulse joints' feet against a wall (a terrain with
+/// cliffs): there a foot is pushed sideways, and a free link pushed at its foot turns as it
+/// moves, so the spring acts on 1/(1/m + |r × n|²/I) — hex18's tibia 0.015 kg against its
+/// 0.05 kg, √(k/m)·dt = 1.16 at 1 ms. The multibody's foot moves its leg with it and needs no
+/// such bound; on ground without walls the push is along the leg, on its mass, as
+/// [`contact_step`] takes it. Measured (docs/rough-ground-log.md, *Impulse joints against
+/// walls*): hex18's impulse ladder diverged in 6 runs of 104 at 1 ms, 2 at 0.5 ms.
+pub fn wall_step(robot: &RobotModel, contact: &ContactModel) -> Option<ContactStep> {
+    let (foot, mass) = robot
+        .legs
+        .iter()
+        .map(|leg| {
+            let link = &robot.links[leg.foot_link];
+            (
+                link.name.clone(),
+                side_mass(link.mass, &link.inertia, leg.foot.center - link.com),
+            )
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    Some(ContactStep {
+        limit: CONTACT_STEP_LIMIT / (contact.normal.stiffness() / mass).sqrt(),
+        what: format!(
+            "on a terrain with walls, impulse joints' feet are pushed sideways: the contact spring \
+             (k = {} N/m) on the foot link `{foot}` pushed at its foot ({} kg, the link turning \
+             as it moves) needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}",
+            num(contact.normal.stiffness()),
+            four_digits(mass)
+        ),
+    })
+}
+
+/// The least mass a free body of `mass` and `inertia` (about its centre of mass) presents to a
+/// push at `arm` from that centre, over every direction n: 1/λ_max(W), W = 1/m + [r]×ᵀ·I⁻¹·[r]×
+/// (the point's mobility). A body that cannot turn (no inertia) presents its mass.
+fn side_mass(mass: f64, inertia: &glam::DMat3, arm: glam::DVec3) -> f64 {
+    let Some(inverse) = na::Matrix3::from_column_slice(&inertia.to_cols_array()).try_inverse()
+    else {
+        return mass;
+    };
+    let r = na::Vector3::new(arm.x, arm.y, arm.z).cross_matrix();
+    let w = na::Matrix3::identity() / mass + r.transpose() * inverse * r;
+    let largest = w.symmetric_eigenvalues().max();
+    if largest.is_finite() && largest > 0.0 {
+        1.0 / largest
+    } else {
+        mass
+    }
 }
 
 /// The explicit contact spring's stability: dt below 2/√(k/m) for the lightest `mass` it acts
@@ -442,6 +492,30 @@ mod tests {
             "{}",
             step.what
         );
+    }
+
+    #[test]
+    fn hex18s_impulse_feet_against_a_wall_halve_the_step() {
+        let w = hex18("tripod");
+        let wall = wall_step(&w.robot, &w.contact).unwrap();
+        // the tibia, 0.05 kg, 0.12 m to its foot, 7.5575e-5 kg·m² about its middle: pushed
+        // across at the foot's centre, 0.06 m from its centre of mass, 1/(20 + 0.06²/7.5575e-5)
+        let expected: f64 = 1.0 / (1.0 / 0.05 + 0.06f64.powi(2) / 7.5575e-5);
+        let mass = (wall.limit / CONTACT_STEP_LIMIT).powi(2) * w.contact.normal.stiffness();
+        assert!(
+            (mass - expected).abs() < 1e-9,
+            "{mass} kg against {expected} kg"
+        );
+        assert!((expected - 0.01479).abs() < 1e-5, "{expected}");
+        // past 1 ms, within 0.5 ms: the walk's step halves
+        assert!(
+            wall.limit < DEFAULT_DT && wall.limit > DEFAULT_DT / 2.0,
+            "{}",
+            wall.limit
+        );
+        assert!(wall.what.contains("`lf_tibia`"), "{}", wall.what);
+        // a body that cannot turn presents its mass
+        assert_eq!(side_mass(0.05, &glam::DMat3::ZERO, glam::DVec3::X), 0.05);
     }
 
     #[test]
