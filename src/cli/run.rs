@@ -69,7 +69,8 @@ pub struct RunArgs {
     #[arg(long)]
     hold_heading: bool,
     /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo, the contact
-    /// spring or the landing feet need a smaller step (a warning says so). A step given is
+    /// spring (impulse joints' feet against a terrain's walls too) or the landing feet need a
+    /// smaller step (a warning says so). A step given is
     /// refused past the servo's bound and warned past the others, naming the step hexsim would
     /// choose.
     #[arg(long)]

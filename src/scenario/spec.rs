@@ -91,7 +91,8 @@ pub struct ScenarioSpec {
     /// Seconds walked after settling (walk) or simulated (ball).
     pub duration: f64,
     /// The time step (s). Default: [`DEFAULT_DT`], or smaller where a walking robot's lightest
-    /// servo, the contact spring or the landing feet need it (see `resolve`); one given is
+    /// servo, the contact spring (impulse joints' feet against walls too) or the landing feet
+    /// need it (see `resolve`); one given is
     /// refused past the servo's bound and warned past the others.
     #[serde(default)]
     pub dt: Option<f64>,
