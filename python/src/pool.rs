@@ -33,8 +33,7 @@ pub(crate) fn for_each<T: Send>(items: &mut [T], threads: usize, work: impl Fn(&
     let pool = pool(threads - 1);
     let spawned = shares.len();
     let done = AtomicUsize::new(0);
-    let mut call = 0;
-    pool.in_place_scope(|scope| {
+    let call = pool.in_place_scope(|scope| {
         for share in shares {
             let done = &done;
             scope.spawn(move |_| {
@@ -45,7 +44,7 @@ pub(crate) fn for_each<T: Send>(items: &mut [T], threads: usize, work: impl Fn(&
         }
         // only now do the threads kept awake by the last call stop spinning: their next job
         // is already queued, so none goes to sleep looking for it
-        call = CALLS.fetch_add(1, Ordering::Relaxed) + 1;
+        let call = CALLS.fetch_add(1, Ordering::Relaxed) + 1;
         run(first);
         // the pool's shares end within microseconds of this one's: spin for them rather than
         // sleep on the scope's lock, whose wake-up on a VM costs tens of microseconds
@@ -53,6 +52,7 @@ pub(crate) fn for_each<T: Send>(items: &mut [T], threads: usize, work: impl Fn(&
         while done.load(Ordering::Acquire) < spawned && started.elapsed() < WAIT_SPINNING {
             std::hint::spin_loop();
         }
+        call
     });
     keep_awake(&pool, threads - 1, call);
 }

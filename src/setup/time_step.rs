@@ -6,8 +6,8 @@
 use crate::contact::{ContactModel, NormalLaw};
 use crate::gait::Gait;
 use crate::limits::num;
-use crate::robot::RobotModel;
 use crate::robot::statics::foot_load;
+use crate::robot::{Leg, Link, RobotModel};
 use crate::sim::{Articulation, STANDARD_GRAVITY, ServoGains};
 use rapier3d::na;
 
@@ -73,15 +73,8 @@ pub fn contact_step(
     stiffness_given: bool,
 ) -> Result<ContactStep, String> {
     // the lightest foot link bounds the effective mass the contact spring acts on
-    let (foot, foot_mass) = robot
-        .legs
-        .iter()
-        .map(|leg| {
-            let link = &robot.links[leg.foot_link];
-            (link.name.clone(), link.mass)
-        })
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .ok_or("the robot has no legs")?;
+    let (foot, foot_mass) =
+        lightest_foot(robot, |_, link| link.mass).ok_or("the robot has no legs")?;
     let what = format!(
         "the lightest foot link (`{foot}`, {} kg)",
         four_digits(foot_mass)
@@ -96,7 +89,7 @@ pub fn contact_step(
         )?;
     }
     let mut step = ContactStep {
-        limit: CONTACT_STEP_LIMIT / (contact.normal.stiffness() / foot_mass).sqrt(),
+        limit: spring_step(contact, foot_mass),
         what: format!(
             "the contact spring (k = {} N/m{}) on {what} needs √(k/m)·dt ≤ {CONTACT_STEP_LIMIT}",
             num(contact.normal.stiffness()),
@@ -133,19 +126,11 @@ pub fn contact_step(
 /// [`contact_step`] takes it. Measured (docs/rough-ground-log.md, *Impulse joints against
 /// walls*): hex18's impulse ladder diverged in 6 runs of 104 at 1 ms, 2 at 0.5 ms.
 pub fn wall_step(robot: &RobotModel, contact: &ContactModel) -> Option<ContactStep> {
-    let (foot, mass) = robot
-        .legs
-        .iter()
-        .map(|leg| {
-            let link = &robot.links[leg.foot_link];
-            (
-                link.name.clone(),
-                side_mass(link.mass, &link.inertia, leg.foot.center - link.com),
-            )
-        })
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let (foot, mass) = lightest_foot(robot, |leg, link| {
+        side_mass(link.mass, &link.inertia, leg.foot.center - link.com)
+    })?;
     Some(ContactStep {
-        limit: CONTACT_STEP_LIMIT / (contact.normal.stiffness() / mass).sqrt(),
+        limit: spring_step(contact, mass),
         what: format!(
             "on a terrain with walls, impulse joints' feet are pushed sideways: the contact spring \
              (k = {} N/m) on the foot link `{foot}` pushed at its foot ({} kg, the link turning \
@@ -154,6 +139,23 @@ pub fn wall_step(robot: &RobotModel, contact: &ContactModel) -> Option<ContactSt
             four_digits(mass)
         ),
     })
+}
+
+/// The foot link whose `mass` (of its leg and link) is least, by name, with that mass.
+fn lightest_foot(robot: &RobotModel, mass: impl Fn(&Leg, &Link) -> f64) -> Option<(String, f64)> {
+    robot
+        .legs
+        .iter()
+        .map(|leg| {
+            let link = &robot.links[leg.foot_link];
+            (link.name.clone(), mass(leg, link))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// The largest step [`CONTACT_STEP_LIMIT`] allows the contact spring on `mass`: √(k/m)·dt ≤ it.
+fn spring_step(contact: &ContactModel, mass: f64) -> f64 {
+    CONTACT_STEP_LIMIT / (contact.normal.stiffness() / mass).sqrt()
 }
 
 /// The least mass a free body of `mass` and `inertia` (about its centre of mass) presents to a
