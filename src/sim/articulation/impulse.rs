@@ -191,6 +191,9 @@ impl Joints for ImpulseRobot {
             // a free rigid body: W_ij = 1/m + [r_i]×ᵀ·I⁻¹·[r_j]× between two points on it, in the
             // ground frames' axes; points on different links are taken as uncoupled
             let r_i = cross(c.point - c.com);
+            // the free link's mobility along this normal, summed over the link's contacts (a
+            // foot between two walls is pushed by both): the damper's bound below
+            let mut alone = 0.0;
             for (j, d) in contacts
                 .iter()
                 .enumerate()
@@ -198,24 +201,13 @@ impl Joints for ImpulseRobot {
             {
                 let r_j = cross(d.point - d.com);
                 let world = inverse_mass + r_i.transpose() * inverse_inertia * r_j;
-                let mut w = axes(c).transpose() * world * axes(d);
-                if i == j
-                    && let Some(&(_, mass)) = self.damper_masses.iter().find(|(l, _)| *l == c.link)
-                {
-                    // never more than DAMPER_FREE_MASSES free links along this normal (its row
-                    // sum over the link's contacts: a foot between two walls is pushed by both)
-                    let alone: f64 = contacts
-                        .iter()
-                        .filter(|d| d.link == c.link)
-                        .map(|d| {
-                            let world = inverse_mass
-                                + r_i.transpose() * inverse_inertia * cross(d.point - d.com);
-                            c.frame.normal.dot(world * d.frame.normal).abs()
-                        })
-                        .sum();
-                    w.z_axis.z = (1.0 / mass).max(alone / DAMPER_FREE_MASSES);
-                }
-                mobility[i * n + j] = w;
+                alone += c.frame.normal.dot(world * d.frame.normal).abs();
+                mobility[i * n + j] = axes(c).transpose() * world * axes(d);
+            }
+            if let Some(&(_, mass)) = self.damper_masses.iter().find(|(l, _)| *l == c.link) {
+                // never more than DAMPER_FREE_MASSES free links along this normal
+                let w = &mut mobility[i * n + i];
+                w.z_axis.z = (1.0 / mass).max(alone / DAMPER_FREE_MASSES);
             }
         }
     }
