@@ -332,6 +332,27 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("found 5 legs"));
 }
 
+/// A URDF named relative to the working directory finds its `package://` meshes the same as
+/// named in full: from its own folder, `hexsim robot hexapod.urdf` reads ant_bot's feet from its
+/// tibia meshes in the package folder above (before, the search for the package stopped at the
+/// working directory, and the robot was refused for feet it could not find).
+#[test]
+fn a_urdf_named_from_its_own_folder_finds_its_package_meshes() {
+    let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/third_party/ant_bot/ant_bot/urdf");
+    let out = hexsim()
+        .current_dir(&folder)
+        .args(["robot", "hexapod.urdf"])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stderr}");
+    assert!(stdout.contains("lf  hip"), "{stdout}");
+}
+
 /// A robot file can set the walking direction (`forward = "-y"`); the run says it and walks
 /// that way (the body frame's x, so forward distance is positive and sideways small).
 #[test]

@@ -27,6 +27,16 @@ pub fn resolve(uri: &str, base: &Path) -> Result<PathBuf, Vec<PathBuf>> {
         .map(|p| std::env::split_paths(&p).collect())
         .unwrap_or_default();
     roots.extend(base.ancestors().map(Path::to_path_buf));
+    // a relative folder's ancestors stop at the working directory (a URDF named as
+    // `hexapod.urdf` has the folder ""): the package folder above it is found from the full path
+    let folder = if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    };
+    if let Ok(full) = folder.canonicalize() {
+        roots.extend(full.ancestors().map(Path::to_path_buf));
+    }
     let mut tried = Vec::new();
     for root in roots {
         let candidates = [
