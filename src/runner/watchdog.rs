@@ -5,7 +5,7 @@ use crate::contact::NormalLaw;
 use crate::metrics::walk::{FALL_TILT, tilt};
 use crate::robot::RobotModel;
 use crate::sim::{BallSample, HexapodSample};
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 /// Faster than a walking robot's body moves (a fall from 1 m lands at 4.4 m/s), beyond what its
 /// drop from the highest it has been explains (√(2·g·Δh): a robot tumbling down a long slope
@@ -15,6 +15,14 @@ const WALK_RUNAWAY_SPIN: f64 = 50.0;
 /// A passive ball's total energy may rise by this fraction of its start (plus 0.5 J) before it is
 /// called runaway; the contact is passive, so a stable run stays well below (V9: 0.4 %).
 const BALL_ENERGY_RISE: f64 = 0.1;
+/// A joint whose rate changes sign on this many steps in a row, each time faster than
+/// [`RING_RATE`], rings at the step rate: no motion a servo drives alternates every step, only
+/// an explicit law that oversteps (each step overshooting the last, as 1 − α with α > 1 does).
+const RING_STEPS: u32 = 20;
+/// The least rate (rad/s) a ringing joint's alternation counts at: above the jitter of a foot's
+/// contact, below a ringing servo's (ant_bot's tibia on impulse joints at 0.5 ms: rad/s within
+/// ten steps of the start).
+const RING_RATE: f64 = 0.1;
 
 /// Checks each step's state against what the contact and bodies allow.
 pub struct Watchdog {
@@ -36,6 +44,36 @@ pub struct Watchdog {
     /// drop from there explains is not runaway.
     gravity: f64,
     highest: Cell<f64>,
+    /// Every model joint's name, and how its rate has alternated (see [`Ringing`]).
+    joints: Vec<String>,
+    ringing: RefCell<Ringing>,
+}
+
+/// Per joint, its rate last step and how many steps in a row it has changed sign; and the first
+/// joint that rang for [`RING_STEPS`], with when it started.
+#[derive(Default)]
+struct Ringing {
+    last: Vec<f64>,
+    flips: Vec<u32>,
+    rang: Option<(f64, usize)>,
+}
+
+impl Ringing {
+    fn update(&mut self, time: f64, dt: f64, rates: &[f64]) {
+        if self.last.len() != rates.len() {
+            self.last = rates.to_vec();
+            self.flips = vec![0; rates.len()];
+            return;
+        }
+        for (j, (&rate, last)) in rates.iter().zip(&mut self.last).enumerate() {
+            let flipped = rate * *last < 0.0 && rate.abs() > RING_RATE && last.abs() > RING_RATE;
+            self.flips[j] = if flipped { self.flips[j] + 1 } else { 0 };
+            *last = rate;
+            if self.rang.is_none() && self.flips[j] >= RING_STEPS {
+                self.rang = Some((time - f64::from(RING_STEPS) * dt, j));
+            }
+        }
+    }
 }
 
 impl Watchdog {
@@ -60,6 +98,8 @@ impl Watchdog {
             fell_at: Cell::new(None),
             gravity,
             highest: Cell::new(f64::NEG_INFINITY),
+            joints: robot.joints.iter().map(|j| j.name.clone()).collect(),
+            ringing: RefCell::default(),
         }
     }
 
@@ -81,6 +121,8 @@ impl Watchdog {
             fell_at: Cell::new(None),
             gravity,
             highest: Cell::new(f64::NEG_INFINITY),
+            joints: Vec::new(),
+            ringing: RefCell::default(),
         }
     }
 
@@ -89,6 +131,9 @@ impl Watchdog {
         if self.fell_at.get().is_none() && tilt(&s.body.matrix3) > FALL_TILT {
             self.fell_at.set(Some(s.time));
         }
+        self.ringing
+            .borrow_mut()
+            .update(s.time, self.dt, &s.joint_velocities);
         if !(s.body.translation.is_finite()
             && s.body_velocity.is_finite()
             && s.body_angular_velocity.is_finite()
@@ -172,7 +217,17 @@ impl Watchdog {
             NormalLaw::SpringDamper { stiffness, .. }
             | NormalLaw::HuntCrossley { stiffness, .. } => stiffness,
         };
-        let cause = if let Some(fell) = self.fell_at.get() {
+        let rang = self
+            .ringing
+            .borrow()
+            .rang
+            .filter(|&(from, _)| self.fell_at.get().is_none_or(|fell| from <= fell));
+        let cause = if let Some((from, joint)) = rang {
+            format!(
+                "the servo on `{}` rang at the step rate from t = {from:.4} s (its rate changed sign every step for {RING_STEPS} steps and more): at dt = {} s the servo oversteps on that joint's inertia (impulse joints apply it explicitly, a step at a time); reduce dt, soften the servo, or use the multibody articulation",
+                self.joints[joint], self.dt
+            )
+        } else if let Some(fell) = self.fell_at.get() {
             format!(
                 "the robot had fallen {:.2} s before (its body tilted past 45° at t = {fell:.4} s), and a tumbling robot's impacts drive a body deeper than a soft ground resolves; the walk had failed before it diverged",
                 time - fell
@@ -256,6 +311,54 @@ mod tests {
             .check_walk(&sample(2.0, DAffine3::IDENTITY, 1.1 * radius))
             .expect("a foot through the ground diverges");
         assert!(!report.contains("fallen"), "{report}");
+    }
+
+    /// A joint whose rate flips sign every step for 20 steps rings: a divergence after it names
+    /// that joint's servo and when it started, even where the robot fell later (ant_bot on
+    /// impulse joints at 0.5 ms: the tibia rang from 4.5 ms, in the air, and the robot fell
+    /// at 3.15 s). A joint that turns one way, or flips fewer steps in a row, does not.
+    #[test]
+    fn a_servo_ringing_at_the_step_rate_is_named_as_the_cause() {
+        let model = crate::robot::hex18_for_tests();
+        let radius = model.legs[0].foot.radius;
+        let joints = model.joints.len();
+        let stepping = |watchdog: &Watchdog, steps: usize, rate: &dyn Fn(usize) -> f64| {
+            for i in 0..steps {
+                let mut s = sample(i as f64 * 1e-3, DAffine3::IDENTITY, 0.0);
+                s.joint_velocities = vec![0.0; joints];
+                s.joint_velocities[14] = rate(i);
+                assert_eq!(watchdog.check_walk(&s), None);
+            }
+        };
+        let ringing = Watchdog::walk(&model, NormalLaw::default(), 1e-3, 9.81);
+        stepping(&ringing, 30, &|i| if i % 2 == 0 { 2.0 } else { -2.0 });
+        let tilted = DAffine3::from_rotation_x(60f64.to_radians());
+        assert_eq!(ringing.check_walk(&sample(1.0, tilted, 0.0)), None);
+        let report = ringing
+            .check_walk(&sample(2.0, DAffine3::IDENTITY, 1.1 * radius))
+            .expect("a foot through the ground diverges");
+        assert!(
+            report.contains(&format!(
+                "the servo on `{}` rang at the step rate from t = 0.0000 s",
+                model.joints[14].name
+            )),
+            "{report}"
+        );
+
+        // one way, or alternating for fewer than 20 steps at a time: the fall's doing
+        let quiet = Watchdog::walk(&model, NormalLaw::default(), 1e-3, 9.81);
+        stepping(&quiet, 30, &|_| 2.0);
+        // a sign held once every 15 steps: 14 flips in a row at most
+        stepping(&quiet, 60, &|i| {
+            if (i - i / 15) % 2 == 0 { 2.0 } else { -2.0 }
+        });
+        stepping(&quiet, 30, &|i| if i % 2 == 0 { 0.05 } else { -0.05 });
+        assert_eq!(quiet.check_walk(&sample(3.0, tilted, 0.0)), None);
+        let report = quiet
+            .check_walk(&sample(4.0, DAffine3::IDENTITY, 1.1 * radius))
+            .expect("a foot through the ground diverges");
+        assert!(!report.contains("rang"), "{report}");
+        assert!(report.contains("fallen"), "{report}");
     }
 
     /// A body faster than 5 m/s is runaway unless its drop from the highest it has been
