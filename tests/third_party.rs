@@ -779,3 +779,42 @@ fn a_ten_times_larger_hexapod_walks_like_its_model() {
     assert!(sideways.abs() < 0.1 * forward, "{sideways:.3} m sideways");
     assert_eq!(large["walk_flags"], serde_json::json!([]));
 }
+
+/// A servo that rings at the step rate is said, in the metrics (`servo_ringing`) and as a
+/// warning: ant_bot on impulse joints at 0.5 ms (the step hexsim chooses for it) rings within
+/// 10 ms, its leg still in the air as it drops; at 0.25 ms, or on the multibody at 0.5 ms, no
+/// servo rings (on impulse joints at 0.5 ms the walk diverges by 4.5 s).
+#[test]
+fn a_servo_ringing_at_the_step_rate_is_reported() {
+    let robot = "tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf";
+    let dir = scratch("third_party_ringing");
+    let run = |articulation: &str, dt: &str| {
+        let json = dir.join(format!("{articulation}_{dt}.json"));
+        let out = hexsim()
+            .args(["run", "--robot", robot, "--duration", "0.3", "--no-record"])
+            .args(["--articulation", articulation, "--dt", dt, "--allow-flags"])
+            .arg("--metrics")
+            .arg(&json)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        let metrics: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (metrics["servo_ringing"].clone(), stdout)
+    };
+    let (ringing, stdout) = run("impulse", "0.0005");
+    let from = ringing["from"].as_f64().expect("a servo rang");
+    assert!(from < 0.01, "{ringing}");
+    assert!(
+        stdout.contains(&format!(
+            "warning: the servo on `{}` rang at the step rate",
+            ringing["joint"].as_str().unwrap()
+        )),
+        "{stdout}"
+    );
+    for (articulation, dt) in [("impulse", "0.00025"), ("multibody", "0.0005")] {
+        let (ringing, stdout) = run(articulation, dt);
+        assert!(ringing.is_null(), "{articulation} at {dt} s: {ringing}");
+        assert!(!stdout.contains("rang"), "{stdout}");
+    }
+}

@@ -2,6 +2,7 @@
 //! runaway speed) stops the run with when, where and the likely cause.
 
 use crate::contact::NormalLaw;
+use crate::metrics::walk::ringing::{RING_STEPS, Ringing};
 use crate::metrics::walk::{FALL_TILT, tilt};
 use crate::robot::RobotModel;
 use crate::sim::{BallSample, HexapodSample};
@@ -15,15 +16,6 @@ const WALK_RUNAWAY_SPIN: f64 = 50.0;
 /// A passive ball's total energy may rise by this fraction of its start (plus 0.5 J) before it is
 /// called runaway; the contact is passive, so a stable run stays well below (V9: 0.4 %).
 const BALL_ENERGY_RISE: f64 = 0.1;
-/// A joint whose rate changes sign on this many steps in a row, each time faster than
-/// [`RING_RATE`], rings at the step rate: no motion a servo drives alternates every step, only
-/// an explicit law that oversteps (each step overshooting the last, as 1 − α with α > 1 does).
-const RING_STEPS: u32 = 20;
-/// The least rate (rad/s) a ringing joint's alternation counts at: above the jitter of a foot's
-/// contact, below a ringing servo's (ant_bot's tibia on impulse joints at 0.5 ms: rad/s within
-/// ten steps of the start).
-const RING_RATE: f64 = 0.1;
-
 /// Checks each step's state against what the contact and bodies allow.
 pub struct Watchdog {
     dt: f64,
@@ -44,36 +36,9 @@ pub struct Watchdog {
     /// drop from there explains is not runaway.
     gravity: f64,
     highest: Cell<f64>,
-    /// Every model joint's name, and how its rate has alternated (see [`Ringing`]).
+    /// Every model joint's name, and whether one rang at the step rate ([`Ringing`]).
     joints: Vec<String>,
     ringing: RefCell<Ringing>,
-}
-
-/// Per joint, its rate last step and how many steps in a row it has changed sign; and the first
-/// joint that rang for [`RING_STEPS`], with when it started.
-#[derive(Default)]
-struct Ringing {
-    last: Vec<f64>,
-    flips: Vec<u32>,
-    rang: Option<(f64, usize)>,
-}
-
-impl Ringing {
-    fn update(&mut self, time: f64, dt: f64, rates: &[f64]) {
-        if self.last.len() != rates.len() {
-            self.last = rates.to_vec();
-            self.flips = vec![0; rates.len()];
-            return;
-        }
-        for (j, (&rate, last)) in rates.iter().zip(&mut self.last).enumerate() {
-            let flipped = rate * *last < 0.0 && rate.abs() > RING_RATE && last.abs() > RING_RATE;
-            self.flips[j] = if flipped { self.flips[j] + 1 } else { 0 };
-            *last = rate;
-            if self.rang.is_none() && self.flips[j] >= RING_STEPS {
-                self.rang = Some((time - f64::from(RING_STEPS) * dt, j));
-            }
-        }
-    }
 }
 
 impl Watchdog {
@@ -99,7 +64,7 @@ impl Watchdog {
             gravity,
             highest: Cell::new(f64::NEG_INFINITY),
             joints: robot.joints.iter().map(|j| j.name.clone()).collect(),
-            ringing: RefCell::default(),
+            ringing: RefCell::new(Ringing::new(robot)),
         }
     }
 
@@ -131,9 +96,7 @@ impl Watchdog {
         if self.fell_at.get().is_none() && tilt(&s.body.matrix3) > FALL_TILT {
             self.fell_at.set(Some(s.time));
         }
-        self.ringing
-            .borrow_mut()
-            .update(s.time, self.dt, &s.joint_velocities);
+        self.ringing.borrow_mut().update(s, self.dt);
         if !(s.body.translation.is_finite()
             && s.body_velocity.is_finite()
             && s.body_angular_velocity.is_finite()
@@ -220,11 +183,11 @@ impl Watchdog {
         let rang = self
             .ringing
             .borrow()
-            .rang
+            .rang()
             .filter(|&(from, _)| self.fell_at.get().is_none_or(|fell| from <= fell));
         let cause = if let Some((from, joint)) = rang {
             format!(
-                "the servo on `{}` rang at the step rate from t = {from:.4} s (its rate changed sign every step for {RING_STEPS} steps and more): at dt = {} s the servo oversteps on that joint's inertia (impulse joints apply it explicitly, a step at a time); reduce dt, soften the servo, or use the multibody articulation",
+                "the servo on `{}` rang at the step rate from t = {from:.4} s (its rate changed sign every step for {RING_STEPS} steps and more, its foot off the ground): at dt = {} s the servo oversteps on that joint's inertia (impulse joints apply it explicitly, a step at a time); reduce dt, soften the servo, or use the multibody articulation",
                 self.joints[joint], self.dt
             )
         } else if let Some(fell) = self.fell_at.get() {
@@ -313,10 +276,10 @@ mod tests {
         assert!(!report.contains("fallen"), "{report}");
     }
 
-    /// A joint whose rate flips sign every step for 20 steps rings: a divergence after it names
-    /// that joint's servo and when it started, even where the robot fell later (ant_bot on
-    /// impulse joints at 0.5 ms: the tibia rang from 4.5 ms, in the air, and the robot fell
-    /// at 3.15 s). A joint that turns one way, or flips fewer steps in a row, does not.
+    /// A swinging leg's joint whose rate flips sign every step for 20 steps rings: a divergence
+    /// after it names that joint's servo and when it started, even where the robot fell later
+    /// (ant_bot on impulse joints at 0.5 ms: a coxa rang from 7 ms, in the air, and the robot
+    /// fell at 3.15 s). A joint that turns one way, or flips fewer steps in a row, does not.
     #[test]
     fn a_servo_ringing_at_the_step_rate_is_named_as_the_cause() {
         let model = crate::robot::hex18_for_tests();
