@@ -333,7 +333,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             "  warning: the servo on `{}` rang at the step rate from t = {:.4} s, its foot off the ground (its rate changed sign every step for {} steps): it oversteps at this dt (impulse joints apply it explicitly), and the walk's figures are not its servo's; reduce dt, soften the servo, or use the multibody articulation",
             ringing.joint,
             ringing.from,
-            hexsim::metrics::walk::ringing::RING_STEPS
+            hexsim::sim::ringing::RING_STEPS
         );
     }
     if let Some(t) = m.fell_at {

@@ -10,7 +10,6 @@ use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-pub mod ringing;
 mod table;
 pub use table::*;
 
@@ -108,7 +107,7 @@ pub struct HexapodMetrics {
     pub max_joint_drift: f64,
     pub max_joint_drift_deg: f64,
     /// The first joint whose servo rang at the step rate while its foot was off the ground
-    /// ([`ringing`]), and when it began; None if none did. A servo that rings oversteps at this
+    /// ([`crate::sim::ringing`]), and when it began; None if none did. A servo that rings oversteps at this
     /// dt, and the walk's figures are not its servo's.
     pub servo_ringing: Option<ServoRinging>,
     /// The gait's stance on this robot: its lengths, where each came from, and its room.
@@ -122,7 +121,7 @@ pub struct HexapodMetrics {
     output: Option<MetricsFile>,
 }
 
-/// A joint that rang at the step rate ([`ringing`]): its name, and when it began (s of
+/// A joint that rang at the step rate ([`crate::sim::ringing`]): its name, and when it began (s of
 /// simulation, settling included).
 #[derive(Debug, Clone, Serialize, Deserialize, Default, PartialEq)]
 #[serde(default)]
@@ -260,8 +259,6 @@ struct Accumulators {
     moving: bool,
     strafing: bool,
     turning: bool,
-    /// Watches the joints for a servo ringing (made at the first step, from the walker's robot).
-    ringing: Option<ringing::Ringing>,
 }
 
 /// How far a contact slid over a step of `dt`, as (in contact, bearing load): its in-plane speed
@@ -398,15 +395,11 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         self.max_joint_drift_deg = self
             .max_joint_drift_deg
             .max(r.joint_drift.angle.to_degrees());
-        if self.servo_ringing.is_none() {
-            let model = walker.hexapod().model();
-            let ringing = self
-                .acc
-                .ringing
-                .get_or_insert_with(|| ringing::Ringing::new(model));
-            ringing.update(r, self.acc.dt);
-            self.servo_ringing = ringing.rang().map(|(from, j)| ServoRinging {
-                joint: model.joints[j].name.clone(),
+        if self.servo_ringing.is_none()
+            && let Some((from, j)) = r.servo_ringing
+        {
+            self.servo_ringing = Some(ServoRinging {
+                joint: walker.hexapod().model().joints[j].name.clone(),
                 from,
             });
         }

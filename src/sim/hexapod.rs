@@ -16,6 +16,7 @@ use super::articulation::{
 use super::engine::{Engine, STANDARD_GRAVITY};
 use super::ground_contact::GroundContacts;
 pub use super::ground_contact::LinkContact;
+use super::ringing::Ringing;
 use crate::contact::{ContactForce, ContactModel};
 use crate::robot::RobotModel;
 use crate::terrain::{FittedPlane, GroundFrame, HeightGrid, Orientation};
@@ -107,6 +108,9 @@ pub struct HexapodSample {
     pub link_contacts: Vec<LinkContact>,
     /// How far apart the joints have come (zero for the multibody; measured every 10 steps).
     pub joint_drift: JointDrift,
+    /// The first joint that rang at the step rate, its foot off the ground, and when it began
+    /// (s): its servo oversteps at this step ([`super::ringing`]). None while none has.
+    pub servo_ringing: Option<(f64, usize)>,
 }
 
 impl HexapodSample {
@@ -135,6 +139,8 @@ pub struct Hexapod {
     rates: Vec<f64>,
     /// The joints' drift, measured every [`DRIFT_EVERY`] steps (impulse joints).
     drift: JointDrift,
+    /// Watches the joints' rates for a servo ringing at the step rate.
+    ringing: Ringing,
     ground: GroundContacts,
     last_contacts: [Option<ContactForce>; 6],
     last_link_contacts: Vec<LinkContact>,
@@ -258,6 +264,7 @@ impl Hexapod {
         let n = model.joints.len();
         let hips_centre = DVec3::new(0.0, 0.0, model.hips_plane());
         let ground = GroundContacts::new(&model, &terrain);
+        let ringing = Ringing::new(&model);
         let mut hexapod = Hexapod {
             engine,
             model,
@@ -271,6 +278,7 @@ impl Hexapod {
             angles: vec![0.0; n],
             rates: vec![0.0; n],
             drift: JointDrift::default(),
+            ringing,
             ground,
             last_contacts: [None; 6],
             last_link_contacts: Vec::new(),
@@ -458,6 +466,9 @@ impl Hexapod {
             self.drift = self.joint_drift();
         }
         self.last_contacts = contacts;
+        let time = self.time();
+        self.ringing
+            .update(time, self.engine.dt(), &self.rates, &self.last_contacts);
         self.sample_into(sample);
     }
 
@@ -510,6 +521,7 @@ impl Hexapod {
         sample.foot_positions = foot_positions;
         sample.foot_contacts = self.last_contacts;
         sample.joint_drift = self.drift;
+        sample.servo_ringing = self.ringing.rang();
     }
 }
 

@@ -13,4 +13,5 @@ pub use hexapod::{
 };
 pub use walker::{WalkSample, Walker};
 pub mod hexapod;
+pub mod ringing;
 pub mod walker;
