@@ -436,7 +436,6 @@ fn resolve_walk(
     let articulation = spec.articulation.unwrap_or_default();
     let dt = time_step::choose(
         requested,
-        articulation,
         &robot,
         &gait.standing_pose,
         gains,

@@ -8,7 +8,7 @@ use crate::gait::Gait;
 use crate::limits::num;
 use crate::robot::statics::foot_load;
 use crate::robot::{Leg, Link, RobotModel};
-use crate::sim::{Articulation, STANDARD_GRAVITY, ServoGains};
+use crate::sim::{STANDARD_GRAVITY, ServoGains};
 use rapier3d::na;
 
 /// The default step (s), and the one hexsim divides when a bound asks for less.
@@ -47,12 +47,6 @@ pub const TOUCHDOWN_STEP_LIMIT: f64 = 0.5;
 /// contact force feed each other: the stance feet's load alternates step to step and they slide
 /// (measured on Kraby: docs/robots.md). hex18's is 0.28.
 pub const SERVO_STEP_LIMIT: f64 = 0.3;
-
-/// The largest (k·dt + d)·dt / I of the impulse joints' servo, whose torque is explicit in the
-/// step, τ = k·(q* − q) − (k·dt + d)·q̇ (`sim::articulation`): each step multiplies the joint's
-/// speed by about 1 − that, which must stay well above 0 or the joint rings (measured on Kraby:
-/// docs/robots.md). hex18's is 0.27 at 1 ms.
-pub const EXPLICIT_SERVO_LIMIT: f64 = 0.5;
 
 /// The largest step the contact allows, and on what (for a message).
 pub struct ContactStep {
@@ -251,14 +245,13 @@ fn touchdown_step(
 }
 
 /// The time step of a walk: as given — refused when the lightest joint's servo is too fast for
-/// it ([`SERVO_STEP_LIMIT`], and [`EXPLICIT_SERVO_LIMIT`] for impulse joints), and warned when
+/// it ([`SERVO_STEP_LIMIT`]; both articulations damp their servos implicitly), and warned when
 /// it is larger than the contact spring or the landing feet allow (`contact`), naming the bound
 /// and the step hexsim would choose — else the default, or 1 ms / n with the least n all of
 /// them allow (said in a warning). `stiffness_given`: the servo's, for the message.
 #[allow(clippy::too_many_arguments)]
 pub fn choose(
     requested: Requested,
-    articulation: Articulation,
     robot: &RobotModel,
     pose: &[f64],
     gains: ServoGains,
@@ -276,7 +269,7 @@ pub fn choose(
     else {
         return Ok(requested.dt());
     };
-    let (k, d) = (gains.stiffness, gains.damping);
+    let k = gains.stiffness;
     let fitted = if stiffness_given {
         ""
     } else {
@@ -291,20 +284,6 @@ pub fn choose(
         num(k),
         num(omega.round())
     );
-    if articulation == Articulation::Impulse {
-        // the root of k·dt² + d·dt = limit·I
-        let explicit = (-d + (d * d + 4.0 * k * EXPLICIT_SERVO_LIMIT * inertia).sqrt()) / (2.0 * k);
-        if explicit < limit {
-            limit = explicit;
-            why = format!(
-                "the impulse joints' explicit servo on `{name}` ({inertia:.2e} kg·m² outboard, \
-                 {} N·m/rad, {} N·m·s/rad) needs (k·dt + d)·dt/I ≤ {EXPLICIT_SERVO_LIMIT} \
-                 (the multibody articulation's implicit servo allows a larger step)",
-                num(k),
-                num(d)
-            );
-        }
-    }
     let (servo_limit, servo_why) = (limit, why.clone());
     if contact.limit < limit {
         limit = contact.limit;
@@ -425,14 +404,7 @@ mod tests {
     ) -> Result<f64, String> {
         let contact = contact_step(requested, &w.robot, &w.contact, &w.gait, 3, false)?;
         choose(
-            requested,
-            Articulation::Multibody,
-            &w.robot,
-            &w.pose,
-            w.gains,
-            false,
-            contact,
-            warnings,
+            requested, &w.robot, &w.pose, w.gains, false, contact, warnings,
         )
     }
 

@@ -2,9 +2,10 @@
 //!
 //! No motion a servo drives alternates at the step rate; an explicit law that oversteps does:
 //! where its damping moves a joint's speed by α of itself in one step, α > 1 overshoots, and
-//! each step turns the last one's motion back (α > 2 grows). The impulse joints' servo is such
-//! a law (`sim::articulation`); on light legs, at the step hexsim chooses, it rings — ant_bot's
-//! coxa at 0.5 ms from 7 ms into the drop, with no foot on the ground. Only a leg whose
+//! each step turns the last one's motion back (α > 2 grows). The impulse joints' servo was such
+//! a law while its damper was explicit: on light legs, at the step hexsim chose, it rang —
+//! ant_bot's coxa at 0.5 ms from 7 ms into the drop, with no foot on the ground, and the walk
+//! diverged (`sim::articulation::impulse` now damps implicitly). Only a leg whose
 //! foot is off the ground counts: a stance foot's friction holding and letting go from one
 //! step to the next also alternates a joint's rate, harmlessly (the multibody's walks of the
 //! public robots show runs of 100 such steps at up to 3.6 rad/s; in swing, none).

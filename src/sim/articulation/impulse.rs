@@ -7,14 +7,22 @@
 //! not by construction, so the joints drift apart by a little (measured by
 //! [`ImpulseRobot::joint_drift`]; see docs/performance.md), and the foot's effective mass is its own link's, not the articulated robot's.
 //!
-//! Servos are explicit torque pairs on the joint's two links: the multibody's law
-//! τ = k·(q* − qₙ) − (k·dt + d)·q̇ evaluated at the start of the step, clamped to the URDF's
-//! `effort` — so the torque limit holds exactly and the torque reported is the one applied. Why
-//! not rapier's joint motors: a motor's target changes every step, and changing a joint makes
-//! rapier rebuild its whole joint layout; and a motor row solved in the same few PGS sweeps as the
-//! locked axes leaves the stance feet sliding (V12 with motors, 3 sweeps: 5.7 mm per stance;
-//! explicit servos: 2.3 mm). At 1 ms the explicit law is far inside its stability bound
-//! (ω·dt ≈ 0.3 for the lightest joint: the tibia, k = 20 N·m/rad about the knee).
+//! Servos: the multibody's law τ = k·(q* − qₙ₊₁) − d·q̇ₙ₊₁, split. The spring k·(q* − qₙ) is
+//! an explicit torque pair on the joint's two links at the step's start; the damper, k·dt + d on
+//! the step's end velocity (which with the explicit spring is the implicit law: backward Euler
+//! adds k·dt of damping), is rapier's joint motor about the free axis with no stiffness and no
+//! target speed, solved with the joint's other rows. Both never change, so rapier keeps its
+//! joint layout (a motor given a new target every step would rebuild it). Where the law would
+//! pass the URDF's `effort`, the effort is applied explicitly and the damper switched off, as
+//! the multibody does: the torque limit holds exactly. The torque reported is the spring's plus
+//! the motor's impulse over the step.
+//!
+//! Why the damper is implicit: explicit, a step moves a joint's speed by (k·dt + d)·dt/I of
+//! itself, I the inertia the solver's few sweeps leave the joint (less than the articulated
+//! robot's, and not to be known in advance), and past 1 it overshoots every step. ant_bot's
+//! servos rang so at the 0.5 ms its tibias set, from 7 ms into the drop (`sim::ringing`), and its
+//! walk diverged; PhantomX's rang and skated 8–20 m in 20 s. With the damper in the solver they
+//! walk 2.550 and 2.689 m (the multibody: 2.572, 2.693 m).
 
 use super::{
     Articulation, ContactPoint, Joints, ServoGains, affine_of, apply_joint_torque, joint_frames,
@@ -23,7 +31,9 @@ use super::{
 use crate::robot::RobotModel;
 use crate::sim::engine::Engine;
 use glam::{DAffine3, DMat3, DQuat, DVec3};
-use rapier3d::prelude::{ImpulseJointHandle, JointAxesMask, JointAxis, RigidBodyHandle};
+use rapier3d::prelude::{
+    GenericJoint, ImpulseJointHandle, JointAxesMask, JointAxis, MotorModel, RigidBodyHandle,
+};
 use std::sync::Arc;
 
 pub struct ImpulseRobot {
@@ -47,6 +57,26 @@ pub struct ImpulseRobot {
     gains: ServoGains,
     /// Per foot link, the mass its normal damper moves (see `contact_mobility`).
     damper_masses: Vec<(usize, f64)>,
+    /// Per model joint, the servo's explicit spring torque k·(q* − q) this step (N·m), and
+    /// whether its law saturates at the effort (then the effort is applied explicitly, and its
+    /// damper is off: switched only when that changes, as the limits are).
+    springs: Vec<f64>,
+    saturated: Vec<bool>,
+    /// The servos' damper, k·dt + d (N·m·s/rad), solved implicitly by rapier's joint motor.
+    damping: f64,
+}
+
+/// rapier's index of a revolute's free axis (x) among a joint's motors.
+const ANG_X: usize = 3;
+
+/// Sets `data`'s motor about its free axis to the servo's damper alone: no stiffness, no target
+/// speed, `damping` (N·m·s/rad) as a force, at most `effort`. A motor that never changes costs
+/// no new joint layout, and rapier solves it with the joint's other rows, implicitly: the
+/// damping acts on the step's end velocity, and no damping makes it ring.
+fn set_damper(data: &mut GenericJoint, damping: f64, effort: f64) {
+    data.set_motor_model(JointAxis::AngX, MotorModel::ForceBased);
+    data.set_motor(JointAxis::AngX, 0.0, 0.0, 0.0, damping as f32);
+    data.set_motor_max_force(JointAxis::AngX, effort as f32);
 }
 
 /// The most mass, in free foot links along the contact's normal, a foot's normal damper is taken
@@ -76,12 +106,15 @@ impl ImpulseRobot {
     ) -> Self {
         let mut joints = Vec::with_capacity(model.joints.len());
         let mut frames = Vec::with_capacity(model.joints.len());
+        let damping = gains.stiffness * engine.dt() + gains.damping;
         for joint in &model.joints {
             let joint_frames = joint_frames(joint, root_com);
+            let mut data = revolute_joint(&joint_frames);
+            set_damper(&mut data, damping, joint.effort);
             joints.push(engine.impulse_joints.insert(
                 bodies[joint.parent],
                 bodies[joint.child],
-                revolute_joint(&joint_frames),
+                data,
                 true,
             ));
             frames.push(joint_frames);
@@ -103,6 +136,9 @@ impl ImpulseRobot {
             torques: vec![0.0; n],
             gains,
             damper_masses: Vec::new(),
+            springs: vec![0.0; n],
+            saturated: vec![false; n],
+            damping,
         }
     }
 
@@ -144,6 +180,15 @@ impl Joints for ImpulseRobot {
             let axis = child_frame * DVec3::X;
             rates[j] = (child.angvel() - parent.angvel()).as_dvec3().dot(axis);
             self.axes[j] = axis;
+            // the torque applied over the step just taken: the spring's, and the damper's impulse
+            // (rapier's on the parent: the child takes it reversed)
+            let damper = match engine.impulse_joints.get(self.joints[j]) {
+                Some(joint) if !self.saturated[j] => {
+                    -f64::from(joint.data.motors[ANG_X].impulse) / engine.dt()
+                }
+                _ => 0.0,
+            };
+            self.torques[j] = self.springs[j] + damper;
         }
     }
 
@@ -222,24 +267,41 @@ impl Joints for ImpulseRobot {
         let dt = engine.dt();
         for (j, joint) in self.model.joints.iter().enumerate() {
             let (q, qd) = (angles[j], rates[j]);
-            let torque = self.gains.torque(targets[j], q, qd, dt);
-            let torque = torque.clamp(-joint.effort, joint.effort);
-            self.torques[j] = torque;
-            apply_joint_torque(engine, &self.bodies, joint, self.axes[j], torque);
+            // the whole law with this step's end velocity estimated by the current one, as the
+            // multibody's drive: past the effort, the effort alone, explicitly
+            let predicted = self.gains.torque(targets[j], q, qd, dt);
+            let saturated = predicted.abs() > joint.effort;
+            let spring = if saturated {
+                joint.effort.copysign(predicted)
+            } else {
+                self.gains.stiffness * (targets[j] - q)
+            };
+            self.springs[j] = spring;
+            apply_joint_torque(engine, &self.bodies, joint, self.axes[j], spring);
             let near_limit = limit_can_bind(joint, q, qd, dt);
-            if near_limit == self.limited[j] {
+            if near_limit == self.limited[j] && saturated == self.saturated[j] {
                 continue;
             }
-            self.limited[j] = near_limit;
             let data = &mut engine
                 .impulse_joints
                 .get_mut(self.joints[j], false)
                 .expect("every model joint is a rapier joint")
                 .data;
-            if near_limit {
-                data.set_limits(JointAxis::AngX, [joint.lower as f32, joint.upper as f32]);
-            } else {
-                data.limit_axes.remove(JointAxesMask::ANG_X);
+            if near_limit != self.limited[j] {
+                self.limited[j] = near_limit;
+                if near_limit {
+                    data.set_limits(JointAxis::AngX, [joint.lower as f32, joint.upper as f32]);
+                } else {
+                    data.limit_axes.remove(JointAxesMask::ANG_X);
+                }
+            }
+            if saturated != self.saturated[j] {
+                self.saturated[j] = saturated;
+                if saturated {
+                    data.motor_axes.remove(JointAxesMask::ANG_X);
+                } else {
+                    set_damper(data, self.damping, joint.effort);
+                }
             }
         }
     }
