@@ -29,7 +29,7 @@ pub enum Articulation {
     #[default]
     Multibody,
     /// Impulse joints between free bodies: about 1.1× faster; the joints drift apart by up to
-    /// ~0.15 mm.
+    /// ~0.35 mm.
     Impulse,
 }
 
