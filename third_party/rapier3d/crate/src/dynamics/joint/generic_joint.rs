@@ -342,17 +342,23 @@ impl GenericJoint {
     /// Can this joint use SIMD-accelerated constraint formulations?
     ///
     /// Locked axes and uncoupled limits have wide row formulations, as does the
-    /// 2D angular motor (the workhorse of ragdoll joints); linear motors, 3D
-    /// motors and coupled limit rows don't (yet) and fall back to the scalar
-    /// path.
+    /// angular motor about the frame's x axis (2D's only one, the workhorse of ragdoll joints;
+    /// a 3D revolute's); linear motors, other 3D motors and coupled limit rows don't (yet) and
+    /// fall back to the scalar path.
     #[cfg(feature = "alloc")]
     pub(crate) fn supports_simd_constraints(&self) -> bool {
         #[cfg(feature = "dim2")]
         let motors_ok =
             (self.motor_axes.bits() & !self.locked_axes.bits() & JointAxesMask::LIN_AXES.bits())
                 == 0;
+        // 3D: the angular motor about the frame's x axis (a revolute's) has the wide row; other
+        // 3D motors fall back to the scalar path.
         #[cfg(feature = "dim3")]
-        let motors_ok = (self.motor_axes.bits() & !self.locked_axes.bits()) == 0;
+        let motors_ok = {
+            let motors = self.motor_axes.bits() & !self.locked_axes.bits();
+            (motors == 0 || motors == JointAxesMask::ANG_X.bits())
+                && (self.coupled_axes & JointAxesMask::ANG_X).is_empty()
+        };
         motors_ok && (self.limit_axes & self.coupled_axes).is_empty()
     }
 
@@ -363,19 +369,12 @@ impl GenericJoint {
     pub(crate) fn simd_row_signature(&self) -> u32 {
         let locked = self.locked_axes.bits() as u32;
         let limits = (self.limit_axes.bits() & !self.locked_axes.bits()) as u32;
-        #[cfg(feature = "dim2")]
-        {
-            // The angular motor row's coefficient formula depends on the motor
-            // model, so lanes must also share it.
-            let motors = (self.motor_axes.bits() & !self.locked_axes.bits()) as u32;
-            let model = (self.motors[crate::math::DIM].model
-                == crate::dynamics::MotorModel::ForceBased) as u32;
-            locked | (limits << 8) | (motors << 16) | (model << 24)
-        }
-        #[cfg(feature = "dim3")]
-        {
-            locked | (limits << 8)
-        }
+        // The angular motor row's coefficient formula depends on the motor model, so lanes
+        // must also share it.
+        let motors = (self.motor_axes.bits() & !self.locked_axes.bits()) as u32;
+        let model =
+            (self.motors[crate::math::DIM].model == crate::dynamics::MotorModel::ForceBased) as u32;
+        locked | (limits << 8) | (motors << 16) | (model << 24)
     }
 
     #[doc(hidden)]

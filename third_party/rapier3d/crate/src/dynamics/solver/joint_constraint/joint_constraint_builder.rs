@@ -170,24 +170,16 @@ pub struct JointConstraintBuilderSimd {
     /// Motorized axes (`motor_axes & !locked_axes`), identical across the
     /// lanes. Only the 2D angular motor has a wide row (see
     /// `GenericJoint::supports_simd_constraints`).
-    #[cfg(feature = "dim2")]
     motor_axes: u8,
     /// The 2D angular motor's per-lane parameters (model shared per chunk via
     /// the row signature).
-    #[cfg(feature = "dim2")]
     motor_model: crate::dynamics::MotorModel,
-    #[cfg(feature = "dim2")]
     motor_stiffness: SimdReal,
-    #[cfg(feature = "dim2")]
     motor_damping: SimdReal,
-    #[cfg(feature = "dim2")]
     motor_target_pos: SimdReal,
-    #[cfg(feature = "dim2")]
     motor_target_vel: SimdReal,
-    #[cfg(feature = "dim2")]
     motor_max_force: SimdReal,
     /// Like `prev_dof_impulses`, for the 2D angular motor row.
-    #[cfg(feature = "dim2")]
     prev_motor_impulse: SimdReal,
     /// Per-axis `[min, max]` limits of the limited linear axes (unset axes are zero).
     /// The angular axes go through `ang_limits`.
@@ -257,7 +249,6 @@ impl JointConstraintBuilderSimd {
                 .all(|j| j.data.simd_row_signature() == joint[0].data.simd_row_signature())
         );
 
-        #[cfg(feature = "dim2")]
         let ang_motor = |ii: usize| &joint[ii].data.motors[crate::math::DIM];
 
         let zero2 = [SimdReal::splat(0.0); 2];
@@ -269,21 +260,13 @@ impl JointConstraintBuilderSimd {
             local_frame2,
             locked_axes,
             limit_axes,
-            #[cfg(feature = "dim2")]
             motor_axes: joint[0].data.motor_axes.bits() & !locked_axes,
-            #[cfg(feature = "dim2")]
             motor_model: ang_motor(0).model,
-            #[cfg(feature = "dim2")]
             motor_stiffness: array![|ii| ang_motor(ii).stiffness].into(),
-            #[cfg(feature = "dim2")]
             motor_damping: array![|ii| ang_motor(ii).damping].into(),
-            #[cfg(feature = "dim2")]
             motor_target_pos: array![|ii| ang_motor(ii).target_pos].into(),
-            #[cfg(feature = "dim2")]
             motor_target_vel: array![|ii| ang_motor(ii).target_vel].into(),
-            #[cfg(feature = "dim2")]
             motor_max_force: array![|ii| ang_motor(ii).max_force].into(),
-            #[cfg(feature = "dim2")]
             prev_motor_impulse: array![|ii| ang_motor(ii).impulse].into(),
             limits: core::array::from_fn(|axis| {
                 if limit_axes & (1 << axis) != 0 {
@@ -348,11 +331,8 @@ impl JointConstraintBuilderSimd {
                 SimdReal::splat(0.0)
             }
         });
-        #[cfg(feature = "dim2")]
-        {
-            self.prev_motor_impulse =
-                array![|ii| joint[ii].data.motors[crate::math::DIM].impulse].into();
-        }
+        self.prev_motor_impulse =
+            array![|ii| joint[ii].data.motors[crate::math::DIM].impulse].into();
     }
 
     pub fn update(
@@ -418,10 +398,9 @@ impl JointConstraintBuilderSimd {
 
         let out_rows = &mut out[self.constraint_id..];
 
-        // The (2D) angular motor row's wide parameters, from the gathered
+        // The angular motor row's wide parameters (about the frame's x axis), from the gathered
         // per-lane motor data (`MotorModel::combine_coefficients` +
         // `JointMotor::motor_params`, wide).
-        #[cfg(feature = "dim2")]
         let ang_motor_params = (self.motor_axes & (1 << DIM) != 0).then(|| {
             use crate::dynamics::MotorModel;
             let dt = SimdReal::splat(params.dt);
@@ -448,8 +427,6 @@ impl JointConstraintBuilderSimd {
                 },
             }
         });
-        #[cfg(feature = "dim3")]
-        let ang_motor_params: Option<MotorParameters<SimdReal>> = None;
 
         // See the scalar builder: keep impulses across the row rebuild when warm-starting.
         // The SIMD builder emits at most one motor row, one row per locked axis and one per
@@ -488,12 +465,9 @@ impl JointConstraintBuilderSimd {
                     match row.writeback_id {
                         WritebackId::Dof(i) => row.impulse = self.prev_dof_impulses[i] * coeff,
                         WritebackId::Limit(i) => row.impulse = self.prev_limit_impulses[i] * coeff,
-                        #[cfg(feature = "dim2")]
                         WritebackId::Motor(_) => {
                             row.impulse = self.prev_motor_impulse * coeff;
                         }
-                        #[cfg(feature = "dim3")]
-                        WritebackId::Motor(_) => {}
                         // Impulse-joint rows only; friction rows are
                         // multibody-internal and are never built here.
                         WritebackId::Friction(_) => {}

@@ -381,8 +381,7 @@ impl JointConstraint<SimdReal, SIMD_WIDTH> {
         limits: &[[SimdReal; 2]; DIM],
         ang_limits: &[AngularLimitParams<SimdReal>; ANG_DIM],
         softness: crate::dynamics::SpringCoefficients<SimdReal>,
-        // `Some` = emit the (2D) angular motor row. Kept out of 3D until the
-        // wide builder gathers per-axis motors.
+        // `Some` = emit the angular motor row about the frame's x axis.
         ang_motor: Option<&MotorParameters<SimdReal>>,
         out: &mut [Self],
     ) -> usize {
