@@ -120,7 +120,7 @@ pub struct RunArgs {
     #[arg(long)]
     no_rolling: bool,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
-    /// impulse joints (about 1.1× faster; the joints drift apart by up to ~0.35 mm)
+    /// impulse joints (about as fast, 15 % fewer instructions; the joints drift apart by up to ~0.35 mm)
     #[arg(long, value_enum, default_value_t = Articulation::default())]
     articulation: Articulation,
     /// rapier substeps per step (each rebuilds the multibody's mass matrix).

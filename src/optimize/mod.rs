@@ -5,7 +5,7 @@
 //! ```toml
 //! scenario = "../scenarios/natural_tripod.toml"   # robot, gait, terrain, contact, start
 //! duration = 8.0                                   # optional: overrides the scenario's
-//! articulation = "impulse"                         # default: impulse joints, 1.1× faster
+//! articulation = "impulse"                         # default: impulse joints, about as fast
 //! terrains = ["../terrains/natural.toml", "../terrains/slope.toml"]  # default: the scenario's
 //! seeds = [11, 12, 13]                             # every terrain with every seed (once if unseeded)
 //! generations = 12

@@ -11,7 +11,7 @@
 //! duration = 10.0                      # s walked (after `settle`), or simulated for a ball
 //! dt = 0.001
 //! seed = 7                             # replaces the terrain generator's seed
-//! articulation = "multibody"           # multibody (default) | impulse (1.1× faster; joints drift)
+//! articulation = "multibody"           # multibody (default) | impulse (about as fast; joints drift)
 //! [start]                              # default: 0.75 m inside the terrain's −x edge
 //! x = -1.25
 //! heading_deg = 0.0

@@ -2,7 +2,8 @@
 //! rapier's impulse joints (five locked axes and a revolute one, solved with the contacts' PGS).
 //!
 //! Why it exists: a step costs a few small constraint rows instead of rebuilding and factorising
-//! the multibody's mass matrix: about 1.1 times faster since rapier was patched
+//! the multibody's mass matrix: 15 % fewer instructions a step since rapier was patched, about as
+//! fast on the clock
 //! (docs/performance.md), for large sweeps. The price: the locked axes are held by the solver,
 //! not by construction, so the joints drift apart by a little (measured by
 //! [`ImpulseRobot::joint_drift`]; see docs/performance.md), and the foot's effective mass is its own link's, not the articulated robot's.
