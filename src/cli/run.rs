@@ -120,7 +120,8 @@ pub struct RunArgs {
     #[arg(long)]
     no_rolling: bool,
     /// How the links are joined in rapier: one reduced-coordinate multibody (exact joints), or
-    /// impulse joints (about as fast, 15 % fewer instructions; the joints drift apart by up to ~0.35 mm)
+    /// impulse joints (about as fast, 15 % fewer instructions; the joints drift apart by up to
+    /// ~0.35 mm)
     #[arg(long, value_enum, default_value_t = Articulation::default())]
     articulation: Articulation,
     /// rapier substeps per step (each rebuilds the multibody's mass matrix).
@@ -330,10 +331,8 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     }
     if let Some(ringing) = &m.servo_ringing {
         println!(
-            "  warning: the servo on `{}` rang at the step rate from t = {:.4} s, its foot off the ground (its rate changed sign every step for {} steps): it oversteps at this dt (impulse joints apply it explicitly), and the walk's figures are not its servo's; reduce dt, soften the servo, or use the multibody articulation",
-            ringing.joint,
-            ringing.from,
-            hexsim::sim::ringing::RING_STEPS
+            "  warning: {}; the walk's figures are not its servo's",
+            hexsim::sim::ringing::describe(&ringing.joint, ringing.from)
         );
     }
     if let Some(t) = m.fell_at {

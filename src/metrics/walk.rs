@@ -107,8 +107,8 @@ pub struct HexapodMetrics {
     pub max_joint_drift: f64,
     pub max_joint_drift_deg: f64,
     /// The first joint whose servo rang at the step rate while its foot was off the ground
-    /// ([`crate::sim::ringing`]), and when it began; None if none did. A servo that rings oversteps at this
-    /// dt, and the walk's figures are not its servo's.
+    /// ([`crate::sim::ringing`]), and when it began; None if none did. A servo that rings
+    /// oversteps at this dt, and the walk's figures are not its servo's.
     pub servo_ringing: Option<ServoRinging>,
     /// The gait's stance on this robot: its lengths, where each came from, and its room.
     pub stance: StanceMetrics,

@@ -4,7 +4,6 @@
 use crate::contact::NormalLaw;
 use crate::metrics::walk::{FALL_TILT, tilt};
 use crate::robot::RobotModel;
-use crate::sim::ringing::RING_STEPS;
 use crate::sim::{BallSample, HexapodSample};
 use std::cell::Cell;
 
@@ -16,6 +15,7 @@ const WALK_RUNAWAY_SPIN: f64 = 50.0;
 /// A passive ball's total energy may rise by this fraction of its start (plus 0.5 J) before it is
 /// called runaway; the contact is passive, so a stable run stays well below (V9: 0.4 %).
 const BALL_ENERGY_RISE: f64 = 0.1;
+
 /// Checks each step's state against what the contact and bodies allow.
 pub struct Watchdog {
     dt: f64,
@@ -97,9 +97,8 @@ impl Watchdog {
         if self.fell_at.get().is_none() && tilt(&s.body.matrix3) > FALL_TILT {
             self.fell_at.set(Some(s.time));
         }
-        if self.rang.get().is_none() {
-            self.rang.set(s.servo_ringing);
-        }
+        // the sample keeps the first joint that rang
+        self.rang.set(s.servo_ringing);
         if !(s.body.translation.is_finite()
             && s.body_velocity.is_finite()
             && s.body_angular_velocity.is_finite()
@@ -188,10 +187,7 @@ impl Watchdog {
             .get()
             .filter(|&(from, _)| self.fell_at.get().is_none_or(|fell| from <= fell));
         let cause = if let Some((from, joint)) = rang {
-            format!(
-                "the servo on `{}` rang at the step rate from t = {from:.4} s (its rate changed sign every step for {RING_STEPS} steps and more, its foot off the ground): at dt = {} s the servo oversteps on that joint's inertia (impulse joints apply it explicitly, a step at a time); reduce dt, soften the servo, or use the multibody articulation",
-                self.joints[joint], self.dt
-            )
+            crate::sim::ringing::describe(&self.joints[joint], from)
         } else if let Some(fell) = self.fell_at.get() {
             format!(
                 "the robot had fallen {:.2} s before (its body tilted past 45° at t = {fell:.4} s), and a tumbling robot's impacts drive a body deeper than a soft ground resolves; the walk had failed before it diverged",

@@ -19,6 +19,17 @@ pub const RING_STEPS: u32 = 20;
 /// jitter.
 pub const RING_RATE: f64 = 0.1;
 
+/// What a ringing joint says, in a warning or as a divergence's cause: which servo, from when,
+/// and what to do.
+pub fn describe(joint: &str, from: f64) -> String {
+    format!(
+        "the servo on `{joint}` rang at the step rate from t = {from:.4} s (its rate changed sign \
+         every step for {RING_STEPS} steps and more, its foot off the ground): it oversteps on \
+         that joint's inertia at this dt (the impulse joints' spring is explicit); reduce dt, \
+         soften the servo, or use the multibody articulation"
+    )
+}
+
 /// Follows every joint's rate step by step; remembers the first that rang.
 #[derive(Debug, Clone, Default)]
 pub struct Ringing {
