@@ -548,6 +548,42 @@ impl LegChain {
         true
     }
 
+    /// The foot link's rotation and the foot's position at `q` (body frame), and the map B from
+    /// a small motion of the foot to the turn (a rotation vector) it gives the foot link:
+    /// Σ aᵢ·δqᵢ over the joints' axes aᵢ, with δq = Jᵀ(JJᵀ + λ²I)⁻¹·δ the damped least
+    /// squares' motion (so B = A·Jᵀ(JJᵀ + λ²I)⁻¹, A the axes as columns). Rotations about
+    /// parallel axes (a femur's and a tibia's, which do most of a lift) add exactly. From
+    /// `warm`'s forward kinematics when they are `q`'s (the gait's last answer nearly always),
+    /// computed otherwise.
+    pub fn foot_turn_map(&self, warm: Option<&IkWarm>, q: &[f64]) -> (DMat3, DVec3, DMat3) {
+        let known = self.n == 3
+            && q.len() == 3
+            && warm.is_some_and(|w| {
+                w.angles.map(f64::to_bits) == [q[0], q[1], q[2]].map(f64::to_bits)
+            });
+        let computed;
+        let (joints, foot, rotation): (&[(DVec3, DVec3)], DVec3, DMat3) = match warm {
+            Some(w) if known => {
+                let (joints, foot, rotation, _) = w.frames();
+                (joints, *foot, *rotation)
+            }
+            _ => {
+                computed = self.frames(&self.angles(q));
+                (&computed.0[..self.n], computed.1, computed.2)
+            }
+        };
+        // J's columns cᵢ = aᵢ × (foot − pᵢ): JJᵀ = Σ cᵢcᵢᵀ and A·Jᵀ = Σ aᵢcᵢᵀ
+        let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
+        let mut jjt = DMat3::from_diagonal(DVec3::splat(LAMBDA2));
+        let mut ajt = DMat3::ZERO;
+        for (p, a) in joints {
+            let c = a.cross(foot - *p);
+            jjt += outer(c, c);
+            ajt += outer(*a, c);
+        }
+        (rotation, foot, ajt * jjt.inverse())
+    }
+
     /// Heading of the leg at rest (all joints zero): the yaw of the foot seen from the hip.
     pub fn rest_yaw(&self) -> f64 {
         let d = self.foot_position(LegAngles::zeros(self.n)) - self.hip();
