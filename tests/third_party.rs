@@ -785,8 +785,8 @@ fn a_ten_times_larger_hexapod_walks_like_its_model() {
 /// the servo's damper is solved implicitly with the joints. While it was explicit, ant_bot's
 /// servos rang from 7 ms into the drop at its 0.5 ms (`servo_ringing`) and its walk diverged
 /// (its body spinning at 52 rad/s by 4.5 s), and PhantomX's rang and skated 8–20 m in 20 s.
-/// Now, 10 s on the natural terrain: ant_bot 1.243 m against the multibody's 1.252 m, its worst
-/// foot slipping 7.9 % of it (2.6 %); PhantomX 1.309 against 1.310 m, 9.2 % (2.9 %).
+/// Now, 10 s on the natural terrain: ant_bot 1.266 m against the multibody's 1.278 m, its worst
+/// foot slipping 6.8 % of it (2.6 %); PhantomX 1.311 against 1.312 m, 9.2 % (2.9 %).
 #[test]
 fn impulse_joints_walk_light_legs_as_the_multibody_does() {
     for (name, robot) in [

@@ -13,7 +13,7 @@
 //! default; [`GaitController::with_rolling_feet`]) the centre target is moved on by r·(Δφ × ẑ),
 //! Δφ the rotation vector that turns the foot link from its standing pose (the stance's middle):
 //! its rate is ω up to a second-order ½·Δφ × ω. The body then moves at the commanded speed over
-//! rolling feet instead of riding on them (hex18: 0.1204 m/s for 0.12 commanded; 0.1242 m/s
+//! rolling feet instead of riding on them (hex18: 0.1207 m/s for 0.12 commanded; 0.1242 m/s
 //! without). A swinging foot gets the offset of the point under it on the ground (its path
 //! without the lift), so the offset passes smoothly from lift-off to touch-down and the lift's
 //! own turn of the tibia does not swing the foot sideways. Δφ is read to first order from the

@@ -424,9 +424,10 @@ impl LegChain {
     /// stays on the branch of `guess`: the answer follows the last one.
     ///
     /// It stops within [`IK_TOLERANCE`] (1 µm) of the target, where a cold [`Self::solve`] goes
-    /// on to 0.1 µm: the gait solves every leg twice a step, each from its own last answer a
-    /// step's motion away, and the last Newton step of a third of those solves was to go from
-    /// under 1 µm to under 0.1 µm (4.9k instructions of a walk's step on hex18). A micrometre is
+    /// on to 0.1 µm: the gait solves every leg every step from its last answer a step's motion
+    /// away, and the last Newton step of a third of those solves was to go from under 1 µm to
+    /// under 0.1 µm (4.9k instructions of a walk's step on hex18, when it solved each leg
+    /// twice). A micrometre is
     /// far below what the servos hold a joint to (their compliance under a leg's load moves the
     /// foot by tenths of a millimetre); the walk's 20 s distance moves by 10⁻⁷ of itself.
     pub fn solve_warm(
