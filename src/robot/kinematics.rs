@@ -119,8 +119,6 @@ pub struct IkSolution {
     pub angles: LegAngles,
     /// Distance from the reached foot position to the target (m).
     pub error: f64,
-    /// The foot link's orientation at `angles` ([`LegChain::foot_rotation`]'s).
-    pub foot_rotation: DMat3,
 }
 
 /// A solve's answer with the forward kinematics it ended on ([`LegChain::solve_warm`]): the
@@ -515,7 +513,6 @@ impl LegChain {
         IkSolution {
             angles: LegAngles::three(q),
             error: error.length(),
-            foot_rotation: frames[*now].2,
         }
     }
 

@@ -80,14 +80,13 @@ struct Trial {
     q: LegAngles,
     joints: JointFrames,
     foot: DVec3,
-    rotation: DMat3,
     error: f64,
     posture: f64,
 }
 
 impl Trial {
     fn at(chain: &LegChain, target: DVec3, q: LegAngles) -> Self {
-        let (joints, foot, rotation) = chain.frames(&q);
+        let (joints, foot, _) = chain.frames(&q);
         let posture = q
             .iter()
             .zip(&chain.rest)
@@ -98,7 +97,6 @@ impl Trial {
             q,
             joints,
             foot,
-            rotation,
             error: (target - foot).length(),
             posture,
         }
@@ -198,7 +196,6 @@ pub(super) fn solve(chain: &LegChain, target: DVec3, guess: &LegAngles) -> IkSol
     IkSolution {
         angles: best.q,
         error: best.error,
-        foot_rotation: best.rotation,
     }
 }
 
