@@ -31,7 +31,7 @@ use super::slew;
 use super::spec::{Gait, SwingShape};
 use crate::robot::kinematics::{IK_TOLERANCE, IkSolution, IkWarm, LegAngles, LegChain, LegStatics};
 use crate::robot::{ContactSphere, RobotModel};
-use glam::{DMat3, DQuat, DVec2, DVec3};
+use glam::{DMat2, DMat3, DQuat, DVec2, DVec3};
 
 /// A velocity command in the body frame.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -1042,8 +1042,8 @@ impl GaitController {
             };
             let roll = |turn: DVec3| DVec2::new(turn.y, -turn.x) * radius;
             let p = roll(phi + j_inv(b * (grounded - foot)));
-            let m = glam::DMat2::from_cols(roll(j_inv(b.x_axis)), roll(j_inv(b.y_axis)));
-            let a = glam::DMat2::IDENTITY - m;
+            let m = DMat2::from_cols(roll(j_inv(b.x_axis)), roll(j_inv(b.y_axis)));
+            let a = DMat2::IDENTITY - m;
             if a.determinant() > 0.5 {
                 a.inverse() * p
             } else {

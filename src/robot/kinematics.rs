@@ -138,6 +138,11 @@ impl IkWarm {
     fn frames(&self) -> &Frames {
         &self.frames[self.now]
     }
+
+    /// Whether these are the forward kinematics of `q`, bit for bit.
+    fn answers(&self, q: &[f64]) -> bool {
+        q.len() == 3 && self.angles.map(f64::to_bits) == [q[0], q[1], q[2]].map(f64::to_bits)
+    }
 }
 
 /// Joint positions and axes, foot position and foot rotation ([`LegChain::frames`]), and the
@@ -451,7 +456,7 @@ impl LegChain {
             return super::redundant::solve(self, target, &guess);
         }
         let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        let known = matches!(warm, Some(w) if w.angles.map(f64::to_bits) == q.map(f64::to_bits));
+        let known = warm.as_ref().is_some_and(|w| w.answers(&q));
         if !known {
             let w = warm.insert(IkWarm {
                 angles: q,
@@ -530,10 +535,7 @@ impl LegChain {
     /// feed-forward poses six legs every step, each in place.
     #[inline]
     pub fn statics_into(&self, warm: &IkWarm, q: &[f64], out: &mut LegStatics) -> bool {
-        if self.n != 3 || q.len() != 3 {
-            return false;
-        }
-        if warm.angles.map(f64::to_bits) != [q[0], q[1], q[2]].map(f64::to_bits) {
+        if self.n != 3 || !warm.answers(q) {
             return false;
         }
         let (joints, foot, rotation, [first, second]) = warm.frames();
@@ -554,14 +556,9 @@ impl LegChain {
     /// `warm`'s forward kinematics when they are `q`'s (the gait's last answer nearly always),
     /// computed otherwise.
     pub fn foot_turn_map(&self, warm: Option<&IkWarm>, q: &[f64]) -> (DMat3, DVec3, DMat3) {
-        let known = self.n == 3
-            && q.len() == 3
-            && warm.is_some_and(|w| {
-                w.angles.map(f64::to_bits) == [q[0], q[1], q[2]].map(f64::to_bits)
-            });
         let computed;
         let (joints, foot, rotation): (&[(DVec3, DVec3)], DVec3, DMat3) = match warm {
-            Some(w) if known => {
+            Some(w) if self.n == 3 && w.answers(q) => {
                 let (joints, foot, rotation, _) = w.frames();
                 (joints, *foot, *rotation)
             }
