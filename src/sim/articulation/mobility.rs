@@ -3,6 +3,12 @@
 //! fill-in, a degree of freedom couples only with its ancestors) and the contacts' axis Jacobians A
 //! (one row per contact and ground axis, one column per degree of freedom).
 //!
+//! M is symmetric (rapier mirrors it, and adds its joints' damping and armature on the diagonal;
+//! the Coriolis forces are explicit, `MultibodyRobot::build`), so its factors are L = D·Uᵀ with D
+//! the pivots, M⁻¹ = U⁻ᵀ·D⁻¹·U⁻¹, and W = Yᵀ·D⁻¹·Y with Y = U⁻¹·Aᵀ: one sweep up the tree, where
+//! solving with M takes a second one down, and a W symmetric by construction. Y keeps A's sparsity
+//! (the sweep up fills only a contact's ancestors, already on its path).
+//!
 //! Why its own code: W is needed every step a foot touches, and nalgebra's generic solve on
 //! dynamic matrices (one right-hand side at a time, bounds-checked views) cost more than the rest
 //! of hexsim's step together. Here the right-hand sides are lanes of fixed-size rows, so each
@@ -29,13 +35,15 @@ pub const GROUP_AXES: usize = LANE * CHUNKS - 2;
 /// `Index`, which is a match over the four lanes.
 type Row = [Vec4; CHUNKS];
 
-/// A group of contact axes: their Jacobian and M⁻¹ applied to it.
+/// A group of contact axes: their Jacobian and its solve.
 #[derive(Clone)]
 struct Group<const D: usize> {
     /// Aᵀ: per degree of freedom, each contact axis' Jacobian entry.
     jacobian: [Row; D],
-    /// M⁻¹·Aᵀ, solved in place.
+    /// Y = U⁻¹·Aᵀ, solved in place.
     solved: [Row; D],
+    /// D⁻¹·Y.
+    scaled: [Row; D],
 }
 
 impl<const D: usize> Default for Group<D> {
@@ -43,6 +51,7 @@ impl<const D: usize> Default for Group<D> {
         Group {
             jacobian: [[Vec4::ZERO; CHUNKS]; D],
             solved: [[Vec4::ZERO; CHUNKS]; D],
+            scaled: [[Vec4::ZERO; CHUNKS]; D],
         }
     }
 }
@@ -76,6 +85,16 @@ impl<const D: usize> Mobility<D> {
         }
     }
 
+    /// Makes room for `axes` contact axes and clears their groups' Jacobian entries, for a step
+    /// that sets only each contact's non-zero ones ([`Mobility::contact`]).
+    pub fn begin(&mut self, axes: usize) {
+        self.reserve(axes);
+        let groups = axes.div_ceil(GROUP_AXES).max(1);
+        for group in &mut self.groups[..groups] {
+            group.jacobian = [[Vec4::ZERO; CHUNKS]; D];
+        }
+    }
+
     /// Sets contact axis `axis`'s Jacobian entry for degree of freedom `dof` (room made by
     /// [`Mobility::reserve`]). Every entry of the axes [`Mobility::compute`] is asked for must be
     /// set (entries are kept between steps).
@@ -86,7 +105,7 @@ impl<const D: usize> Mobility<D> {
     }
 
     /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
-    /// room made by [`Mobility::reserve`]): one lookup of its group for all its entries.
+    /// room made by [`Mobility::begin`]): one lookup of its group for all its entries.
     #[inline]
     pub fn contact(&mut self, i: usize) -> ContactAxes<'_, D> {
         let first = 3 * i;
@@ -125,14 +144,14 @@ impl<const D: usize> Mobility<D> {
             }
             return true;
         }
-        // more contacts (shins, a belly): M⁻¹·Aᵀ group by group (each column of Aᵀ is solved on
-        // its own), then W's blocks between every two groups
+        // more contacts (shins, a belly): Y and D⁻¹·Y group by group (each column of Aᵀ is
+        // solved on its own), then W's blocks between every two groups
         let needed = needed_rows::<CHUNKS, D>(&self.groups[..groups], axes, factors.parents());
         for g in 0..groups {
             let valid = lanes(axes - g * GROUP_AXES);
             let group = &mut self.groups[g];
             group.solved = group.jacobian;
-            solve::<CHUNKS, D>(&mut group.solved, factors, &needed, &valid);
+            solve::<CHUNKS, D>(group, factors, &needed, &valid);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
@@ -140,18 +159,18 @@ impl<const D: usize> Mobility<D> {
         for g in 0..groups {
             let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
             for d in (0..D).filter(|&d| needed[d]) {
-                let a_row = self.groups[g].jacobian[d];
+                let y_row = self.groups[g].solved[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
-                    let coefficient = a_row[lane / LANE].as_ref()[lane % LANE];
+                    let coefficient = y_row[lane / LANE].as_ref()[lane % LANE];
                     if coefficient == 0.0 {
                         continue;
                     }
                     for h in 0..groups {
-                        let x_row = &self.groups[h].solved[d];
+                        let z_row = &self.groups[h].scaled[d];
                         let w_row = &mut self.product[a * groups + h];
                         for c in 0..CHUNKS {
-                            w_row[c] += x_row[c] * coefficient;
+                            w_row[c] += z_row[c] * coefficient;
                         }
                     }
                 }
@@ -165,21 +184,21 @@ impl<const D: usize> Mobility<D> {
         let needed = needed_rows::<C, D>(&self.groups[..1], axes, factors.parents());
         let group = &mut self.groups[0];
         group.solved = group.jacobian;
-        solve::<C, D>(&mut group.solved, factors, &needed, &lanes(axes));
-        // W = A·X, row a = Σ_d A[a][d]·X[d] (A is sparse: a foot moves with the root and its leg,
-        // and a row of A without entries, not needed, adds nothing)
+        solve::<C, D>(group, factors, &needed, &lanes(axes));
+        // W = Yᵀ·(D⁻¹·Y), row a = Σ_d Y[d][a]·(D⁻¹·Y)[d] (Y is sparse: a foot moves with the
+        // root and its leg, and a row without entries, not needed, adds nothing)
         let product = &mut self.product[..axes];
         for row in product.iter_mut() {
             *row = [Vec4::ZERO; CHUNKS];
         }
-        // (A's row read as one run of lanes: no lane index computed per entry)
-        let rows = group.jacobian.iter().zip(group.solved.iter()).zip(needed);
-        for ((a_row, x_row), _) in rows.filter(|(_, needed)| *needed) {
-            let coefficients: [[f32; LANE]; C] = std::array::from_fn(|c| a_row[c].to_array());
+        // (Y's row read as one run of lanes: no lane index computed per entry)
+        let rows = group.solved.iter().zip(group.scaled.iter()).zip(needed);
+        for ((y_row, z_row), _) in rows.filter(|(_, needed)| *needed) {
+            let coefficients: [[f32; LANE]; C] = std::array::from_fn(|c| y_row[c].to_array());
             for (w_row, &coefficient) in product.iter_mut().zip(coefficients.as_flattened()) {
                 if coefficient != 0.0 {
                     for c in 0..C {
-                        w_row[c] += x_row[c] * coefficient;
+                        w_row[c] += z_row[c] * coefficient;
                     }
                 }
             }
@@ -276,26 +295,26 @@ fn needed_rows<const C: usize, const D: usize>(
     needed
 }
 
-/// M⁻¹·Aᵀ in place from the tree factors (column-major, entries only between a degree of freedom
-/// and its ancestors); `C` chunks of lanes. Only the rows `needed` ([`needed_rows`]) are solved
-/// for; the others are left as they are, and the product never reads them.
+/// Y = U⁻¹·Aᵀ in place in `group.solved` (holding Aᵀ) from the tree factors (column-major,
+/// entries only between a degree of freedom and its ancestors), and D⁻¹·Y into `group.scaled`;
+/// `C` chunks of lanes. Only the rows `needed` ([`needed_rows`]) are scaled; the others are left
+/// as they are, and the product never reads them.
 ///
-/// What is skipped changes no bit of what is read: on the way up a row that is zero in every
-/// lane of this step's axes (`valid`) would subtract nothing from its ancestors' (x − 0·u = x),
-/// and on the way down a row feeds only its descendants, which are not needed when it is not.
-/// A leg in the air so costs the solves nothing (its three rows, each with a chain of up to
-/// eight ancestors).
+/// What is skipped changes no bit of what is read: a row that is zero in every lane of this
+/// step's axes (`valid`) would subtract nothing from its ancestors' (y − 0·u = y). A leg in the
+/// air so costs the solve nothing (its three rows, each with a chain of up to eight ancestors).
 fn solve<const C: usize, const D: usize>(
-    x: &mut [Row; D],
+    group: &mut Group<D>,
     factors: &TreeLu,
     needed: &[bool; D],
     valid: &Lanes,
 ) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
+    let (y, scaled) = (&mut group.solved, &mut group.scaled);
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
     for k in (0..D).rev() {
-        let yk = x[k];
+        let yk = y[k];
         if !has_entry::<C>(&yk, valid) {
             continue;
         }
@@ -303,30 +322,17 @@ fn solve<const C: usize, const D: usize>(
         while i != NO_PARENT {
             let u = a[i + k * D];
             for c in 0..C {
-                x[i][c] -= yk[c] * u;
+                y[i][c] -= yk[c] * u;
             }
             i = parents[i];
         }
     }
-    // L·X = Y (lower): from the root down, a row's off-diagonal entries are its ancestors'
-    for k in 0..D {
-        if !needed[k] {
-            continue;
-        }
-        let mut row = x[k];
-        let mut j = parents[k];
-        while j != NO_PARENT {
-            let l = a[k + j * D];
-            for c in 0..C {
-                row[c] -= x[j][c] * l;
-            }
-            j = parents[j];
-        }
+    // D⁻¹·Y, D the diagonal of L
+    for k in (0..D).filter(|&k| needed[k]) {
         let inverse = 1.0 / a[k + k * D];
-        for v in &mut row[..C] {
-            *v *= inverse;
+        for (z, y) in scaled[k][..C].iter_mut().zip(&y[k][..C]) {
+            *z = *y * inverse;
         }
-        x[k] = row;
     }
 }
 

@@ -46,6 +46,8 @@ pub struct MultibodyRobot {
     start_angles: Vec<f64>,
     gains: ServoGains,
     dt: f64,
+    /// Per model link: its multibody link and its path ([`LinkPath`]).
+    link_paths: Vec<LinkPath>,
     /// Scratch for the contact mobility.
     scratch: Scratch,
 }
@@ -82,6 +84,7 @@ impl MultibodyRobot {
             dt: engine.dt(),
             // the loader gives six legs of equal length (`robot::branches`)
             scratch: Scratch::for_joints(model.joints.len()).expect("six legs alike"),
+            link_paths: Vec::new(),
         };
         for joint in &model.joints {
             let link = robot.multibody_link(engine, bodies[joint.child]);
@@ -93,6 +96,16 @@ impl MultibodyRobot {
             robot.links.push(link);
             robot.dofs.push(dof);
         }
+        robot.link_paths = bodies
+            .iter()
+            .map(|&body| {
+                let link = robot.multibody_link(engine, body);
+                LinkPath {
+                    link,
+                    dofs: dofs_on_path(robot.multibody(engine), link),
+                }
+            })
+            .collect();
         let mb = robot.multibody_mut(&mut engine.multibody_joints);
         // rapier's default damping of 0.1 on every degree of freedom is not part of the model:
         // air drag on the body is not modelled, and joint damping is the servo's
@@ -197,7 +210,7 @@ impl Joints for MultibodyRobot {
         mobility: &mut [DMat3],
     ) {
         let mb = self.multibody(engine);
-        let args = (engine, mb, contacts, velocities, mobility);
+        let args = (mb, &self.link_paths[..], contacts, velocities, mobility);
         match &mut self.scratch {
             Scratch::Legs3(scratch) => contact_mobility_in(scratch, args),
             Scratch::Legs4(scratch) => contact_mobility_in(scratch, args),
@@ -293,12 +306,33 @@ impl Scratch {
     }
 }
 
+/// A model link's multibody link, and the degrees of freedom on its path from the root in
+/// increasing order: the only columns of its body Jacobian rapier fills (patch 0002).
+struct LinkPath {
+    link: usize,
+    dofs: Vec<usize>,
+}
+
+/// The degrees of freedom on multibody link `link`'s path from the root, in increasing order:
+/// each ancestor link's joint's (the root's six first), then its own.
+fn dofs_on_path(mb: &Multibody, link: usize) -> Vec<usize> {
+    let mut dofs = Vec::new();
+    let mut at = Some(link);
+    while let Some(l) = at {
+        let l = mb.link(l).expect("a link's ancestors are links");
+        dofs.extend(l.assembly_id()..l.assembly_id() + l.joint().ndofs());
+        at = l.parent_id();
+    }
+    dofs.sort_unstable();
+    dofs
+}
+
 /// [`MultibodyRobot::contact_mobility`] with the scratch of `D` degrees of freedom.
 fn contact_mobility_in<const D: usize>(
     scratch: &mut Mobility<D>,
-    (engine, mb, contacts, velocities, mobility): (
-        &Engine,
+    (mb, link_paths, contacts, velocities, mobility): (
         &Multibody,
+        &[LinkPath],
         &[ContactPoint],
         &mut [DVec3],
         &mut [DMat3],
@@ -306,36 +340,26 @@ fn contact_mobility_in<const D: usize>(
 ) {
     let n = contacts.len();
     let q_dot = mb.generalized_velocity();
-    scratch.reserve(3 * n);
+    let q_dot = q_dot.as_slice();
+    // every entry cleared, then each contact's path set: a degree of freedom off a contact's path
+    // (another leg's joint: two thirds of them) moves its point not at all
+    scratch.begin(3 * n);
     for (i, c) in contacts.iter().enumerate() {
-        let link = engine
-            .multibody_joints
-            .rigid_body_link(c.body)
-            .expect("every model link is in the multibody")
-            .id;
+        let LinkPath { link, dofs: path } = &link_paths[c.link];
         // a material point's velocity column per degree of freedom: J_v − [r]×·J_ω, with the
         // arm r from the link's centre of mass (J the link's centre-of-mass Jacobian)
-        let jacobian = mb.body_jacobian(link);
+        let jacobian = mb.body_jacobian(*link).as_slice();
         let arm = c.point - c.com;
         let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
         let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
-        // a degree of freedom off the link's path (another leg's joint: two thirds of them)
-        // has a column of +0 (rapier clears the Jacobian before filling the path), whose
-        // point column is +0 and whose entries are these, computed once
-        let off_path = axes.map(|axis| axis.dot(glam::Vec3::ZERO));
         let mut velocity = glam::Vec3::ZERO;
         let mut rows = scratch.contact(i);
-        let columns = jacobian.as_slice().chunks_exact(6);
-        for (dof, (column, &rate)) in columns.zip(q_dot.as_slice()).enumerate() {
-            if column.iter().fold(0, |bits, v| bits | v.to_bits()) == 0 {
-                velocity += glam::Vec3::ZERO * rate;
-                rows.set(dof, off_path);
-                continue;
-            }
+        for &dof in path {
+            let column = &jacobian[6 * dof..6 * dof + 6];
             let linear = glam::Vec3::from_slice(&column[..3]);
             let angular = glam::Vec3::from_slice(&column[3..]);
             let point = linear - r.cross(angular);
-            velocity += point * rate;
+            velocity += point * q_dot[dof];
             rows.set(dof, axes.map(|axis| axis.dot(point)));
         }
         velocities[i] = velocity.as_dvec3();
@@ -347,12 +371,15 @@ fn contact_mobility_in<const D: usize>(
         scratch.compute(mb.augmented_mass_factors(), 3 * n),
         "the mass matrix is factorised from the start, {D} degrees of freedom"
     );
+    // W is symmetric (`mobility.rs`): each block above the diagonal is read, and mirrored below
     for i in 0..n {
-        for j in 0..n {
+        for j in i..n {
             let [x, y, z] = scratch
                 .block(i, j)
                 .map(|c| glam::Vec3::from_array(c).as_dvec3());
-            mobility[i * n + j] = DMat3::from_cols(x, y, z);
+            let block = DMat3::from_cols(x, y, z);
+            mobility[j * n + i] = block.transpose();
+            mobility[i * n + j] = block;
         }
     }
 }
