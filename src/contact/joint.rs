@@ -45,11 +45,11 @@ type Block = na::SMatrix<f64, { 2 * MAX_JOINT_CONTACTS }, { 2 * MAX_JOINT_CONTAC
 type Column = na::SVector<f64, { 2 * MAX_JOINT_CONTACTS }>;
 
 /// Singular values below this fraction of T_SS's largest count as zero in the least-squares
-/// solve of a singular joint problem (coincident contacts); an LU solution amplifying the
+/// solve of a singular joint problem (coincident contacts); a Cholesky or LU solution amplifying the
 /// right-hand side by more than its inverse (a condition number past 10⁹) is not trusted.
 const SINGULAR: f64 = 1e-9;
 
-/// The sticking contacts' T_SS·x = rhs: by LU when T_SS is well conditioned, else the
+/// The sticking contacts' T_SS·x = rhs: by Cholesky (or LU) when T_SS is well conditioned, else the
 /// least-squares solution of least norm (contacts that nearly coincide share their force instead
 /// of pulling against each other with huge internal forces). `active`: the rows in use; the
 /// unused ones (fixed-size storage) are padded with the active block's scale, so that the padding
@@ -84,8 +84,10 @@ where
     })
 }
 
-/// T_SS·x = rhs by LU (`active` rows in use, the rest padded as [`solve_sticking`] pads them),
-/// if its answer is finite and trusted (see [`SINGULAR`]).
+/// T_SS·x = rhs (`active` rows in use, the rest padded as [`solve_sticking`] pads them), if its
+/// answer is finite and trusted (see [`SINGULAR`]): by Cholesky, T_SS being symmetric positive
+/// definite when the contacts' points are apart (a block of the mobility W = A·M⁻¹·Aᵀ, half an
+/// LU's work and no pivot search), else, nearly singular, by LU.
 fn lu_trusted<D>(
     t_ss: na::OMatrix<f64, D, D>,
     rhs: &na::OVector<f64, D>,
@@ -103,6 +105,21 @@ where
     };
     let finite = |x: &na::OVector<f64, D>| x.iter().all(|v| v.is_finite());
     let trusted = |x: &na::OVector<f64, D>| x.amax() * scale * SINGULAR <= rhs.amax();
+    // a pivot below the cut-off relative to T_SS's scale: nearly singular (contacts that nearly
+    // coincide), where the answer's split between them is rounding's, not the least-norm one
+    let conditioned = |c: &na::Cholesky<f64, D>| {
+        let l = c.l_dirty();
+        (0..active).all(|k| l[(k, k)] * l[(k, k)] > SINGULAR * scale)
+    };
+    if let Some(x) = t_ss
+        .clone()
+        .cholesky()
+        .filter(conditioned)
+        .map(|c| c.solve(rhs))
+        .filter(|x| finite(x) && trusted(x))
+    {
+        return Some(x);
+    }
     t_ss.lu().solve(rhs).filter(|x| finite(x) && trusted(x))
 }
 
@@ -115,7 +132,7 @@ fn solve_blocks(
     rhs: impl Fn(usize) -> na::Vector2<f64>,
     out: &mut Vec<DVec2>,
 ) -> bool {
-    // by LU on exactly the rows in use first: the padded LU below gives these rows the same
+    // on exactly the rows in use first: the padded solve below gives these rows the same
     // arithmetic bit for bit (the padding's rows and columns are zero beside the block, so they
     // never win a pivot and subtract only zeros) at a fraction of its cost (12 × 12 for three
     // feet's 6 × 6); where that answer is not trusted, the padded solve as before
