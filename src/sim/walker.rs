@@ -156,8 +156,8 @@ impl BodyReference {
 
 /// Seconds over which a body set down tilted is brought to the levelling that following the
 /// terrain asks: all at once, a body set down parallel to 30° was pitched 11° in one step, and
-/// the jerk moved hex18 2.0 mm down the slope (V21, multibody; ramped: 0.18 mm, 0.19 mm since
-/// the walker rides a fitted ground plane).
+/// the jerk moved hex18 2.0 mm down the slope (V21, multibody; ramped: 0.18 mm, 0.17–0.19 mm
+/// since the walker rides a fitted ground plane).
 const LEVELLING_RAMP: f64 = 0.5;
 
 /// How far the body moves (m) and turns (the heading's change, ≈ rad) before the standing points
