@@ -75,7 +75,7 @@ where
     for k in active..t_ss.nrows() {
         t_ss[(k, k)] = scale;
     }
-    lu_trusted(t_ss.clone(), rhs, active).or_else(|| {
+    solve_trusted(t_ss.clone(), rhs, active).or_else(|| {
         let svd = t_ss.svd(true, true);
         let largest = svd.singular_values.amax();
         svd.solve(rhs, SINGULAR * largest)
@@ -88,7 +88,7 @@ where
 /// answer is finite and trusted (see [`SINGULAR`]): by Cholesky, T_SS being symmetric positive
 /// definite when the contacts' points are apart (a block of the mobility W = A·M⁻¹·Aᵀ, half an
 /// LU's work and no pivot search), else, nearly singular, by LU.
-fn lu_trusted<D>(
+fn solve_trusted<D>(
     t_ss: na::OMatrix<f64, D, D>,
     rhs: &na::OVector<f64, D>,
     active: usize,
@@ -143,7 +143,7 @@ fn solve_blocks(
                     let mut t_ss = na::OMatrix::<f64, $d, $d>::zeros();
                     let mut column = na::OVector::<f64, $d>::zeros();
                     fill_blocks(&mut t_ss, &mut column, m, &block, &rhs);
-                    lu_trusted(t_ss, &column, 2 * m)
+                    solve_trusted(t_ss, &column, 2 * m)
                         .map(|x| store(x.as_slice(), m, out))
                         .is_some()
                 })*

@@ -79,7 +79,7 @@ impl<const D: usize> Default for Mobility<D> {
 impl<const D: usize> Mobility<D> {
     /// Makes room for `axes` contact axes (allocating only the first time a step has that many).
     pub fn reserve(&mut self, axes: usize) {
-        let groups = axes.div_ceil(GROUP_AXES).max(1);
+        let groups = groups_for(axes);
         if groups > self.groups.len() {
             self.groups.resize_with(groups, Group::default);
         }
@@ -89,7 +89,7 @@ impl<const D: usize> Mobility<D> {
     /// that sets only each contact's non-zero ones ([`Mobility::contact`]).
     pub fn begin(&mut self, axes: usize) {
         self.reserve(axes);
-        let groups = axes.div_ceil(GROUP_AXES).max(1);
+        let groups = groups_for(axes);
         for group in &mut self.groups[..groups] {
             group.jacobian = [[Vec4::ZERO; CHUNKS]; D];
         }
@@ -126,7 +126,7 @@ impl<const D: usize> Mobility<D> {
             return false;
         }
         self.reserve(axes);
-        let groups = axes.div_ceil(GROUP_AXES).max(1);
+        let groups = groups_for(axes);
         self.in_use = groups;
         if self.product.len() < axes * groups {
             self.product.resize(axes * groups, [Vec4::ZERO; CHUNKS]);
@@ -246,6 +246,11 @@ impl<const D: usize> ContactAxes<'_, D> {
             row[chunk].as_mut()[lane] = value;
         }
     }
+}
+
+/// The groups that hold `axes` contact axes (at least one, kept between steps).
+fn groups_for(axes: usize) -> usize {
+    axes.div_ceil(GROUP_AXES).max(1)
 }
 
 /// The lanes of a group that hold this step's contact axes. The others keep the entries of an

@@ -378,8 +378,10 @@ fn contact_mobility_in<const D: usize>(
                 .block(i, j)
                 .map(|c| glam::Vec3::from_array(c).as_dvec3());
             let block = DMat3::from_cols(x, y, z);
-            mobility[j * n + i] = block.transpose();
             mobility[i * n + j] = block;
+            if j != i {
+                mobility[j * n + i] = block.transpose();
+            }
         }
     }
 }
