@@ -748,6 +748,7 @@ mod tests {
             drift,
             normal_force,
             rolling: None,
+            damper: None,
         };
         let mut states = [
             state(

@@ -133,6 +133,8 @@ pub struct PendingContact {
     pub demand: DVec2,
     /// The normal force's change since last step (through the body, it pushes other contacts).
     pub normal_change: f64,
+    /// The damper's part of `normal_force` (what the next step's push estimate subtracts).
+    pub damper: f64,
 }
 
 impl PendingContact {
@@ -194,6 +196,9 @@ pub struct ContactState {
     /// Last step's rolling-resistance and spin-friction torque and the body's angular velocity
     /// (world), for the rolling load estimate (see `rolling`).
     rolling: Option<(DVec3, DVec3)>,
+    /// Last step's penetration rate and the damper force applied, for the push estimate (see
+    /// [`ContactModel::begin`]); `None` on a contact's first step.
+    damper: Option<(f64, f64)>,
 }
 
 /// The contact's response over one step.
@@ -282,9 +287,16 @@ impl ContactModel {
         let local = frame.to_local(point_velocity);
         let normal_velocity = local.z;
         let slip = DVec2::new(local.x, local.y);
-        let normal_force =
-            self.normal
-                .force(geometry.penetration, -normal_velocity, normal_mass, dt);
+        // The push P on the body along the normal, estimated from last step (normal.rs): over it
+        // m·Δẋ = h·(P − F_d,last), so P = m·Δẋ/h + F_d,last, its spring at last step's depth (at
+        // this step's, a foot sinking steadily would meet c·ẋ·(1 − k·h²/m), not c·ẋ). A
+        // contact's first step has no history: the damper stops the body alone.
+        let rate = -normal_velocity;
+        let x = geometry.penetration;
+        let push = state.damper.map_or(0.0, |(last_rate, last_damper)| {
+            normal_mass * (rate - last_rate) / dt + last_damper
+        });
+        let normal_force = self.normal.force(x, rate, normal_mass, dt, push);
         let in_plane = |v: DVec3| DVec2::new(frame.tangent_x.dot(v), frame.tangent_y.dot(v));
         // F_stop = F_prev − M·u (see `friction`): u = (2v − v_prev)/h with last step's load, v/h
         // on a contact's first step; plus a fraction of the drift accumulated while sticking (the
@@ -305,6 +317,7 @@ impl ContactModel {
             previous_friction,
             demand,
             normal_change: normal_force - state.normal_force,
+            damper: normal_force - self.normal.elastic(x),
         })
     }
 
@@ -333,6 +346,7 @@ impl ContactModel {
         let slip_world = frame.to_world(pending.slip.extend(0.0));
         state.previous = Some((friction, slip_world));
         state.normal_force = pending.normal_force;
+        state.damper = Some((-pending.normal_velocity, pending.damper));
         state.drift = if outcome.sticking {
             state.drift + slip_world * dt
         } else {
@@ -489,6 +503,7 @@ mod tests {
             previous_friction: DVec2::ZERO,
             demand: DVec2::ZERO,
             normal_change: 0.0,
+            damper: 0.0,
         }
     }
 
@@ -520,6 +535,65 @@ mod tests {
             (2e-3, DVec3::new(-0.01, 0.0, 0.0))
         );
         assert!(!foot.sticking);
+    }
+
+    /// A 39 g foot (PhantomX's, along the normal) on a damper alone, c = 93 N·s/m at 1 ms (c·h/m
+    /// = 2.4), coming down at 0.6 m/s: `(push, rates)` over 40 steps of m·ẋ' = P − F, the
+    /// contact's force F from [`ContactModel::respond`].
+    fn pushed_foot(push: f64) -> (f64, f64, f64, Vec<f64>) {
+        let (m, c, h) = (0.039, 93.0, 1e-3);
+        let model = ContactModel {
+            normal: NormalLaw::SpringDamper {
+                stiffness: 0.0,
+                damping: c,
+            },
+            ..ContactModel::default()
+        };
+        let geometry = SphereGeometry {
+            penetration: 1e-3,
+            point: DVec3::ZERO,
+            frame: GroundFrame::from_normal(DVec3::Z),
+        };
+        let mut state = ContactState::default();
+        let mut rates = vec![0.6];
+        for _ in 0..40 {
+            let rate = *rates.last().unwrap();
+            let velocity = DVec3::new(0.0, 0.0, -rate);
+            let mass = EffectiveMass::particle(m);
+            let f = model
+                .respond(&geometry, velocity, &mass, h, &mut state)
+                .unwrap();
+            rates.push(rate + h / m * (push - f.normal_force));
+        }
+        (m, c, h, rates)
+    }
+
+    /// The damper is exact under a steady push (normal.rs): from the second step on (the first
+    /// has no estimate of P) each step's rate is the exact solution of m·ẋ' = P − c·ẋ,
+    /// P/c + (ẋ − P/c)·e^(−c·h/m), and a foot pushed at 20 N sinks at P/c = 0.215 m/s. The
+    /// damper alone (P = 0 in the law) would let it sink at P/(c·φ) = 0.49 m/s: the body above
+    /// would meet 41 N·s/m of damping, not 93.
+    #[test]
+    fn a_pushed_foot_meets_the_whole_damper() {
+        for push in [20.0, 2.0, 0.0] {
+            let (m, c, h, rates) = pushed_foot(push);
+            let decay = (-c * h / m).exp();
+            for pair in rates[1..].windows(2) {
+                let exact = push / c + (pair[0] - push / c) * decay;
+                assert!(
+                    (pair[1] - exact).abs() < 1e-12,
+                    "P = {push}: {} against the exact {exact}",
+                    pair[1]
+                );
+            }
+            let terminal = *rates.last().unwrap();
+            assert!(
+                (terminal - push / c).abs() < 1e-12,
+                "P = {push}: {terminal}"
+            );
+        }
+        let phi = exact_decay_factor(93.0 * 1e-3 / 0.039);
+        assert!(20.0 / (93.0 * phi) > 2.0 * 20.0 / 93.0);
     }
 
     /// hex18's foot in a trench (measured): W_nn = 7.6 /kg and W_nt = (11.4, 10.5) /kg. Friction

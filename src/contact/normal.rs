@@ -9,6 +9,22 @@
 //! φ = 0.93 for the 1 kg ball), and the damper can never reverse the normal velocity (it only takes
 //! energy out: passive) however light the body. The spring stays explicit; semi-implicit Euler keeps
 //! it stable while √(k/m)·h < 2, which [`NormalLaw::stable_time_step`] reports.
+//!
+//! ## A light body pushed by a heavy one
+//! That decay alone is right for a body the damper stops by itself (a ball, a swinging foot). A
+//! stance foot is different: the body comes down on it through a stiff leg, and its own mass m
+//! (1/W_nn) is a small part of what the damper has to stop. Under a push P (every other force
+//! along the normal on it, its own spring included) m·ẋ' = P − c·ẋ has ẋ(t) = P/c + (ẋ₀ − P/c)·
+//! e^(−c·t/m), and the damper's exact average over the step is
+//!
+//! F_d = P·(1 − φ) + c·ẋ₀·φ,  φ = φ(c·h/m).
+//!
+//! Without the push (P = 0) the damper gives only c·φ·ẋ: a foot pushed steadily sinks at
+//! P/(c·φ), not P/c, so the body meets c·φ ≤ m/h of damping — on a 39 g foot at 1 ms, 39 N·s/m
+//! against the 93 asked (docs/rough-ground-log.md, *Where a fall's depth comes from*). The
+//! caller estimates P from the last step ([`crate::contact::ContactModel::begin`]); F_d is kept
+//! between 0 and the law's own c·ẋ₀, so the damper only ever takes energy out and never more
+//! than the law as written asks.
 
 /// A normal force law on the penetration x ≥ 0 and its rate ẋ (positive when sinking in).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,25 +121,43 @@ impl NormalLaw {
         }
     }
 
-    /// The normal force for penetration `x` (> 0 in contact) and penetration rate `rate` (ẋ = −v_n),
-    /// on a body whose effective mass along the normal is `mass`, over a step `dt`.
-    pub fn force(&self, x: f64, rate: f64, mass: f64, dt: f64) -> f64 {
+    /// The spring's part alone: k·x (Hunt–Crossley k·xⁿ); 0 out of contact.
+    pub fn elastic(&self, x: f64) -> f64 {
         if x <= 0.0 {
             return 0.0;
         }
-        let (elastic, damping) = match *self {
-            NormalLaw::SpringDamper { stiffness, damping } => (stiffness * x, damping),
+        match *self {
+            NormalLaw::SpringDamper { stiffness, .. } => stiffness * x,
             NormalLaw::HuntCrossley {
                 stiffness,
                 exponent,
-                damping,
-            } => {
-                let elastic = stiffness * x.powf(exponent);
-                (elastic, elastic * damping)
-            }
+                ..
+            } => stiffness * x.powf(exponent),
+        }
+    }
+
+    /// The normal force for penetration `x` (> 0 in contact) and penetration rate `rate` (ẋ = −v_n),
+    /// on a body whose effective mass along the normal is `mass`, over a step `dt`, pushed into
+    /// the ground by `push` (P: every other normal force on it, its own spring included; 0 for
+    /// a body the damper stops alone). The spring k·x plus the damper's exact average over the
+    /// step, P·(1 − φ) + c·ẋ·φ, kept between 0 and c·ẋ (module doc); the sum clamped at ≥ 0.
+    pub fn force(&self, x: f64, rate: f64, mass: f64, dt: f64, push: f64) -> f64 {
+        if x <= 0.0 {
+            return 0.0;
+        }
+        let elastic = self.elastic(x);
+        let damping = match *self {
+            NormalLaw::SpringDamper { damping, .. } => damping,
+            NormalLaw::HuntCrossley { damping, .. } => elastic * damping,
         };
-        let damping = damping * exact_decay_factor(damping * dt / mass);
-        (elastic + damping * rate).max(0.0)
+        let phi = exact_decay_factor(damping * dt / mass);
+        let explicit = damping * rate;
+        let damper = if push == 0.0 {
+            explicit * phi
+        } else {
+            (push * (1.0 - phi) + explicit * phi).clamp(explicit.min(0.0), explicit.max(0.0))
+        };
+        (elastic + damper).max(0.0)
     }
 
     /// The law as written, its damper explicit: k·x + c·ẋ (Hunt–Crossley k·xⁿ·(1 + d·ẋ)),
@@ -238,21 +272,21 @@ mod tests {
             damping: 150.0,
         };
         // effectively explicit when c·h/m is tiny
-        let f = law.force(0.001, 0.2, 1e6, 1e-3);
+        let f = law.force(0.001, 0.2, 1e6, 1e-3, 0.0);
         assert!((f - (20.0 + 30.0)).abs() < 1e-3, "{f}");
     }
 
     #[test]
     fn never_pulls() {
         let law = NormalLaw::default();
-        assert_eq!(law.force(0.001, -10.0, 1.0, 1e-3), 0.0);
-        assert_eq!(law.force(-0.001, 1.0, 1.0, 1e-3), 0.0);
+        assert_eq!(law.force(0.001, -10.0, 1.0, 1e-3, 0.0), 0.0);
+        assert_eq!(law.force(-0.001, 1.0, 1.0, 1e-3, 0.0), 0.0);
         let hc = NormalLaw::HuntCrossley {
             stiffness: 2e6,
             exponent: 1.5,
             damping: 1.0,
         };
-        assert_eq!(hc.force(0.001, -5.0, 1.0, 1e-3), 0.0);
+        assert_eq!(hc.force(0.001, -5.0, 1.0, 1e-3, 0.0), 0.0);
     }
 
     #[test]
@@ -262,9 +296,9 @@ mod tests {
             exponent: 1.5,
             damping: 1.0,
         };
-        assert!(hc.force(1e-12, 3.0, 1.0, 1e-3) < 1e-8);
+        assert!(hc.force(1e-12, 3.0, 1.0, 1e-3, 0.0) < 1e-8);
         // F = k·x^n·(1 + d·ẋ) for a heavy body
-        let f = hc.force(1e-3, 0.5, 1e9, 1e-3);
+        let f = hc.force(1e-3, 0.5, 1e9, 1e-3, 0.0);
         assert!((f - 2e6 * 1e-3f64.powf(1.5) * 1.5).abs() < 1e-6);
     }
 
@@ -276,7 +310,7 @@ mod tests {
             damping: 150.0,
         };
         let (m, v, h) = (0.05, 1.0, 1e-3);
-        let impulse = law.force(1e-3, v, m, h) * h;
+        let impulse = law.force(1e-3, v, m, h, 0.0) * h;
         assert!(impulse < m * v);
         assert!((impulse - m * v * (1.0 - (-3.0f64).exp())).abs() < 1e-12);
     }

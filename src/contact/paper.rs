@@ -87,6 +87,7 @@ impl ContactModel {
             previous_friction: DVec2::ZERO,
             demand: DVec2::ZERO,
             normal_change: 0.0,
+            damper: 0.0,
         };
         Some(self.finish(&pending, stop, dt, state))
     }
