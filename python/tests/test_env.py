@@ -95,15 +95,16 @@ def test_the_vector_environment_equals_the_single_ones_bit_for_bit(env_id, threa
     np.testing.assert_array_equal(a[0], b[0])
     _assert_infos_equal(a[1], b[1], "reset")
     rng = np.random.default_rng(0)
-    truncated = 0
+    ended = np.zeros(3, dtype=bool)
     for k in range(40):
         actions = rng.uniform(-1, 1, size=vector.action_space.shape).astype(np.float32)
         got, want = vector.step(actions), singles.step(actions)
         for x, y in zip(got[:4], want[:4]):
             np.testing.assert_array_equal(x, y, err_msg=f"action {k}")
         _assert_infos_equal(got[4], want[4], f"action {k}")
-        truncated += int(got[3].sum())
-    assert truncated == 3, "each world truncated once, then reset"
+        # truncated at 30 actions, or terminated before by a fall the random joints caused
+        ended |= got[2] | got[3]
+    assert ended.all(), "each world's episode ended, then reset"
     vector.close()
     singles.close()
 

@@ -105,7 +105,7 @@ impl ContactModel {
         let (t1, t2, n) = (frame.tangent_x, frame.tangent_y, frame.normal);
         let inverse_inertia = glam::DMat3::from_diagonal(DVec3::splat(1.0 / body.inertia));
         let mass = EffectiveMass::rigid_body(body.mass, inverse_inertia, r, frame);
-        let pending = self.begin(geometry, point_velocity, mass.normal, dt, state)?;
+        let pending = self.begin(geometry, point_velocity, mass.normal, true, dt, state)?;
         if self.rolling_resistance <= 0.0 && self.spin_friction <= 0.0 {
             state.rolling = None;
             let stop = pending.stopping_force(mass.tangential);
