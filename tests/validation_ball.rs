@@ -918,7 +918,7 @@ fn v20_a_riser_is_a_wall() {
 /// energy ½·m·v² = 0.5 J goes into k = 2e4's spring (7.07 mm undamped). Measured: 6.45 mm into
 /// the face (closest approach 43.55 mm against the 45 mm asked; 6.43 mm before the damper
 /// counted the push, 6.16 mm before 56c8170); 5 mm would need k ≥ 3.2e4.
-/// The 0.33 mm past the head-on depth: for its first 4 ms the ball's one contact lies in the
+/// The 0.35 mm past the head-on depth: for its first 4 ms the ball's one contact lies in the
 /// riser's concave foot, its normal tilted up to 26° from horizontal and its depth short of the
 /// face's (1.11 mm against 1.97 mm), and it reaches the face itself 4.49 mm deep at 0.64 m/s
 /// (docs/physics.md, *What is not met*).

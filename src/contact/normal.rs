@@ -152,11 +152,8 @@ impl NormalLaw {
         };
         let phi = exact_decay_factor(damping * dt / mass);
         let explicit = damping * rate;
-        let damper = if push == 0.0 {
-            explicit * phi
-        } else {
-            (push * (1.0 - phi) + explicit * phi).clamp(explicit.min(0.0), explicit.max(0.0))
-        };
+        let damper =
+            (push * (1.0 - phi) + explicit * phi).clamp(explicit.min(0.0), explicit.max(0.0));
         (elastic + damper).max(0.0)
     }
 
