@@ -129,6 +129,10 @@ pub struct IkSolution {
 pub struct IkWarm {
     angles: [f64; 3],
     frames: [Frames; 2],
+    /// The Jacobian of each of `frames` and its determinant, where a solve computed them (the
+    /// branch test of the trial it took): the next iteration's, the next solve's first and the
+    /// rolling offset's ([`LegChain::foot_turn_map`]), not computed again.
+    jacobians: [Option<(DMat3, f64)>; 2],
     /// Which of `frames` are the answer's.
     now: usize,
 }
@@ -461,6 +465,7 @@ impl LegChain {
             let w = warm.insert(IkWarm {
                 angles: q,
                 frames: [NO_FRAMES; 2],
+                jacobians: [None; 2],
                 now: 0,
             });
             self.frames3_into(q, &mut w.frames[0]);
@@ -468,26 +473,43 @@ impl LegChain {
         let IkWarm {
             angles,
             frames,
+            jacobians,
             now,
         } = warm.as_mut().expect("set above");
         let mut error = target - frames[*now].1;
+        let mut distance = error.length();
         let mut lambda2 = LAMBDA2;
         'solve: for _ in 0..50 {
-            if error.length() < tolerance {
+            if distance < tolerance {
                 break;
             }
-            let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
+            let (j, det) = jacobians[*now].unwrap_or_else(|| {
+                let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
+                (j, j.determinant())
+            });
             let trial = 1 - *now;
-            // a trial is taken if it comes closer and, following, stays on the branch
-            let progress = |frames: &Frames| {
-                (target - frames.1).length() < error.length() && (!follow || same_branch(j, frames))
+            // a trial is taken if it comes closer and, following, stays on the branch (see
+            // [`same_branch`]); its Jacobian, computed for that, is kept for the next iteration
+            // (and the next solve, and [`Self::foot_turn_map`]) if it is taken
+            let progress = |frames: &Frames, jacobian: &mut Option<(DMat3, f64)>| {
+                *jacobian = None;
+                let closer = (target - frames.1).length();
+                let taken = closer < distance
+                    && (!follow || {
+                        let to = Self::jacobian_of(&frames.0, frames.1);
+                        let to_det = to.determinant();
+                        *jacobian = Some((to, to_det));
+                        same_branch(det, to_det)
+                    });
+                taken.then_some(closer)
             };
             let next = loop {
                 let step = self.step_within_limits(j, q, error, lambda2);
                 let next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
                 self.frames3_into(next, &mut frames[trial]);
-                if progress(&frames[trial]) {
+                if let Some(closer) = progress(&frames[trial], &mut jacobians[trial]) {
                     lambda2 = (lambda2 * 0.1).max(LAMBDA2);
+                    distance = closer;
                     break next;
                 }
                 if lambda2 == LAMBDA2 {
@@ -498,7 +520,8 @@ impl LegChain {
                         q[2] + 0.5 * step.z,
                     ]);
                     self.frames3_into(half, &mut frames[trial]);
-                    if progress(&frames[trial]) {
+                    if let Some(closer) = progress(&frames[trial], &mut jacobians[trial]) {
+                        distance = closer;
                         break half;
                     }
                 }
@@ -517,7 +540,7 @@ impl LegChain {
         *angles = q;
         IkSolution {
             angles: LegAngles::three(q),
-            error: error.length(),
+            error: distance,
         }
     }
 
@@ -557,22 +580,26 @@ impl LegChain {
     /// computed otherwise.
     pub fn foot_turn_map(&self, warm: Option<&IkWarm>, q: &[f64]) -> (DMat3, DVec3, DMat3) {
         let computed;
-        let (joints, foot, rotation): (&[(DVec3, DVec3)], DVec3, DMat3) = match warm {
+        let (joints, foot, rotation, jacobian): (&[(DVec3, DVec3)], DVec3, DMat3, _) = match warm {
             Some(w) if self.n == 3 && w.answers(q) => {
                 let (joints, foot, rotation, _) = w.frames();
-                (joints, *foot, *rotation)
+                (joints, *foot, *rotation, w.jacobians[w.now].map(|(j, _)| j))
             }
             _ => {
                 computed = self.frames(&self.angles(q));
-                (&computed.0[..self.n], computed.1, computed.2)
+                (&computed.0[..self.n], computed.1, computed.2, None)
             }
         };
-        // J's columns cᵢ = aᵢ × (foot − pᵢ): JJᵀ = Σ cᵢcᵢᵀ and A·Jᵀ = Σ aᵢcᵢᵀ
+        // J's columns cᵢ = aᵢ × (foot − pᵢ) (the solve's, where it kept them): JJᵀ = Σ cᵢcᵢᵀ
+        // and A·Jᵀ = Σ aᵢcᵢᵀ
         let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
         let mut jjt = DMat3::from_diagonal(DVec3::splat(LAMBDA2));
         let mut ajt = DMat3::ZERO;
-        for (p, a) in joints {
-            let c = a.cross(foot - *p);
+        for (i, (p, a)) in joints.iter().enumerate() {
+            let c = match jacobian {
+                Some(j) => j.col(i),
+                None => a.cross(foot - *p),
+            };
             jjt += outer(c, c);
             ajt += outer(*a, c);
         }
@@ -593,17 +620,13 @@ impl LegChain {
     }
 }
 
-/// Whether the pose of `frames` is on the same side of the leg's singular poses as the one
-/// whose Jacobian is `j`: det J changes sign where the leg passes through one (stretched,
-/// or its foot on the coxa's axis), and a knee's two branches have opposite signs. A step
-/// across is refused: a target out of reach is closest at the stretched pose, and a solve
-/// free to cross it comes back on either branch (ant_bot's knee, folded past 2 rad on its
+/// Whether a pose whose Jacobian's determinant is `to` is on the same side of the leg's
+/// singular poses as one whose is `from`: det J changes sign where the leg passes through one
+/// (stretched, or its foot on the coxa's axis), and a knee's two branches have opposite signs.
+/// A step across is refused: a target out of reach is closest at the stretched pose, and a
+/// solve free to cross it comes back on either branch (ant_bot's knee, folded past 2 rad on its
 /// femur's limit, then missed targets its usual branch reaches).
-fn same_branch(j: DMat3, frames: &Frames) -> bool {
-    let (from, to) = (
-        j.determinant(),
-        LegChain::jacobian_of(&frames.0, frames.1).determinant(),
-    );
+fn same_branch(from: f64, to: f64) -> bool {
     // a pose on the singular set itself (a straight leg at zero angles) belongs to neither
     from == 0.0 || from * to > 0.0
 }
