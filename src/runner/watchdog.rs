@@ -25,6 +25,9 @@ pub struct Watchdog {
     bodies: Vec<(String, f64, f64)>,
     /// Every model link's name (a walk's), for a link contact that went through.
     links: Vec<String>,
+    /// The largest foot radius (m; the ball's radius): how deep a link's contact sphere smaller
+    /// than it may sink (see [`Watchdog::check_walk`]).
+    feet_radius: f64,
     /// Weight carried by the contacts (N), to tell a soft ground from an unstable step.
     weight: f64,
     /// The ball's total energy at the start (J).
@@ -59,6 +62,11 @@ impl Watchdog {
                 })
                 .collect(),
             links: robot.links.iter().map(|l| l.name.clone()).collect(),
+            feet_radius: robot
+                .legs
+                .iter()
+                .map(|leg| leg.foot.radius)
+                .fold(0.0, f64::max),
             weight: robot.total_mass() * gravity / 3.0, // a tripod carries it on three feet
             start_energy: None,
             fell_at: Cell::new(None),
@@ -82,6 +90,7 @@ impl Watchdog {
             law,
             bodies: vec![("ball".into(), radius, mass)],
             links: Vec::new(),
+            feet_radius: radius,
             weight: mass * gravity,
             start_energy: Some(start.total_energy()),
             fell_at: Cell::new(None),
@@ -123,9 +132,8 @@ impl Watchdog {
         // feet lets sink that far under a light load (MushroomRL's tibia, 1.0 mm on a 2 cm
         // pyramid step, was called diverged in 92 of its 104 ladder runs); a depth past a foot's
         // radius is as far from a contact the ground resolves on a link as on a foot
-        let feet = self.bodies.iter().map(|b| b.1).fold(0.0, f64::max);
         for c in &s.link_contacts {
-            let bound = c.radius.max(feet);
+            let bound = c.radius.max(self.feet_radius);
             if !c.force.force.is_finite() || c.force.penetration > bound {
                 let what = format!(
                     "sank {:.1} mm into the ground, deeper than its {:.1} mm contact sphere{}",
@@ -295,8 +303,7 @@ mod tests {
         let feet = model.legs[0].foot.radius;
         let pressed = |radius: f64, depth: f64| {
             let mut s = sample(1.0, DAffine3::IDENTITY, 0.0);
-            let mut force = sample(1.0, DAffine3::IDENTITY, depth).foot_contacts[0].unwrap();
-            force.penetration = depth;
+            let force = sample(1.0, DAffine3::IDENTITY, depth).foot_contacts[0].unwrap();
             s.link_contacts.push(crate::sim::hexapod::LinkContact {
                 link: 3,
                 radius,
