@@ -388,11 +388,7 @@ impl GaitController {
     /// levelling's share of it), and no lower than the body's clearance allows
     /// ([`Self::body_offset`]'s margin).
     fn measured_lean(&self, model: &RobotModel) -> Lean {
-        let centre = centre_of_mass(model, &self.last);
-        let ground = (0..6)
-            .map(|k| self.neutral[k].z - self.radius[k])
-            .sum::<f64>()
-            / 6.0;
+        let (centre, height) = self.centre_over_feet(model);
         let folds = self
             .vertical_room
             .iter()
@@ -405,11 +401,33 @@ impl GaitController {
             folds.min(self.belly_margin)
         };
         Lean::new(
-            centre.z - ground,
+            height,
             self.support_margin(centre.truncate()),
             self.measured_horizontal_room(),
             crouch,
         )
+    }
+
+    /// The standing centre of mass (body frame) and its height over the feet's ground (m).
+    fn centre_over_feet(&self, model: &RobotModel) -> (DVec3, f64) {
+        let centre = centre_of_mass(model, &self.last);
+        let ground = (0..6)
+            .map(|k| self.neutral[k].z - self.radius[k])
+            .sum::<f64>()
+            / 6.0;
+        (centre, centre.z - ground)
+    }
+
+    /// The steepest tilt, any way, on which the gait's walk on level ground keeps its centre of
+    /// mass's plumb line inside every support polygon of its cycle (rad): the support margin's
+    /// least way m over the centre of mass's height h above the feet, atan(m / h) (the lean's
+    /// plumb line, [`super::lean`], meets the feet's plane h·tan θ off on a tilt θ). 0 for a
+    /// gait that leaves its centre of mass outside some support on level ground.
+    pub(super) fn static_tilt(&self, model: &RobotModel) -> f64 {
+        let (centre, height) = self.centre_over_feet(model);
+        let m = self.support_margin(centre.truncate());
+        let least = m.back.min(m.fore).min(m.right).min(m.left).max(0.0);
+        least.atan2(height.max(f64::MIN_POSITIVE))
     }
 
     /// How far all six stance tracks ([`STANCE_TRACK`]) may move together along each of the

@@ -13,6 +13,10 @@
 //!   the gait's fewest feet with half their effort to spare ([`TORQUE_SHARE`]), and the body's
 //!   lowest point clears the ground by a step height (what a foot steps over the body passes).
 //!   A grid over h ∈ [0.05, 0.95]·L, r ∈ [0.05, 1]·L, refined twice around the best cell.
+//!   Among the stances that pass, a steady one is preferred: its walk on level ground keeps the
+//!   centre of mass over the support on a tilt of [`STEADY_TILT`] any way, with [`STEADY_ROOM`]
+//!   of joint room; the most room alone chose tall stances on legs hanging under the hips, which
+//!   fell over on slopes and edges.
 //! - When no stance passes, the fitted stride and step height are halved (twice at most); when
 //!   still none passes, the error names what binds at the stance that came closest: a joint at
 //!   its limit, a servo short of torque, or the body too low.
@@ -32,6 +36,13 @@ const STRIDE_PER_LEG: f64 = 0.25;
 const STEP_PER_LEG: f64 = 0.125;
 /// Weight of the mean joint room against the least in the fit's score.
 const MEAN_WEIGHT: f64 = 0.1;
+/// A stance is steady when its walk on level ground keeps the centre of mass's plumb line inside
+/// the support on a tilt of this much, any way ([`GaitController::static_tilt`]), with its
+/// joints this much room; the fit takes the steady stance with the most room when there is one.
+/// On the ladders the public robots whose fitted stance was steady to 26° or less fell in 2–70
+/// of their 104 runs, those steady to 40° or more in none.
+pub const STEADY_TILT: f64 = 30.0 * std::f64::consts::PI / 180.0;
+pub const STEADY_ROOM: f64 = 15.0 * std::f64::consts::PI / 180.0;
 /// Grid cells per free length in the coarse search, and cycle instants sampled per candidate.
 const GRID: usize = 16;
 const SEARCH_SAMPLES: usize = 24;
@@ -105,6 +116,9 @@ pub struct Fitted {
     pub scale: f64,
     /// Joint angles per model joint, standing in the gait's pose.
     pub standing_pose: Vec<f64>,
+    /// The steepest tilt the walk keeps its centre of mass over its support on (rad;
+    /// [`GaitController::static_tilt`]).
+    pub static_tilt: f64,
 }
 
 impl Fitted {
@@ -130,6 +144,26 @@ impl Fitted {
                 self.scale
             ));
         }
+        lines.push(format!(
+            "walking on level ground its centre of mass stays over the support on tilts up to {:.1}°{}",
+            self.static_tilt.to_degrees(),
+            if self.static_tilt >= STEADY_TILT {
+                String::new()
+            } else if self.origins.stance_height == Origin::Fitted
+                || self.origins.reach == Origin::Fitted
+            {
+                format!(
+                    " (less than the {:.0}° of a steady stance: the fit found none with {:.0}° of joint room)",
+                    STEADY_TILT.to_degrees(),
+                    STEADY_ROOM.to_degrees()
+                )
+            } else {
+                format!(
+                    " (less than the {:.0}° of a steady stance; the stance is given)",
+                    STEADY_TILT.to_degrees()
+                )
+            }
+        ));
         let (joint, room) = self.margins.worst;
         let clearance = self.clearance.map_or(String::new(), |c| {
             format!("; body {c:.3} m above the ground")
@@ -256,6 +290,7 @@ fn measure(
     let standing_pose = model.pose_from_legs(&controller.standing_angles());
     let margins = cycle_margins(model, &gait).map_err(|e| FitError(e.to_string()))?;
     Ok(Fitted {
+        static_tilt: controller.static_tilt(model),
         load: load_in(model, &standing_pose, feet_down),
         clearance: body_depth.map(|depth| gait.stance_height - depth),
         standing_pose,
@@ -307,6 +342,8 @@ struct Assessment {
     step_height: f64,
     /// The score to maximise, or what is wrong with the stance.
     outcome: Result<f64, Problem>,
+    /// Whether the stance is steady ([`STEADY_TILT`], [`STEADY_ROOM`]); false when it fails.
+    steady: bool,
     /// How far from fitting (0 when it fits): the miss over the leg length, the torque excess
     /// as a share of the effort, the clearance shortfall over the leg length.
     penalty: f64,
@@ -408,6 +445,7 @@ impl Search<'_> {
             reach: r,
             step_height: gait.step_height,
             outcome,
+            steady: false,
             penalty,
         };
         let controller = match GaitController::for_cycle(self.model, gait.clone()) {
@@ -453,7 +491,11 @@ impl Search<'_> {
             );
         }
         let mean = margins.per_joint.iter().sum::<f64>() / margins.per_joint.len().max(1) as f64;
-        judged(Ok(margins.worst.1 + MEAN_WEIGHT * mean), 0.0)
+        Assessment {
+            steady: margins.worst.1 >= STEADY_ROOM
+                && controller.static_tilt(self.model) >= STEADY_TILT,
+            ..judged(Ok(margins.worst.1 + MEAN_WEIGHT * mean), 0.0)
+        }
     }
 
     /// The best (stance height, reach) with the given ones held, and the failure closest to
@@ -478,18 +520,23 @@ impl Search<'_> {
                     .collect()
             }
         };
-        let mut best: Option<Assessment> = None;
+        // the best stance, and the best steady one: the steady one is taken when there is one
+        let mut best: [Option<Assessment>; 2] = [None, None];
         let mut closest: [Option<Assessment>; 3] = [None, None, None];
         let consider = |a: Assessment,
-                        best: &mut Option<Assessment>,
+                        best: &mut [Option<Assessment>; 2],
                         closest: &mut [Option<Assessment>; 3]| {
             match a.outcome {
                 Ok(score) => {
-                    if best
-                        .as_ref()
-                        .is_none_or(|b| b.outcome.as_ref().is_ok_and(|&s| score > s))
-                    {
-                        *best = Some(a);
+                    let better = |b: &Option<Assessment>| {
+                        b.as_ref()
+                            .is_none_or(|b| b.outcome.as_ref().is_ok_and(|&s| score > s))
+                    };
+                    if a.steady && better(&best[1]) {
+                        best[1] = Some(a.clone());
+                    }
+                    if better(&best[0]) {
+                        best[0] = Some(a);
                     }
                 }
                 Err(ref problem) => {
@@ -510,8 +557,9 @@ impl Search<'_> {
             }
         }
         // refine twice: a 5 × 5 grid at half the spacing around the best
+        let chosen = |best: &[Option<Assessment>; 2]| best[1].clone().or_else(|| best[0].clone());
         for _ in 0..2 {
-            let Some(centre) = best.clone() else { break };
+            let Some(centre) = chosen(&best) else { break };
             h_step /= 2.0;
             r_step /= 2.0;
             let around = |c: f64, step: f64, lo: f64, hi: f64| -> Vec<f64> {
@@ -532,7 +580,7 @@ impl Search<'_> {
             }
         }
         (
-            best.map(|b| (b.stance_height, b.reach)),
+            chosen(&best).map(|b| (b.stance_height, b.reach)),
             closest.into_iter().flatten().collect(),
         )
     }

@@ -151,6 +151,9 @@ pub struct StanceMetrics {
     pub max_servo_joint: String,
     /// The body's lowest point above level ground, standing (m), when its shape is known.
     pub body_clearance: Option<f64>,
+    /// The steepest tilt on which the walk keeps its centre of mass over its support (deg;
+    /// `GaitController::static_tilt`).
+    pub static_tilt_deg: f64,
 }
 
 impl StanceMetrics {
@@ -178,6 +181,7 @@ impl StanceMetrics {
             max_servo_share: fitted.load.share,
             max_servo_joint: model.joints[fitted.load.joint].name.clone(),
             body_clearance: fitted.clearance,
+            static_tilt_deg: fitted.static_tilt.to_degrees(),
         }
     }
 }
