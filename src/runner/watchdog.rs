@@ -15,6 +15,14 @@ const WALK_RUNAWAY_SPIN: f64 = 50.0;
 /// A passive ball's total energy may rise by this fraction of its start (plus 0.5 J) before it is
 /// called runaway; the contact is passive, so a stable run stays well below (V9: 0.4 %).
 const BALL_ENERGY_RISE: f64 = 0.1;
+/// A robot's contact may sink as far as its ground gives under this many of the robot's weights
+/// (its normal law's static sink), whatever the sphere's radius: a leg presses the ground with
+/// at most 3 before it gives way (`gait::compliance::CAP`), and a landing adds to it. The ground
+/// fitted to a robot gives 4.9 mm there (the reference's 2·10⁴ N/m under four of hex18's
+/// 24.7 N), the ladder's 5 mm bar; a foot found at the tip of a mesh can be far smaller (the
+/// Phobos export's 2.2 mm, olli's 4.8 mm), and walking over an edge at that depth is a contact
+/// the ground resolves, not a divergence (it stopped 9 of Phobos's 104 ladder runs at 2.2–2.3 mm).
+const SINK_WEIGHTS: f64 = 4.0;
 
 /// Checks each step's state against what the contact and bodies allow.
 pub struct Watchdog {
@@ -28,6 +36,9 @@ pub struct Watchdog {
     /// The largest foot radius (m; the ball's radius): how deep a link's contact sphere smaller
     /// than it may sink (see [`Watchdog::check_walk`]).
     feet_radius: f64,
+    /// How far the ground gives under [`SINK_WEIGHTS`] of the robot's weights (m; 0 for the
+    /// ball): how deep any of a robot's contacts may sink, whatever its radius.
+    ground_give: f64,
     /// Weight carried by the contacts (N), to tell a soft ground from an unstable step.
     weight: f64,
     /// The ball's total energy at the start (J).
@@ -67,6 +78,7 @@ impl Watchdog {
                 .iter()
                 .map(|leg| leg.foot.radius)
                 .fold(0.0, f64::max),
+            ground_give: law.static_sink(SINK_WEIGHTS * robot.total_mass() * gravity),
             weight: robot.total_mass() * gravity / 3.0, // a tripod carries it on three feet
             start_energy: None,
             fell_at: Cell::new(None),
@@ -91,6 +103,7 @@ impl Watchdog {
             bodies: vec![("ball".into(), radius, mass)],
             links: Vec::new(),
             feet_radius: radius,
+            ground_give: 0.0,
             weight: mass * gravity,
             start_energy: Some(start.total_energy()),
             fell_at: Cell::new(None),
@@ -116,13 +129,15 @@ impl Watchdog {
             return Some(self.report(s.time, "non-finite state", "body and joints", None));
         }
         for (k, contact) in s.foot_contacts.iter().enumerate() {
+            let radius = self.bodies[k].1;
             if let Some(c) = contact
-                && (!c.force.is_finite() || c.penetration > self.bodies[k].1)
+                && (!c.force.is_finite() || c.penetration > radius.max(self.ground_give))
             {
                 let what = format!(
-                    "sank {:.1} mm into the ground, deeper than its {:.1} mm radius",
+                    "sank {:.1} mm into the ground, deeper than its {:.1} mm radius{}",
                     c.penetration * 1e3,
-                    self.bodies[k].1 * 1e3
+                    radius * 1e3,
+                    self.and_the_ground(radius)
                 );
                 return Some(self.report(s.time, &what, &self.bodies[k].0, Some(k)));
             }
@@ -133,17 +148,18 @@ impl Watchdog {
         // pyramid step, was called diverged in 92 of its 104 ladder runs); a depth past a foot's
         // radius is as far from a contact the ground resolves on a link as on a foot
         for c in &s.link_contacts {
-            let bound = c.radius.max(self.feet_radius);
-            if !c.force.force.is_finite() || c.force.penetration > bound {
+            let sphere = c.radius.max(self.feet_radius);
+            if !c.force.force.is_finite() || c.force.penetration > sphere.max(self.ground_give) {
                 let what = format!(
-                    "sank {:.1} mm into the ground, deeper than its {:.1} mm contact sphere{}",
+                    "sank {:.1} mm into the ground, deeper than its {:.1} mm contact sphere{}{}",
                     c.force.penetration * 1e3,
                     c.radius * 1e3,
-                    if bound > c.radius {
-                        format!(" and the feet's {:.1} mm radius", bound * 1e3)
+                    if sphere > c.radius {
+                        format!(" and the feet's {:.1} mm radius", sphere * 1e3)
                     } else {
                         String::new()
-                    }
+                    },
+                    self.and_the_ground(sphere)
                 );
                 let place = format!("link {}", self.links[c.link]);
                 return Some(self.report(s.time, &what, &place, None));
@@ -160,6 +176,18 @@ impl Watchdog {
             return Some(self.report(s.time, &what, "body", None));
         }
         None
+    }
+
+    /// What a report adds when the ground's give bounds a contact deeper than its `sphere`.
+    fn and_the_ground(&self, sphere: f64) -> String {
+        if self.ground_give > sphere {
+            format!(
+                " and the {:.1} mm the ground gives under {SINK_WEIGHTS} of the robot's weights",
+                self.ground_give * 1e3
+            )
+        } else {
+            String::new()
+        }
     }
 
     pub fn check_ball(&self, s: &BallSample) -> Option<String> {
@@ -317,6 +345,33 @@ mod tests {
         assert!(report.contains("and the feet's 10.0 mm radius"), "{report}");
         assert_eq!(pressed(2.0 * feet, 1.5 * feet), None);
         assert!(pressed(2.0 * feet, 2.1 * feet).is_some());
+    }
+
+    /// A foot smaller than the ground's give (the Phobos export's 2.2 mm, found at the tip of
+    /// a mesh) may sink as far as the ground gives under four of the robot's weights, 4.9 mm on
+    /// hex18's reference ground, and diverges past it, the report naming both bounds.
+    #[test]
+    fn a_small_foot_may_sink_as_far_as_the_ground_gives() {
+        let mut model = crate::robot::hex18_for_tests();
+        for leg in &mut model.legs {
+            leg.foot.radius = 2.2e-3;
+        }
+        let give = 4.0 * model.total_mass() * 9.81 / crate::contact::REFERENCE_STIFFNESS;
+        assert!((give - 4.9e-3).abs() < 0.1e-3, "{give}");
+        let watchdog = Watchdog::walk(&model, NormalLaw::default(), 1e-3, 9.81);
+        for depth in [2.3e-3, 0.99 * give] {
+            let verdict = watchdog.check_walk(&sample(1.0, DAffine3::IDENTITY, depth));
+            assert_eq!(verdict, None, "{depth}");
+        }
+        let report = watchdog
+            .check_walk(&sample(1.0, DAffine3::IDENTITY, 1.01 * give))
+            .expect("past the ground's give diverges");
+        assert!(
+            report.contains(
+                "deeper than its 2.2 mm radius and the 4.9 mm the ground gives under 4 of the robot's weights"
+            ),
+            "{report}"
+        );
     }
 
     /// A divergence after a servo rang names that joint's servo and when it started, even
