@@ -190,7 +190,8 @@ impl Faces {
 /// [`sphere_geometry`] on a grid with cliffs (`terrain/cliff.rs`): the surface is the treads and
 /// the walls between them, so the closest point is the nearest of the tread found from below the
 /// centre (and, if that is clear while the footprint holds higher ground, from the footprint's
-/// edges) and the closest point of each wall within reach. The nearest is kept, whichever side
+/// edges and from the sample nearest the centre: a box's side under the cliff threshold is a
+/// ramp one cell wide, which searches from the rim step over) and the closest point of each wall within reach. The nearest is kept, whichever side
 /// the centre is on; the side itself is read from the height below the centre (the centre is in
 /// the ground where it is lower than the surface above its own (x, y), walls included) — not from
 /// a tangent plane, which on an upper tread reaching over the lower one would call a centre
@@ -216,14 +217,17 @@ fn among_walls(
     };
     touching.add(best);
     let starts = if best.penetration <= 0.0 {
-        let edge = |u: f64, v: f64| Some((center.x + u * radius, center.y + v * radius));
-        let (e, w, n, s) = (
-            edge(1.0, 0.0),
-            edge(-1.0, 0.0),
-            edge(0.0, 1.0),
-            edge(0.0, -1.0),
-        );
-        [e, w, n, s, None, None, None, None]
+        let at = |u: f64, v: f64| Some((center.x + u * radius, center.y + v * radius));
+        [
+            at(1.0, 0.0),
+            at(-1.0, 0.0),
+            at(0.0, 1.0),
+            at(0.0, -1.0),
+            terrain.nearest_sample(center, radius),
+            None,
+            None,
+            None,
+        ]
     } else {
         crease_starts(terrain, center, radius, &best)
     };

@@ -405,6 +405,31 @@ impl HeightGrid {
         ]
     }
 
+    /// The (x, y) of the sample nearest to `p` among those in the square of half-width `r`
+    /// around it, if it lies within `r` of `p`: a point of the surface inside a sphere there,
+    /// from which a closest-point search reaches a feature narrower than the sphere (a box's
+    /// edge, one cell from the ground) that searches started at the footprint's rim step over.
+    pub fn nearest_sample(&self, p: DVec3, r: f64) -> Option<(f64, f64)> {
+        let (j0, _, _) = locate(p.x - r, self.x0, self.dx, self.nx);
+        let (j1, _, _) = locate(p.x + r, self.x0, self.dx, self.nx);
+        let (i0, _, _) = locate(p.y - r, self.y0, self.dy, self.ny);
+        let (i1, _, _) = locate(p.y + r, self.y0, self.dy, self.ny);
+        let mut best = None;
+        let mut nearest = r * r;
+        for i in i0..=i1 + 1 {
+            let y = self.y_at(i);
+            for j in j0..=j1 + 1 {
+                let x = self.x_at(j);
+                let d2 = DVec3::new(x, y, self.sample(i, j)).distance_squared(p);
+                if d2 < nearest {
+                    nearest = d2;
+                    best = Some((x, y));
+                }
+            }
+        }
+        best
+    }
+
     /// Calls `f` with every wall (a cliff's vertical face, [`cliff`]) in the cells the square of
     /// half-width `r` around (x, y) overlaps; nothing on a grid without cliffs.
     pub fn walls_near(&self, x: f64, y: f64, r: f64, mut f: impl FnMut(Wall)) {
