@@ -264,3 +264,47 @@ fn a_foot_beside_a_low_box_finds_its_edge_wherever_it_stands() {
         "the same edge 0.3 mm away: {floating} against {pressing}"
     );
 }
+
+/// WORMS (79 kg, feet 56 mm spheres on pads 0.115 m across) settling perceptive over
+/// `ladder/stones.toml` at its widest pits, 10 cm: the standing targets took each foot's ground
+/// from under its centre alone, 10 cm down in a pit one step and on a stone the next as the
+/// body swayed a millimetre, and the legs threw the body about until the run stopped for
+/// runaway motion 0.19–0.28 s into the settle (2, 4 and 10 cm pits all did). A foot stands on
+/// the ground its sole rests on (`foothold::resting_ground`): the pits' rims.
+#[test]
+fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
+    let dir = scratch("ladder-worms");
+    let family = std::fs::read_to_string(project_file("ladder/stones.toml")).unwrap();
+    let scenario = format!(
+        "robot = {:?}\nfollow_terrain = true\nreactive_gait = true\n{}",
+        project_file("tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf"),
+        &family[..family.find("[sweep]").unwrap()]
+    )
+    .replace(
+        "../gaits/tripod.toml",
+        &project_file("gaits/tripod.toml").display().to_string(),
+    )
+    .replace("gap = 0.02", "gap = 0.10")
+    .replace("duration = 25.0", "duration = 0.5");
+    let file = dir.join("stones.toml");
+    std::fs::write(&file, scenario).unwrap();
+    let json = dir.join("m.json");
+    let mut cmd = hexsim();
+    cmd.arg("run")
+        .arg(&file)
+        .arg("--metrics")
+        .arg(&json)
+        .arg("--allow-flags");
+    let m = metrics_of(cmd, &json, "WORMS settling over 10 cm pits");
+    let tilt = m["max_roll_deg"]
+        .as_f64()
+        .unwrap()
+        .max(m["max_pitch_deg"].as_f64().unwrap());
+    println!(
+        "walked {} s, tilt {tilt:.2}°, deepest foot {:.2} mm",
+        m["walk_time"],
+        m["max_penetration"].as_f64().unwrap() * 1e3
+    );
+    assert!(m["complete"].as_bool().unwrap(), "{m}");
+    assert!(tilt < 10.0, "tilted {tilt}°");
+}

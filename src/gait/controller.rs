@@ -84,6 +84,9 @@ pub struct GaitController {
     /// Each foot sphere's radius, and its link's orientation in the standing pose, for the
     /// rolling offset (see the module's doc).
     radius: [f64; 6],
+    /// How far each foot reaches across the ground, its sole's rim included
+    /// ([`crate::robot::contact_set::sole_reach`]): what a pit must be wider than to take it.
+    sole: [f64; 6],
     rest: [DMat3; 6],
     rolling: bool,
     /// The standing pose's angles per leg: the branch (knee bent the usual way) a solve that
@@ -302,6 +305,7 @@ impl GaitController {
             }
         }
         let radius = std::array::from_fn(|k| model.legs[k].foot.radius);
+        let sole = std::array::from_fn(|k| crate::robot::contact_set::sole_reach(model, k));
         let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]));
         let feet_ground = hips - spec.stance_height;
         let above = |c: &ContactSphere| c.center.z - c.radius - feet_ground;
@@ -321,6 +325,7 @@ impl GaitController {
             neutral,
             last,
             radius,
+            sole,
             rest,
             rolling: true,
             home: last,
@@ -775,11 +780,13 @@ impl GaitController {
             .fold(within, f64::max)
     }
 
+    /// The legs' angles standing still, each foot at its neutral point on the ground it rests on
+    /// there ([`foothold::resting_ground`]: a pit narrower than the foot holds it on its rims).
     pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [LegAngles; 6] {
         self.last_time = None;
         let angles = std::array::from_fn(|k| {
             let mut foot = self.neutral[k];
-            self.stance_ground[k] = ground(foot);
+            self.stance_ground[k] = foothold::resting_ground(&ground, foot, self.sole[k]);
             foot.z += self.stance_ground[k];
             let (_, solution) = self.place(k, foot, 0.0, true);
             self.last[k] = solution.angles;

@@ -79,6 +79,42 @@ pub fn stance_ground(
     }
 }
 
+/// The ground a foot reaching `radius` across stands on over `p`: the height of the lowest
+/// point of the sphere of that radius centred above `p` and resting on the ground (body frame,
+/// `ground`'s points), read from the centre and three rings of eight points across the
+/// footprint, each point's ground less the sphere's rise above its lowest point there,
+/// r − √(r² − d²). A flat sole wider than its foot sphere is taken as a sphere its width: its
+/// rim held on a pit's edges a little lower than the flat pad is (WORMS's 0.115 m pads over
+/// 10 cm pits: 11 mm below the rims, 24 mm where two pits cross).
+///
+/// The ground under the centre alone reads a pit narrower than the foot as the foot's ground:
+/// WORMS's feet standing over 2 cm stepping stones' gaps had targets 10 cm down in the pits and
+/// back on the stones as the settling body swayed a millimetre, and the legs threw the 79 kg
+/// body about until the run stopped for runaway motion. Over a pit narrower than the foot this
+/// reads its rims; over one wider, its floor.
+pub fn resting_ground(ground: &impl Fn(DVec3) -> f64, p: DVec3, radius: f64) -> f64 {
+    let d = std::f64::consts::FRAC_1_SQRT_2;
+    let ways = [
+        (1.0, 0.0),
+        (d, d),
+        (0.0, 1.0),
+        (-d, d),
+        (-1.0, 0.0),
+        (-d, -d),
+        (0.0, -1.0),
+        (d, -d),
+    ];
+    let mut top = ground(p);
+    for share in [0.35f64, 0.7, 0.95] {
+        let rise = radius * (1.0 - (1.0 - share * share).sqrt());
+        for (u, v) in ways {
+            let at = p + DVec3::new(u, v, 0.0) * (share * radius);
+            top = top.max(ground(at) - rise);
+        }
+    }
+    top
+}
+
 /// The shift (body frame, horizontal) that moves the foothold `p` off any edge within
 /// `radius + EDGE_MARGIN` of it: the shortest up to `longest`, tried along `direction` (the
 /// leg's travel across the ground) first, then against it, to either side and diagonally (a
@@ -229,6 +265,29 @@ mod tests {
             let shift = away_from_edges(&g, DVec3::new(0.2, 0.1, -0.1), DVec3::X, 0.01, 0.05);
             assert_eq!(shift, DVec3::ZERO);
         }
+    }
+
+    /// A 5 cm foot over a 2 cm trench stands on its rims, 1.0 mm below them (r − √(r² − 1²) cm);
+    /// over a 20 cm trench, on its floor; on a plane, on the plane; beside a riser, on the
+    /// riser's top where the footprint reaches over it.
+    #[test]
+    fn a_foot_rests_on_the_rims_of_a_pit_narrower_than_itself() {
+        let trench = |width: f64| move |p: DVec3| if p.x.abs() < width / 2.0 { -0.1 } else { 0.0 };
+        let r = 0.05;
+        let narrow = resting_ground(&trench(0.02), DVec3::ZERO, r);
+        let expected = -(r - (r * r - 0.01f64 * 0.01).sqrt());
+        assert!(
+            narrow <= 0.0 && narrow > -0.004,
+            "{narrow} against {expected}"
+        );
+        assert_eq!(resting_ground(&trench(0.2), DVec3::ZERO, r), -0.1);
+        assert_eq!(
+            resting_ground(&|_| 0.03, DVec3::new(0.1, 0.2, 0.0), r),
+            0.03
+        );
+        let beside = resting_ground(&riser, DVec3::new(0.29, 0.0, 0.0), r);
+        assert!(beside > 0.07 && beside < 0.08, "{beside}");
+        assert_eq!(resting_ground(&riser, DVec3::new(0.2, 0.0, 0.0), r), 0.0);
     }
 
     /// A foothold 1 cm short of a riser moves back onto its tread, one 1 cm past it forward onto

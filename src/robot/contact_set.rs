@@ -92,6 +92,18 @@ pub fn in_sole(sphere: &ContactSphere, foot: &super::model::Foot) -> bool {
     sphere.center.length() + sphere.radius >= reach - SOLE_DEPTH * foot.radius
 }
 
+/// How far leg `leg`'s foot reaches across the ground from its sphere's centre: its radius, or
+/// farther where a sole ([`in_sole`]) is wider (WORMS's pads: 0.115 m on a 56 mm sphere).
+pub fn sole_reach(model: &super::RobotModel, leg: usize) -> f64 {
+    let leg = &model.legs[leg];
+    model.links[leg.foot_link]
+        .contacts
+        .iter()
+        .filter(|sphere| in_sole(sphere, &leg.foot))
+        .map(|sphere| sphere.center.distance(leg.foot.center) + sphere.radius)
+        .fold(leg.foot.radius, f64::max)
+}
+
 /// For each contact sphere of link `link`, the leg whose foot's sole it is part of
 /// ([`in_sole`]): what the ground contact reports it as, and `hexsim robot` counts.
 pub fn soles(model: &super::RobotModel, link: usize) -> impl Iterator<Item = Option<usize>> + '_ {
