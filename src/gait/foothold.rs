@@ -91,8 +91,15 @@ pub fn stance_ground(
 /// WORMS's feet standing over 2 cm stepping stones' gaps had targets 10 cm down in the pits and
 /// back on the stones as the settling body swayed a millimetre, and the legs threw the 79 kg
 /// body about until the run stopped for runaway motion. Over a pit narrower than the foot this
-/// reads its rims; over one wider, its floor.
+/// reads its rims; over one wider, its floor. Where the footprint holds no edge ([`near_edge`])
+/// it is the centre's ground, as a walking stance foot reads it: on a plane the sphere rests a
+/// little higher than its lowest point's ground (r·(1/cos θ − 1), 2.2 mm for a 1 cm foot on
+/// 35°), and a settled stance that the walk's first step then lowered by as much moved hex18's
+/// feet perceptive down 35°.
 pub fn resting_ground(ground: &impl Fn(DVec3) -> f64, p: DVec3, radius: f64) -> f64 {
+    if !near_edge(ground, p, radius) {
+        return ground(p);
+    }
     let d = std::f64::consts::FRAC_1_SQRT_2;
     let ways = [
         (1.0, 0.0),
@@ -268,8 +275,8 @@ mod tests {
     }
 
     /// A 5 cm foot over a 2 cm trench stands on its rims, 1.0 mm below them (r − √(r² − 1²) cm);
-    /// over a 20 cm trench, on its floor; on a plane, on the plane; beside a riser, on the
-    /// riser's top where the footprint reaches over it.
+    /// over a 20 cm trench, on its floor; on a plane or a slope, on the ground under its centre;
+    /// beside a riser, on the riser's top where the footprint reaches over it.
     #[test]
     fn a_foot_rests_on_the_rims_of_a_pit_narrower_than_itself() {
         let trench = |width: f64| move |p: DVec3| if p.x.abs() < width / 2.0 { -0.1 } else { 0.0 };
@@ -285,6 +292,9 @@ mod tests {
             resting_ground(&|_| 0.03, DVec3::new(0.1, 0.2, 0.0), r),
             0.03
         );
+        let slope = |p: DVec3| 0.7 * p.x; // 35°: no edge, the centre's ground
+        let p = DVec3::new(0.1, 0.0, 0.0);
+        assert_eq!(resting_ground(&slope, p, r), slope(p));
         let beside = resting_ground(&riser, DVec3::new(0.29, 0.0, 0.0), r);
         assert!(beside > 0.07 && beside < 0.08, "{beside}");
         assert_eq!(resting_ground(&riser, DVec3::new(0.2, 0.0, 0.0), r), 0.0);
