@@ -110,8 +110,12 @@ pub struct GaitController {
     /// Perceptive planning per leg ([`Self::targets_on`]): the foothold shift (body frame,
     /// horizontal) of its stance, the one chosen for the swing under way, the ground its foot
     /// lifted off (in `ground`'s units; NaN before the first stance), and whether it swings.
+    /// With each foothold, how far its foot's sole rests above the ground under its centre
+    /// ([`foothold::resting_ground`]; zero off edges): read once per swing, for where it lands.
     foothold: [DVec3; 6],
     next_foothold: [DVec3; 6],
+    rim: [f64; 6],
+    next_rim: [f64; 6],
     stance_ground: [f64; 6],
     swinging: [bool; 6],
     /// Where the feet are (body frame, as `ground`'s points), when known: a stance foot stands
@@ -336,6 +340,8 @@ impl GaitController {
             compliance: None,
             foothold: [DVec3::ZERO; 6],
             next_foothold: [DVec3::ZERO; 6],
+            rim: [0.0; 6],
+            next_rim: [0.0; 6],
             stance_ground: [f64::NAN; 6],
             swinging: [false; 6],
             feet_at: None,
@@ -738,6 +744,24 @@ impl GaitController {
         std::array::from_fn(|k| STANCE_TRACK.map(|along| self.foothold_near(ground, k, along)))
     }
 
+    /// How far each point of the stance `track` lies under the ground its foot's sole rests on
+    /// there ([`foothold::resting_ground`] less the ground under the point): zero but where the
+    /// footprint holds an edge it could not be moved off. A track point in a pit narrower than
+    /// the sole read as the pit's floor crouched the body into it: WORMS (pads 0.115 m across)
+    /// over 2 and 4 cm stepping stones' gaps lowered its body 7.3 cm at once when settling, at
+    /// 3.6 m/s, and the run stopped for runaway motion. Read when the tracks are (they are held
+    /// while the body moves a little), not every step: an edge test of a wide sole is hundreds
+    /// of terrain reads.
+    pub fn track_rims(
+        &self,
+        ground: &impl Fn(DVec3) -> f64,
+        track: &[StanceTrack; 6],
+    ) -> [[f64; 3]; 6] {
+        std::array::from_fn(|k| {
+            track[k].map(|p| foothold::resting_ground(ground, p, self.sole[k]) - ground(p))
+        })
+    }
+
     /// Leg `k`'s foothold `along` strides forward of its neutral point, off any edge.
     fn foothold_near(&self, ground: &impl Fn(DVec3) -> f64, k: usize, along: f64) -> DVec3 {
         let p = self.neutral[k] + self.lean() + DVec3::X * along * self.spec.stride_length;
@@ -757,12 +781,20 @@ impl GaitController {
     /// 2.4 cm. Never lowered so far that the body's lowest sphere (`belly`) comes within half
     /// its standing clearance of the ground under it: lowered freely, ant_bot crouched 7.8 cm
     /// to reach a stair's lower tread and sat on the upper one.
-    pub fn body_offset(&self, ground: impl Fn(DVec3) -> f64, track: &[StanceTrack; 6]) -> f64 {
+    ///
+    /// `rims` holds how far each track point's sole rests above the ground under its centre
+    /// ([`Self::track_rims`]): a foot wider than a pit stands on its rims, not on its floor.
+    pub fn body_offset(
+        &self,
+        ground: impl Fn(DVec3) -> f64,
+        track: &[StanceTrack; 6],
+        rims: &[[f64; 3]; 6],
+    ) -> f64 {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
         for (k, points) in track.iter().enumerate() {
             let room = self.room_left(k);
-            for (&p, (down, up)) in points.iter().zip(room) {
-                let v = ground(p);
+            for ((&p, (down, up)), rim) in points.iter().zip(room).zip(rims[k]) {
+                let v = ground(p) + rim;
                 lo = lo.max(v - up);
                 hi = hi.min(v + down);
             }
@@ -787,6 +819,7 @@ impl GaitController {
         let angles = std::array::from_fn(|k| {
             let mut foot = self.neutral[k];
             self.stance_ground[k] = foothold::resting_ground(&ground, foot, self.sole[k]);
+            self.rim[k] = self.stance_ground[k] - ground(foot);
             foot.z += self.stance_ground[k];
             let (_, solution) = self.place(k, foot, 0.0, true);
             self.last[k] = solution.angles;
@@ -895,12 +928,13 @@ impl GaitController {
             if let Some(ground) = &ground {
                 foot.z += match phase {
                     LegPhase::Stance(_) => {
-                        self.stance_ground[k] = match self.feet_at {
-                            Some(feet) => {
-                                foothold::stance_ground(ground, foot, feet[k], self.radius[k])
-                            }
-                            None => ground(foot),
-                        };
+                        self.stance_ground[k] = self.rim[k]
+                            + match self.feet_at {
+                                Some(feet) => {
+                                    foothold::stance_ground(ground, foot, feet[k], self.radius[k])
+                                }
+                                None => ground(foot),
+                            };
                         self.stance_ground[k]
                     }
                     LegPhase::Swing(s) => {
@@ -910,7 +944,7 @@ impl GaitController {
                         let from = n + d * (0.5 + s * ratio) + self.foothold[k];
                         let to = n - d * (0.5 + (1.0 - s) * ratio) + self.next_foothold[k];
                         let crossed = SwingGround::new(ground, from, to, self.radius[k]);
-                        let landing = ground(to);
+                        let landing = ground(to) + self.next_rim[k];
                         let lifted = if self.stance_ground[k].is_nan() {
                             ground(from)
                         } else {
@@ -982,6 +1016,7 @@ impl GaitController {
             LegPhase::Stance(_) if self.swinging[k] => {
                 self.swinging[k] = false;
                 self.foothold[k] = self.next_foothold[k];
+                self.rim[k] = self.next_rim[k];
             }
             LegPhase::Swing(s) if !self.swinging[k] => {
                 self.swinging[k] = true;
@@ -1007,6 +1042,9 @@ impl GaitController {
                     self.spec.step_height,
                     reaches,
                 );
+                let there = landing + self.next_foothold[k];
+                self.next_rim[k] =
+                    foothold::resting_ground(ground, there, self.sole[k]) - ground(there);
             }
             _ => {}
         }
@@ -1388,7 +1426,7 @@ mod tests {
                 }
             };
             assert!(!reached(0, landing - DVec3::Z * depth), "{}", model.name);
-            let lowered = -c.body_offset(ground, &tracks);
+            let lowered = -c.body_offset(ground, &tracks, &[[0.0; 3]; 6]);
             assert!(lowered > 0.002, "{}: lowered {lowered}", model.name);
             for (k, track) in tracks.iter().enumerate() {
                 for &p in track {
@@ -1419,7 +1457,7 @@ mod tests {
                     0.0
                 }
             };
-            let lowered = -c.body_offset(hole, &tracks);
+            let lowered = -c.body_offset(hole, &tracks, &[[0.0; 3]; 6]);
             assert!(
                 (lowered - 0.5 * clearance).abs() < 1e-12,
                 "{}: lowered {lowered}, clearance {clearance}",

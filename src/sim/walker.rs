@@ -183,6 +183,9 @@ struct StandingPoints {
     /// The feet's stance tracks, each point off edges ([`GaitController::track_footholds`]):
     /// `[0]` the neutral foot.
     tracks: [StanceTrack; 6],
+    /// How far each track point's foot rests above the ground under it
+    /// ([`GaitController::track_rims`]).
+    rims: [[f64; 3]; 6],
     /// The tracks' ends on the ground (world frame, as searched in the level frame `ends_at`).
     ends: [[DVec3; 2]; 6],
     ends_at: (DVec3, glam::DMat3),
@@ -405,11 +408,13 @@ impl Walker {
                 (tracks, ends, (center, heading))
             }
         };
+        let rims = self.controller.track_rims(&ground, &tracks);
         let held = StandingPoints {
             center,
             heading,
             hips,
             tracks,
+            rims,
             ends,
             ends_at,
         };
@@ -451,7 +456,7 @@ impl Walker {
         };
         let share = ramp * controller.levelling(residual, planar, &standing.feet());
         let followed = |p: DVec3| residual(p) + share * planar(p);
-        let raised = controller.body_offset(followed, &standing.tracks);
+        let raised = controller.body_offset(followed, &standing.tracks, &standing.rims);
         // terrain − followed + raised, a plane: (1 − λ)·(measured + rise) + λ·level + raised
         let (center, heading) = Self::level_frame(hexapod);
         let to_world = |p: glam::DVec2| center.truncate() + heading.transform_vector2(p);
