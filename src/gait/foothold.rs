@@ -79,44 +79,37 @@ pub fn stance_ground(
     }
 }
 
-/// The ground a foot reaching `radius` across stands on over `p`: the height of the lowest
-/// point of the sphere of that radius centred above `p` and resting on the ground (body frame,
-/// `ground`'s points), read from the centre and three rings of eight points across the
-/// footprint, each point's ground less the sphere's rise above its lowest point there,
-/// r − √(r² − d²). A flat sole wider than its foot sphere is taken as a sphere its width: its
-/// rim held on a pit's edges a little lower than the flat pad is (WORMS's 0.115 m pads over
-/// 10 cm pits: 11 mm below the rims, 24 mm where two pits cross).
+/// The ground a foot reaching `radius` across stands on over `p` (body frame, `ground`'s points):
+/// over a pit narrower than the foot, where it rests on the pit's rims; elsewhere, the ground
+/// under its centre. The rims are read as a sphere of that radius centred above `p` rests on
+/// them: on three rings of points across the footprint, each pair of opposite points holds it
+/// at the lower of their grounds less the sphere's rise above its lowest point there,
+/// r − √(r² − d²), and the highest pair, if above the centre's ground, is its ground. A flat
+/// sole wider than its foot sphere is taken as a sphere its width, held on a pit's rims a
+/// little lower than the flat pad is (WORMS's 0.115 m pads over 10 cm pits: 11 mm below the
+/// rims, 24 mm where two pits cross).
 ///
-/// The ground under the centre alone reads a pit narrower than the foot as the foot's ground:
-/// WORMS's feet standing over 2 cm stepping stones' gaps had targets 10 cm down in the pits and
-/// back on the stones as the settling body swayed a millimetre, and the legs threw the 79 kg
-/// body about until the run stopped for runaway motion. Over a pit narrower than the foot this
-/// reads its rims; over one wider, its floor. Where the footprint holds no edge ([`near_edge`])
-/// it is the centre's ground, as a walking stance foot reads it: on a plane the sphere rests a
-/// little higher than its lowest point's ground (r·(1/cos θ − 1), 2.2 mm for a 1 cm foot on
-/// 35°), and a settled stance that the walk's first step then lowered by as much moved hex18's
-/// feet perceptive down 35°.
+/// Opposite points, not any one: high ground on one side alone (a stair's nose beside a foot
+/// centred over the tread below) tips a sole off, down onto the lower ground; read as its
+/// ground, WORMS's foot planned on a 12 cm stair's nose was pushed 7.2 mm into it. The ground
+/// under the centre alone reads a pit narrower than the foot as the foot's ground: WORMS's feet
+/// standing over 2 cm stepping stones' gaps had targets 10 cm down in the pits and back on the
+/// stones as the settling body swayed a millimetre, and the legs threw the 79 kg body about
+/// until the run stopped for runaway motion. Where the footprint holds no edge ([`near_edge`])
+/// it is the centre's ground, as a walking stance foot reads it: on a slope a sphere rests a
+/// little above its lowest point's ground (r·(1/cos θ − 1), 2.2 mm for a 1 cm foot on 35°).
 pub fn resting_ground(ground: &impl Fn(DVec3) -> f64, p: DVec3, radius: f64) -> f64 {
     if !near_edge(ground, p, radius) {
         return ground(p);
     }
     let d = std::f64::consts::FRAC_1_SQRT_2;
-    let ways = [
-        (1.0, 0.0),
-        (d, d),
-        (0.0, 1.0),
-        (-d, d),
-        (-1.0, 0.0),
-        (-d, -d),
-        (0.0, -1.0),
-        (d, -d),
-    ];
+    let axes = [(1.0, 0.0), (d, d), (0.0, 1.0), (-d, d)];
     let mut top = ground(p);
     for share in [0.35f64, 0.7, 0.95] {
         let rise = radius * (1.0 - (1.0 - share * share).sqrt());
-        for (u, v) in ways {
-            let at = p + DVec3::new(u, v, 0.0) * (share * radius);
-            top = top.max(ground(at) - rise);
+        for (u, v) in axes {
+            let off = DVec3::new(u, v, 0.0) * (share * radius);
+            top = top.max(ground(p + off).min(ground(p - off)) - rise);
         }
     }
     top
@@ -276,7 +269,7 @@ mod tests {
 
     /// A 5 cm foot over a 2 cm trench stands on its rims, 1.0 mm below them (r − √(r² − 1²) cm);
     /// over a 20 cm trench, on its floor; on a plane or a slope, on the ground under its centre;
-    /// beside a riser, on the riser's top where the footprint reaches over it.
+    /// beside a riser, on the tread under its centre (high ground on one side tips it off).
     #[test]
     fn a_foot_rests_on_the_rims_of_a_pit_narrower_than_itself() {
         let trench = |width: f64| move |p: DVec3| if p.x.abs() < width / 2.0 { -0.1 } else { 0.0 };
@@ -295,8 +288,9 @@ mod tests {
         let slope = |p: DVec3| 0.7 * p.x; // 35°: no edge, the centre's ground
         let p = DVec3::new(0.1, 0.0, 0.0);
         assert_eq!(resting_ground(&slope, p, r), slope(p));
-        let beside = resting_ground(&riser, DVec3::new(0.29, 0.0, 0.0), r);
-        assert!(beside > 0.07 && beside < 0.08, "{beside}");
+        // beside a riser, high ground on one side only: the lower tread
+        assert_eq!(resting_ground(&riser, DVec3::new(0.29, 0.0, 0.0), r), 0.0);
+        assert_eq!(resting_ground(&riser, DVec3::new(0.31, 0.0, 0.0), r), 0.08);
         assert_eq!(resting_ground(&riser, DVec3::new(0.2, 0.0, 0.0), r), 0.0);
     }
 
