@@ -42,7 +42,7 @@ fn a_ladder_reports_the_highest_level_crossed_and_what_stopped_the_robot() {
         format!(
             "description = \"up a slope\"\ngait = {:?}\nduration = 6.0\n\
              [terrain.source]\nkind = \"slope\"\nangle_deg = 5.0\nsize = [10.0, 10.0]\n\
-             [start]\nx = -1.0\ny = 0.0\n[expect]\nforward_min = 0.3\nmax_tilt_deg = 45\n\
+             [start]\nx = -1.0\ny = 0.0\n[expect]\nforward_min = 0.3\nmax_body_tilt_deg = 45\n\
              [sweep]\n\"terrain.source.angle_deg\" = [5.0, 38.0]\nfollow_terrain = [false, true]\n",
             project_file("gaits/tripod.toml")
         ),
@@ -307,4 +307,55 @@ fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
     );
     assert!(m["complete"].as_bool().unwrap(), "{m}");
     assert!(tilt < 10.0, "tilted {tilt}°");
+}
+
+/// A walk whose scenario stops at its fall (`stop_at_fall`, as the ladder's families do) ends on
+/// the step its body first tilts past 45° from upright: complete (its result decided, not cut
+/// short), the metrics' `fell_at` its last moment and its body's largest tilt just past 45°,
+/// where the same walk without the stop tumbles on. bullet (steady to 8.9°: its body 0.41 m up
+/// on feet close under it) walking up 20° falls backwards within a second of walking.
+#[test]
+fn a_walk_that_stops_at_its_fall_ends_on_the_step_it_fell() {
+    let dir = scratch("fall");
+    let walk = |stop: bool| {
+        let file = dir.join(format!("fall_{stop}.toml"));
+        std::fs::write(
+            &file,
+            format!(
+                "robot = {:?}\ngait = {:?}\nduration = 4.0\nstop_at_fall = {stop}\n\
+                 [terrain.source]\nkind = \"slope\"\nangle_deg = 20.0\nsize = [10.0, 10.0]\n\
+                 [start]\nattitude = \"ground\"\nx = -1.0\ny = 0.0\n",
+                project_file("tests/data/third_party/bullet_syropod/robot/bullet.urdf"),
+                project_file("gaits/tripod.toml")
+            ),
+        )
+        .unwrap();
+        let json = dir.join(format!("fall_{stop}.json"));
+        let out = hexsim()
+            .arg("run")
+            .arg(&file)
+            .args(["--no-record", "--allow-flags", "--metrics"])
+            .arg(&json)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        let metrics: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (stdout, metrics)
+    };
+    let (stdout, stopped) = walk(true);
+    let fell_at = stopped["fell_at"].as_f64().expect("bullet falls up 20°");
+    assert!(fell_at < 2.0, "{stopped}");
+    assert_eq!(stopped["complete"], true, "{stdout}");
+    assert_eq!(stopped["walk_time"].as_f64().unwrap(), fell_at, "{stopped}");
+    let tilt = stopped["max_body_tilt_deg"].as_f64().unwrap();
+    assert!(tilt > 45.0 && tilt < 46.0, "{tilt}");
+    assert!(!stdout.contains("stopped early"), "{stdout}");
+    let (_, tumbling) = walk(false);
+    assert_eq!(tumbling["fell_at"].as_f64(), Some(fell_at));
+    assert_eq!(tumbling["walk_time"].as_f64(), Some(4.0));
+    assert!(
+        tumbling["max_body_tilt_deg"].as_f64().unwrap() > 60.0,
+        "{tumbling}"
+    );
 }

@@ -316,7 +316,8 @@ impl Simulation {
             return Err(DivergedError::new_err(failure.to_string()));
         }
         if session.stopped() {
-            // an output's error: finishing says which and names the files still written
+            // an output's error (finishing says which and names the files still written), or
+            // the run's own end (its fall, in a scenario that stops at one)
             self.finish()?;
         }
         Ok(taken)

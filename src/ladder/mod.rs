@@ -5,14 +5,17 @@
 //! A family is a sweep scenario file (`ladder/*.toml`, runnable as it is with `hexsim batch`): its
 //! `[sweep]` lists the difficulty parameter's levels (one dotted key) and `follow_terrain =
 //! [false, true]`; its `[expect]` says what crossing is — `forward_min`, the distance to get past
-//! the start, and `max_tilt_deg = 45`, not falling. Blind runs walk the reactive gait
-//! (`reactive_gait = true` unless the family's file sets it; a plain `hexsim batch` of the
-//! files walks them rigid). The ladder is a client of the batch engine: it expands the families
-//! (for another robot, with that robot and a duration fitted to its speed), runs them as one
-//! batch and reads each run's record into an [`Outcome`]. A stall, a slide back, a fall or a
-//! divergence is a result, said as such; and a crossing that was not the walk commanded (its feet
-//! skated, it drifted or turned: the metrics' `walk_flags`) is a scramble, counted as crossed but
-//! told apart, with each family's highest level crossed as commanded beside its highest crossed.
+//! the start, and `max_body_tilt_deg = 45`, not falling (the body's tilt from upright); and
+//! `stop_at_fall = true` ends a run at its fall, which decides the level (what a tumbling robot
+//! does after is no part of it, as legged_gym ends an episode at a fall). Blind runs walk the
+//! reactive gait (`reactive_gait = true` unless the family's file sets it; a plain `hexsim
+//! batch` of the files walks them rigid). The ladder is a client of the batch engine: it expands
+//! the families (for another robot, with that robot and a duration fitted to its speed), runs
+//! them as one batch and reads each run's record into an [`Outcome`]. A stall, a slide back, a
+//! fall or a divergence is a result, said as such; and a crossing that was not the walk
+//! commanded (its feet skated, it drifted or turned: the metrics' `walk_flags`) is a scramble,
+//! counted as crossed but told apart, with each family's highest level crossed as commanded
+//! beside its highest crossed.
 
 pub mod chart;
 
@@ -136,6 +139,7 @@ pub struct RungResult {
     pub outcome: Outcome,
     /// Forward distance past the start (m), when the run produced one.
     pub forward: Option<f64>,
+    /// The body's largest tilt from upright (°): past 45° it fell.
     pub max_tilt_deg: Option<f64>,
     /// Deepest penetration of a foot and of any other link (m).
     pub max_penetration: Option<f64>,
@@ -356,11 +360,7 @@ pub fn summarise(
             perceptive: rung.perceptive,
             outcome,
             forward: metric("forward_distance"),
-            max_tilt_deg: record.and_then(|r| {
-                let roll = r.metrics.get("max_roll_deg")?.as_f64()?;
-                let pitch = r.metrics.get("max_pitch_deg")?.as_f64()?;
-                Some(roll.max(pitch))
-            }),
+            max_tilt_deg: metric("max_body_tilt_deg"),
             max_penetration: metric("max_penetration"),
             max_link_penetration: metric("max_link_penetration"),
             walk_flags: record.map(walk_flags).unwrap_or_default(),

@@ -31,7 +31,8 @@ pub const HEADING_BOUND_DEG: f64 = 10.0;
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default)]
 pub struct HexapodMetrics {
-    /// False when the run stopped early (interrupted or diverged).
+    /// False when the run stopped early (interrupted or diverged); a walk that stops at its fall
+    /// (`stop_at_fall`) is complete there.
     pub complete: bool,
     pub steps: u64,
     pub sim_time: f64,
@@ -50,6 +51,9 @@ pub struct HexapodMetrics {
     pub command_progress: f64,
     pub max_roll_deg: f64,
     pub max_pitch_deg: f64,
+    /// The body's largest tilt from upright over the walk: its z axis from the vertical (°),
+    /// what a fall is judged by ([`FALL_TILT`]; roll and pitch each below 45° may tilt it past).
+    pub max_body_tilt_deg: f64,
     pub rms_roll_deg: f64,
     pub rms_pitch_deg: f64,
     /// Body height above the terrain under it (m).
@@ -447,9 +451,11 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         self.walk_time = a.walk_steps as f64 * dt;
         self.mean_speed = self.distance / self.walk_time;
         self.heading_change_deg = a.yaw_total.to_degrees();
-        if tilt(&r.body.matrix3) > FALL_TILT && self.fell_at.is_none() {
+        let body_tilt = tilt(&r.body.matrix3);
+        if body_tilt > FALL_TILT && self.fell_at.is_none() {
             self.fell_at = Some(self.walk_time);
         }
+        self.max_body_tilt_deg = self.max_body_tilt_deg.max(body_tilt.to_degrees());
         self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
         self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
         a.roll2 += roll * roll;

@@ -1,7 +1,8 @@
 //! The one step loop every run goes through: step the simulation, check it has not left physics
 //! (the watchdog), hand the sample to the observers; stop early on divergence, on an observer's
-//! error or when interrupted, and finish every observer either way, so each file holds the run as
-//! far as it went.
+//! error, when interrupted or when the run's own end comes (a walk's fall, where its scenario
+//! stops at one), and finish every observer either way, so each file holds the run as far as it
+//! went.
 
 use crate::record::Observer;
 use anyhow::Result;
@@ -32,11 +33,18 @@ pub trait Stepper {
     /// Why `sample` is not physical, if it is not: what, where and the likely cause (see
     /// [`super::watchdog`]).
     fn diverged(&self, sample: &Self::Sample) -> Option<String>;
+
+    /// True when `sample` ends the run before its planned steps, its result decided (a walk
+    /// that stops at its fall): the run is complete there.
+    fn ended(&self, _sample: &Self::Sample) -> bool {
+        false
+    }
 }
 
 /// How the loop ended.
 pub struct LoopEnd {
-    /// False when the run stopped early (interrupted or diverged).
+    /// False when the run stopped early (interrupted or diverged); true when it took every
+    /// planned step or came to its own end ([`Stepper::ended`]).
     pub complete: bool,
     /// What diverged, if the run did.
     pub failure: Option<String>,
@@ -68,6 +76,8 @@ pub struct Looping<S> {
     error: Option<anyhow::Error>,
     /// What diverged: the loop takes no more steps.
     failure: Option<String>,
+    /// The run came to its own end ([`Stepper::ended`]): the loop takes no more steps.
+    ended: bool,
     taken: u64,
     /// Wall-clock seconds spent in `advance`.
     seconds: f64,
@@ -88,6 +98,7 @@ impl<S> Looping<S> {
         Looping {
             error,
             failure: None,
+            ended: false,
             taken: 0,
             seconds: 0.0,
             last,
@@ -95,7 +106,7 @@ impl<S> Looping<S> {
     }
 
     /// Takes up to `steps` more steps, each observed; fewer if the run diverges, an observer
-    /// fails or the process is interrupted. Returns the steps taken.
+    /// fails, it comes to its own end or the process is interrupted. Returns the steps taken.
     pub fn advance<T: Stepper<Sample = S>>(
         &mut self,
         stepper: &mut T,
@@ -114,6 +125,7 @@ impl<S> Looping<S> {
                 self.failure = Some(message);
             } else {
                 self.error = observe(observers, sample, stepper.world()).err();
+                self.ended = stepper.ended(sample);
             }
         }
         self.taken += taken;
@@ -121,9 +133,10 @@ impl<S> Looping<S> {
         taken
     }
 
-    /// True once the loop will take no more steps: diverged or an observer failed.
+    /// True once the loop will take no more steps: diverged, an observer failed or the run came
+    /// to its own end.
     pub fn stopped(&self) -> bool {
-        self.error.is_some() || self.failure.is_some()
+        self.error.is_some() || self.failure.is_some() || self.ended
     }
 
     /// What diverged, if the run did.
@@ -141,14 +154,15 @@ impl<S> Looping<S> {
         self.last.as_ref()
     }
 
-    /// Finishes every observer in order; the run is complete if it took `planned` steps and
-    /// neither diverged nor failed.
+    /// Finishes every observer in order; the run is complete if it took `planned` steps or came
+    /// to its own end, and neither diverged nor failed.
     pub fn finish<W: ?Sized>(
         self,
         planned: u64,
         observers: &mut [&mut dyn Observer<S, W>],
     ) -> Result<LoopEnd> {
-        let complete = self.taken == planned && !self.stopped();
+        let complete =
+            (self.taken == planned || self.ended) && self.error.is_none() && self.failure.is_none();
         let mut written = Vec::new();
         let mut finish_error = None;
         for observer in observers.iter_mut() {
@@ -198,11 +212,12 @@ mod tests {
         }
     }
 
-    /// Counts up; "diverges" at `diverge_at`.
+    /// Counts up; "diverges" at `diverge_at`, comes to its own end at `end_at`.
     struct Counter {
         n: u64,
         diverge_at: u64,
         initial: bool,
+        end_at: u64,
     }
 
     impl Stepper for Counter {
@@ -220,6 +235,9 @@ mod tests {
         }
         fn diverged(&self, s: &Count) -> Option<String> {
             (s.0 == self.diverge_at).then(|| format!("diverged at {}", s.0))
+        }
+        fn ended(&self, s: &Count) -> bool {
+            s.0 == self.end_at
         }
     }
 
@@ -273,6 +291,7 @@ mod tests {
             n: 0,
             diverge_at: 0,
             initial: true,
+            end_at: 0,
         };
         let end = run(&mut counter, 2, &mut [&mut a, &mut b]).unwrap();
         assert!(end.complete && end.failure.is_none());
@@ -284,6 +303,28 @@ mod tests {
         assert_eq!(*seen.lock().unwrap(), expected);
     }
 
+    /// A walk that stops at its fall: the fall's step observed, no step after it, and the run
+    /// complete (its result decided), not cut short.
+    #[test]
+    fn a_run_that_comes_to_its_own_end_stops_there_complete() {
+        let seen = Arc::new(Mutex::new(Vec::new()));
+        let (mut a, mut b) = logs(&seen, None);
+        let mut counter = Counter {
+            n: 0,
+            diverge_at: 0,
+            initial: false,
+            end_at: 3,
+        };
+        let end = run(&mut counter, 10, &mut [&mut a, &mut b]).unwrap();
+        assert!(end.complete && end.failure.is_none());
+        assert_eq!(end.steps, 3);
+        let seen = seen.lock().unwrap();
+        assert_eq!(
+            seen[4..],
+            ["a 3", "b 3", "a finished true", "b finished true"]
+        );
+    }
+
     #[test]
     fn the_diverged_step_is_observed_and_every_file_finished_incomplete() {
         let seen = Arc::new(Mutex::new(Vec::new()));
@@ -292,6 +333,7 @@ mod tests {
             n: 0,
             diverge_at: 3,
             initial: false,
+            end_at: 0,
         };
         let end = run(&mut counter, 10, &mut [&mut a, &mut b]).unwrap();
         assert!(!end.complete);
@@ -312,6 +354,7 @@ mod tests {
             n: 0,
             diverge_at: 0,
             initial: false,
+            end_at: 0,
         };
         let error = run(&mut counter, 10, &mut [&mut a, &mut b])
             .err()

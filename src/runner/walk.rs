@@ -6,6 +6,7 @@ use super::step_loop::{Looping, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, Fitted, GaitController, VelocityCommand};
+use crate::metrics::walk::{FALL_TILT, tilt};
 use crate::metrics::{GroundMetrics, HexapodMetrics, StanceMetrics};
 use crate::record::hexapod::WalkScene;
 use crate::record::{self, Observer, decimation};
@@ -34,6 +35,9 @@ pub struct WalkRun {
     pub settle_time: f64,
     /// How the walker drives its legs, as the scenario's fields of the same names say.
     pub switches: WalkSwitches,
+    /// End the walk when the robot falls (its body past [`FALL_TILT`] from upright, as the
+    /// metrics' `fell_at` reads it): the run is complete there, its result decided.
+    pub stop_at_fall: bool,
     /// Seconds walked.
     pub duration: f64,
     /// Samples per second in the recording and trajectory.
@@ -81,6 +85,8 @@ struct Walking {
     /// A command that replaces the schedule (a caller steering step by step).
     command: Option<VelocityCommand>,
     watchdog: Watchdog,
+    /// See [`WalkRun::stop_at_fall`].
+    stop_at_fall: bool,
 }
 
 impl Walking {
@@ -114,6 +120,11 @@ impl Stepper for Walking {
 
     fn diverged(&self, sample: &WalkSample) -> Option<String> {
         self.watchdog.check_walk(&sample.robot)
+    }
+
+    fn ended(&self, sample: &WalkSample) -> bool {
+        // the metrics' test of a fall, on the same samples (the walk's, not the settling's)
+        self.stop_at_fall && !sample.settling && tilt(&sample.robot.body.matrix3) > FALL_TILT
     }
 }
 
@@ -193,6 +204,7 @@ impl WalkRun {
                 dt,
                 crate::sim::STANDARD_GRAVITY,
             ),
+            stop_at_fall: self.stop_at_fall,
         };
         let mut session = WalkSession {
             walking,
@@ -262,7 +274,8 @@ impl WalkSession {
         self.looping().steps()
     }
 
-    /// True once no more steps will be taken: the run diverged or an output failed.
+    /// True once no more steps will be taken: the run diverged, an output failed or it ended at
+    /// the robot's fall (`stop_at_fall`).
     pub fn stopped(&self) -> bool {
         self.looping().stopped()
     }

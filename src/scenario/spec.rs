@@ -138,6 +138,11 @@ pub struct ScenarioSpec {
     /// walks (default false: the gait turns open loop; see `gait::heading`).
     #[serde(default)]
     pub hold_heading: Option<bool>,
+    /// End the walk when the robot falls (its body tilted past 45°, the metrics' `fell_at`): the
+    /// fall decides a ladder level, as legged_gym's terrain curriculum ends an episode, and what
+    /// a robot does tumbling on is no part of it (default false: the walk goes on to its end).
+    #[serde(default)]
+    pub stop_at_fall: Option<bool>,
     /// How the links are joined: `multibody` (default) or `impulse` (faster; joints drift a little).
     #[serde(default)]
     pub articulation: Option<crate::sim::Articulation>,
@@ -173,7 +178,7 @@ pub const DEFAULT_DT: f64 = crate::setup::time_step::DEFAULT_DT;
 
 impl ScenarioSpec {
     /// A walk's fields, each with whether it is set: a ball scenario must set none.
-    pub fn walk_fields(&self) -> [(&'static str, bool); 15] {
+    pub fn walk_fields(&self) -> [(&'static str, bool); 16] {
         [
             ("robot", self.robot.is_some()),
             ("gait", self.gait.is_some()),
@@ -184,6 +189,7 @@ impl ScenarioSpec {
             ("compliant_legs", self.compliant_legs.is_some()),
             ("lean_on_slopes", self.lean_on_slopes.is_some()),
             ("hold_heading", self.hold_heading.is_some()),
+            ("stop_at_fall", self.stop_at_fall.is_some()),
             ("articulation", self.articulation.is_some()),
             ("solver_iterations", self.solver_iterations.is_some()),
             ("pgs_iterations", self.pgs_iterations.is_some()),

@@ -148,6 +148,16 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
     },
     TILT,
     Metric {
+        name: "max_body_tilt_deg",
+        unit: "°",
+        what: "largest tilt of the body from upright: its z axis from the vertical (past 45° it fell)",
+        // as `tilt_deg`, a bound, not compared with baselines (older ones lack it)
+        noise: None,
+        better: Better::Lower,
+        bounds: &[Bound::max("max_body_tilt_deg")],
+        value: |m| Value::One(m.max_body_tilt_deg),
+    },
+    Metric {
         name: "rms_roll_deg",
         unit: "°",
         what: "root mean square of the roll over the walk's steps",
