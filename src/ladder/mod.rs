@@ -7,7 +7,8 @@
 //! [false, true]`; its `[expect]` says what crossing is — `forward_min`, the distance to get past
 //! the start, and `max_body_tilt_deg = 45`, not falling (the body's tilt from upright); and
 //! `stop_at_fall = true` ends a run at its fall, which decides the level (what a tumbling robot
-//! does after is no part of it, as legged_gym ends an episode at a fall). Blind runs walk the
+//! does after is no part of it, as legged_gym ends an episode at a fall; set unless the family's
+//! file sets it, and a run whose body tilted past 45° is a fall whatever its file bounds). Blind runs walk the
 //! reactive gait (`reactive_gait = true` unless the family's file sets it; a plain `hexsim
 //! batch` of the files walks them rigid). The ladder is a client of the batch engine: it expands
 //! the families (for another robot, with that robot and a duration fitted to its speed), runs
@@ -87,22 +88,22 @@ impl Outcome {
         }
     }
 
-    /// What a run's record says happened: crossing needs every expectation met, and crossing as
-    /// commanded no walk flag as well.
+    /// What a run's record says happened: crossing needs every expectation met and no fall (the
+    /// body past 45° from upright, the metrics' `fell_at`, whatever a family's file bounds), and
+    /// crossing as commanded no walk flag as well.
     pub fn of(record: &Record) -> Outcome {
         let metric = |name: &str| record.metrics.get(name).and_then(|v| v.as_f64());
         match record.status {
             Status::Error => return Outcome::Error,
             Status::Diverged => return Outcome::Diverged,
+            _ if metric("fell_at").is_some() => return Outcome::Fell,
             Status::Passed | Status::Regressed if walk_flags(record).is_empty() => {
                 return Outcome::Crossed;
             }
             Status::Passed | Status::Regressed => return Outcome::Scrambled,
             Status::Failed => {}
         }
-        if metric("fell_at").is_some() {
-            Outcome::Fell
-        } else if metric("forward_distance").is_some_and(|d| d < -SLID_BACK) {
+        if metric("forward_distance").is_some_and(|d| d < -SLID_BACK) {
             Outcome::SlidBack
         } else {
             Outcome::Stalled
@@ -252,6 +253,10 @@ pub fn load(files: &[PathBuf], robot: Option<&Path>) -> Result<Ladder, ScenarioE
                 // terrain they know, and heights found by touch fight that plan (hex18,
                 // perceptive and reactive, fell down 10 cm stairs it descends without).
                 table.insert("reactive_gait".into(), toml::Value::Boolean(true));
+            }
+            if !table.contains_key("stop_at_fall") {
+                // a fall decides the level: a family of its own stops there as ladder/'s do
+                table.insert("stop_at_fall".into(), toml::Value::Boolean(true));
             }
             let mut scenario = scenario::from_table(table.clone(), run_name.clone(), &path)?;
             if robot.is_some() {
@@ -543,6 +548,23 @@ mod tests {
                 "| 0.04 (stalled at 0.06); as commanded 0.02 (scrambled at 0.04) | 0.06 (all) |"
             ),
             "{table}"
+        );
+    }
+
+    /// A run whose body tilted past 45° from upright fell, even where its family's file bounds
+    /// only roll and pitch (each under 45°) and the run passed them, or got its distance first.
+    #[test]
+    fn a_run_that_fell_is_a_fall_whatever_it_passed() {
+        let mut fell = record("b2", "passed", 2.8, &[]);
+        fell.metrics["fell_at"] = serde_json::json!(7.6);
+        assert_eq!(Outcome::of(&fell), Outcome::Fell);
+        fell.status = Status::Failed;
+        assert_eq!(Outcome::of(&fell), Outcome::Fell);
+        fell.status = Status::Diverged;
+        assert_eq!(Outcome::of(&fell), Outcome::Diverged);
+        assert_eq!(
+            Outcome::of(&record("b2", "passed", 2.8, &[])),
+            Outcome::Crossed
         );
     }
 
