@@ -351,11 +351,30 @@ fn a_walk_that_stops_at_its_fall_ends_on_the_step_it_fell() {
     let tilt = stopped["max_body_tilt_deg"].as_f64().unwrap();
     assert!(tilt > 45.0 && tilt < 46.0, "{tilt}");
     assert!(!stdout.contains("stopped early"), "{stdout}");
-    let (_, tumbling) = walk(false);
+    assert!(stdout.contains("the walk stopped there"), "{stdout}");
+    let (stdout, tumbling) = walk(false);
     assert_eq!(tumbling["fell_at"].as_f64(), Some(fell_at));
     assert_eq!(tumbling["walk_time"].as_f64(), Some(4.0));
     assert!(
         tumbling["max_body_tilt_deg"].as_f64().unwrap() > 60.0,
         "{tumbling}"
     );
+    assert!(!stdout.contains("the walk stopped there"), "{stdout}");
+    // the command line's flag: up the 15° slope file it falls later, and stops there too
+    let json = dir.join("flag.json");
+    let mut cmd = hexsim();
+    cmd.arg("run")
+        .arg("--robot")
+        .arg(project_file(
+            "tests/data/third_party/bullet_syropod/robot/bullet.urdf",
+        ))
+        .arg("--terrain")
+        .arg(project_file("terrains/slope15.toml"))
+        .args(["--on-ground", "--stop-at-fall", "--duration", "10"])
+        .args(["--no-record", "--allow-flags", "--metrics"])
+        .arg(&json);
+    let flagged = metrics_of(cmd, &json, "--stop-at-fall");
+    let fell_at = flagged["fell_at"].as_f64().expect("bullet falls up 15°");
+    assert_eq!(flagged["walk_time"].as_f64(), Some(fell_at), "{flagged}");
+    assert!(fell_at < 10.0 && flagged["complete"] == true, "{flagged}");
 }

@@ -25,7 +25,7 @@ pub struct RunArgs {
             "speed", "sideways", "turn", "start", "heading", "on_ground", "seed",
             "servo_stiffness", "servo_damping", "no_feedforward", "no_rolling", "articulation",
             "solver_iterations", "pgs_iterations", "log_rate", "allow_unstable_dt",
-            "stiff_legs", "no_lean", "hold_heading",
+            "stiff_legs", "no_lean", "hold_heading", "stop_at_fall",
         ]
     )]
     scenario: Option<PathBuf>,
@@ -68,6 +68,11 @@ pub struct RunArgs {
     /// foot turns the body for good).
     #[arg(long)]
     hold_heading: bool,
+    /// End the walk when the robot falls: its body tilted past 45° from upright (the metrics'
+    /// `fell_at`), the run complete there, as the terrain ladder's runs end (default: the walk
+    /// goes on to its duration, the robot tumbling).
+    #[arg(long)]
+    stop_at_fall: bool,
     /// Time step (s). Default: 1 ms, or 1 ms / n where the robot's lightest servo, the contact
     /// spring (impulse joints' feet against a terrain's walls too) or the landing feet need a
     /// smaller step (a warning says so). A step given is
@@ -218,6 +223,7 @@ fn spec(args: &RunArgs) -> ScenarioSpec {
         compliant_legs: args.stiff_legs.then_some(false),
         lean_on_slopes: args.no_lean.then_some(false),
         hold_heading: args.hold_heading.then_some(true),
+        stop_at_fall: args.stop_at_fall.then_some(true),
         articulation: Some(args.articulation),
         solver_iterations: Some(args.solver_iterations),
         pgs_iterations: args.pgs_iterations,
@@ -337,8 +343,13 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     }
     if let Some(t) = m.fell_at {
         println!(
-            "  warning: the robot fell at {t:.2} s into the walk (its body tilted past {:.0}°)",
-            hexsim::metrics::walk::FALL_TILT.to_degrees()
+            "  warning: the robot fell at {t:.2} s into the walk (its body tilted past {:.0}°){}",
+            hexsim::metrics::walk::FALL_TILT.to_degrees(),
+            if scenario.spec.stop_at_fall == Some(true) {
+                "; the walk stopped there (stop_at_fall)"
+            } else {
+                ""
+            }
         );
     }
     if !m.link_contact_time.is_empty() {
