@@ -8,9 +8,9 @@
 //! the start, and `max_body_tilt_deg = 45`, not falling (the body's tilt from upright); and
 //! `stop_at_fall = true` ends a run at its fall, which decides the level (what a tumbling robot
 //! does after is no part of it, as legged_gym ends an episode at a fall; set unless the family's
-//! file sets it, and a run whose body tilted past 45° is a fall whatever its file bounds). Blind runs walk the
-//! reactive gait (`reactive_gait = true` unless the family's file sets it; a plain `hexsim
-//! batch` of the files walks them rigid). The ladder is a client of the batch engine: it expands
+//! file sets it, and a run whose body tilted past 45° is a fall whatever its file bounds). Blind
+//! runs walk the reactive gait (`reactive_gait = true` unless the family's file sets it; a plain
+//! `hexsim batch` of the files walks them rigid). The ladder is a client of the batch engine: it expands
 //! the families (for another robot, with that robot and a duration fitted to its speed), runs
 //! them as one batch and reads each run's record into an [`Outcome`]. A stall, a slide back, a
 //! fall or a divergence is a result, said as such; and a crossing that was not the walk

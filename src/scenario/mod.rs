@@ -89,8 +89,6 @@ struct WalkSetup {
     settings: HexapodSettings,
     settle: f64,
     switches: crate::runner::walk::WalkSwitches,
-    /// End the walk at the robot's fall (the scenario's `stop_at_fall`).
-    stop_at_fall: bool,
     start: spec::StartSpec,
     /// The contact's stiffness and damping and where they came from.
     ground: crate::metrics::GroundMetrics,
@@ -308,7 +306,7 @@ impl Scenario {
             settings: w.settings,
             settle_time: w.settle,
             switches: w.switches,
-            stop_at_fall: w.stop_at_fall,
+            stop_at_fall: self.spec.stop_at_fall.unwrap_or(false),
             duration: self.spec.duration,
             log_rate: self.log_rate,
             outputs,

@@ -476,7 +476,6 @@ fn resolve_walk(
         },
         settle,
         switches: spec.switches(),
-        stop_at_fall: spec.stop_at_fall.unwrap_or(false),
         start: spec.start.unwrap_or_default(),
         ground,
     })
