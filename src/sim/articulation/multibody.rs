@@ -350,19 +350,21 @@ fn contact_mobility_in<const D: usize>(
         // arm r from the link's centre of mass (J the link's centre-of-mass Jacobian)
         let jacobian = mb.body_jacobian(*link).as_slice();
         let arm = c.point - c.com;
-        let r = glam::Vec3::new(arm.x as f32, arm.y as f32, arm.z as f32);
-        let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal].map(|a| a.as_vec3());
-        let mut velocity = glam::Vec3::ZERO;
+        // in SSE registers (`Vec3A`): the same products and sums, lane by lane, as scalars
+        let r = glam::Vec3A::new(arm.x as f32, arm.y as f32, arm.z as f32);
+        let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal]
+            .map(|a| glam::Vec3A::from(a.as_vec3()));
+        let mut velocity = glam::Vec3A::ZERO;
         let mut rows = scratch.contact(i);
         for &dof in path {
             let column = &jacobian[6 * dof..6 * dof + 6];
-            let linear = glam::Vec3::from_slice(&column[..3]);
-            let angular = glam::Vec3::from_slice(&column[3..]);
+            let linear = glam::Vec3A::from_slice(&column[..3]);
+            let angular = glam::Vec3A::from_slice(&column[3..]);
             let point = linear - r.cross(angular);
             velocity += point * q_dot[dof];
             rows.set(dof, axes.map(|axis| axis.dot(point)));
         }
-        velocities[i] = velocity.as_dvec3();
+        velocities[i] = glam::Vec3::from(velocity).as_dvec3();
     }
     if n == 0 {
         return;
