@@ -65,6 +65,13 @@ impl Figure {
         self.rapier_share
             .map(|share| self.steps_per_second / share.max(1e-9))
     }
+
+    /// hexsim's own part of a step (s): the step's wall time less rapier's, by the clock —
+    /// the figure issue 45 bounds (≤ 4 µs), which a share alone hides.
+    pub fn own_step_seconds(&self) -> Option<f64> {
+        self.rapier_share
+            .map(|share| (1.0 - share) / self.steps_per_second.max(1e-9))
+    }
 }
 
 /// The whole benchmark.

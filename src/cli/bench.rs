@@ -64,10 +64,13 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         if let Some(d) = f.max_joint_drift {
             notes.push(format!("joint drift ≤ {:.1} µm", d * 1e6));
         }
-        if let (Some(share), Some(ceiling)) = (f.rapier_share, f.rapier_ceiling()) {
+        if let (Some(share), Some(ceiling), Some(own)) =
+            (f.rapier_share, f.rapier_ceiling(), f.own_step_seconds())
+        {
             notes.push(format!(
-                "rapier's step {:.0} % (alone {ceiling:.0} steps/s)",
-                share * 100.0
+                "rapier's step {:.0} % (alone {ceiling:.0} steps/s), hexsim's own {:.1} µs a step",
+                share * 100.0,
+                own * 1e6
             ));
         }
         println!(
