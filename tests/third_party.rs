@@ -869,3 +869,44 @@ fn the_fitted_stance_is_steady_where_a_steady_one_exists() {
         "{bullet}"
     );
 }
+
+/// A robot whose legs all point sideways from hips close together fore and aft stands on
+/// tripods shorter than its stride, and no stance height or reach makes it steady: MushroomRL's
+/// hips are 0.08 m fore and aft, so a tripod's triangle spans ±0.04 m at its centre of mass
+/// against a 0.101 m stride (steady to 0.0°, and it fell in 73 of its 104 ladder runs). The fit
+/// then turns the front and rear feet towards the body's ends (`Gait::splay`), taking the least
+/// of 15°, 30°, 45° with a steady stance whose links other than the feet stay 5 mm off the
+/// level ground over the whole cycle; it walks straight on flat ground on its feet alone.
+#[test]
+fn a_robot_on_short_tripods_splays_its_front_and_rear_feet() {
+    let robot = "tests/data/third_party/mushroom_hexapod/hexapod.urdf";
+    let out = hexsim().args(["robot", robot]).output().unwrap();
+    assert!(out.status.success());
+    let report = String::from_utf8_lossy(&out.stdout).into_owned();
+    let number_after = |marker: &str, unit: char| -> f64 {
+        let at = report
+            .find(marker)
+            .unwrap_or_else(|| panic!("{marker:?} in {report}"));
+        let rest = &report[at + marker.len()..];
+        rest[..rest.find(unit).unwrap()].trim().parse().unwrap()
+    };
+    assert!(
+        report.contains("front and rear feet splayed 45° towards the body's ends (fitted)"),
+        "{report}"
+    );
+    assert!(
+        number_after("over the support on tilts up to", '°') >= 30.0,
+        "{report}"
+    );
+    assert!(
+        number_after("least joint room over a cycle", '°') >= 15.0,
+        "{report}"
+    );
+    assert!(
+        number_after("links other than the feet", 'm') >= 0.005,
+        "{report}"
+    );
+    let m = walk(robot, "terrains/flat.toml", "splayed");
+    assert_eq!(m["max_link_penetration"], 0.0, "{m}");
+    assert!(m["forward_distance"].as_f64().unwrap() > 1.5, "{m}");
+}

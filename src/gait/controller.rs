@@ -224,7 +224,7 @@ impl GaitController {
         for (k, chain) in chains.iter().enumerate() {
             let leg = &model.legs[k];
             let reach = spec.reach;
-            let yaw = chain.rest_yaw();
+            let yaw = chain.rest_yaw() + splay_turn(k) * spec.splay;
             let hip = chain.hip();
             neutral[k] = DVec3::new(
                 hip.x + reach * yaw.cos(),
@@ -1130,6 +1130,19 @@ impl GaitController {
     }
 }
 
+/// Which way [`Gait::splay`] turns leg `k`'s standing foot about its hip ([`crate::robot::LEG_NAMES`]
+/// order: lf, lm, lr, rf, rm, rr): a front foot towards the front (clockwise on the left,
+/// counter-clockwise on the right, seen from above), a rear one towards the rear, a middle one
+/// not at all.
+fn splay_turn(k: usize) -> f64 {
+    let left = if k < 3 { 1.0 } else { -1.0 };
+    match k % 3 {
+        0 => -left,
+        2 => left,
+        _ => 0.0,
+    }
+}
+
 /// The most solves more a leg's first targets take to read the rolling offset at the pose it
 /// moves the foot to ([`GaitController::place`]), and the change of offset (m) they stop at: a
 /// hundredth of the IK's tolerance, so that the next step's, read from it, goes on without a
@@ -1282,6 +1295,33 @@ mod tests {
             "/tests/data/third_party/ant_bot/ant_bot/urdf/hexapod.urdf"
         );
         crate::robot::load(std::path::Path::new(path)).unwrap()
+    }
+
+    /// A splay turns each front foot about its hip towards the front and each rear foot towards
+    /// the rear, by the splay and at the same reach; the middle feet stay.
+    #[test]
+    fn a_splay_turns_the_front_and_rear_feet_towards_the_ends() {
+        let (model, gait) = hex18_tripod();
+        let straight = GaitController::for_cycle(&model, gait.clone()).unwrap();
+        let splay = 20f64.to_radians();
+        let splayed = GaitController::for_cycle(&model, Gait { splay, ..gait }).unwrap();
+        for k in 0..6 {
+            let hip = straight.chains[k].hip().truncate();
+            let (before, after) = (
+                straight.neutral[k].truncate() - hip,
+                splayed.neutral[k].truncate() - hip,
+            );
+            let turn = before.angle_to(after);
+            let forward = after.x - before.x;
+            let at = format!("leg {k}: {before} → {after}, turned {turn}");
+            assert!((after.length() - before.length()).abs() < 1e-9, "{at}");
+            match k % 3 {
+                0 => assert!((turn.abs() - splay).abs() < 1e-9 && forward > 0.02, "{at}"),
+                2 => assert!((turn.abs() - splay).abs() < 1e-9 && forward < -0.02, "{at}"),
+                _ => assert!(turn.abs() < 1e-9, "{at}"),
+            }
+            assert_eq!(splayed.neutral[k].z, straight.neutral[k].z);
+        }
     }
 
     /// hex18 and the tripod fitted to it.

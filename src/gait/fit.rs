@@ -16,7 +16,13 @@
 //!   Among the stances that pass, a steady one is preferred: its walk on level ground keeps the
 //!   centre of mass over the support on a tilt of [`STEADY_TILT`] any way, with [`STEADY_ROOM`]
 //!   of joint room; the most room alone chose tall stances on legs hanging under the hips, which
-//!   fell over on slopes and edges.
+//!   fell over on slopes and edges. No stance may put a link other than a foot on the level
+//!   ground over the cycle (a shin or a knee walked on).
+//! - Splay: when the stance found is steady to less than [`SPLAY_BELOW`] (legs that all point
+//!   sideways from hips close together stand on tripods shorter than their stride), the front
+//!   and rear feet are turned towards the body's ends by the least of [`SPLAYS`] that gives a
+//!   steady stance, its links [`SPLAYED_LINK_MARGIN`] clear of the ground (a gait file may give
+//!   `splay_deg` itself).
 //! - When no stance passes, the fitted stride and step height are halved (twice at most); when
 //!   still none passes, the error names what binds at the stance that came closest: a joint at
 //!   its limit, a servo short of torque, or the body too low.
@@ -46,6 +52,25 @@ pub const STEADY_ROOM: f64 = 15.0 * std::f64::consts::PI / 180.0;
 /// Grid cells per free length in the coarse search, and cycle instants sampled per candidate.
 const GRID: usize = 16;
 const SEARCH_SAMPLES: usize = 24;
+/// The splays ([`Gait::splay`]) the fit tries, in turn, when the stance it finds with the legs
+/// as they point is steady to less than [`SPLAY_BELOW`]: the first with a steady stance is
+/// taken.
+const SPLAYS: [f64; 4] = [
+    0.0,
+    15.0 * std::f64::consts::PI / 180.0,
+    30.0 * std::f64::consts::PI / 180.0,
+    45.0 * std::f64::consts::PI / 180.0,
+];
+/// A stance steady to this tilt or more keeps the legs' own direction, steady or not. Measured
+/// on the ladders (rough-ground.md, *Splayed stances*): hexapod_description (17.5° → 30.3° at
+/// 15°) and MushroomRL (0° → 34.2° at 45°) fell far less splayed; WORMS (26.1° → 31.9° at 15°)
+/// diverged in 3 perceptive runs, settling on another knee branch.
+const SPLAY_BELOW: f64 = 20.0 * std::f64::consts::PI / 180.0;
+/// How far the links other than the feet of a splayed stance must stay above the level ground
+/// over the cycle (m): turned towards the ends, legs bring their shins lower (MushroomRL's to
+/// 1 mm at 45°), and a shin that clears level ground by less than the depth a contact may
+/// reach (the ladder's 5 mm) walks on the ground wherever it is uneven.
+const SPLAYED_LINK_MARGIN: f64 = 0.005;
 /// Standard gravity for the torque check (m/s²).
 const GRAVITY: f64 = 9.80665;
 
@@ -74,6 +99,7 @@ pub struct Origins {
     pub reach: Origin,
     pub step_height: Origin,
     pub stride_length: Origin,
+    pub splay: Origin,
 }
 
 impl Origins {
@@ -83,6 +109,7 @@ impl Origins {
             self.reach,
             self.step_height,
             self.stride_length,
+            self.splay,
         ]
         .contains(&Origin::Fitted)
     }
@@ -138,6 +165,18 @@ impl Fitted {
             o.stride_length.describe(),
             g.nominal_speed()
         )];
+        if g.splay != 0.0 || o.splay != Origin::Fitted {
+            lines.push(format!(
+                "front and rear feet splayed {:.0}° towards the body's ends ({}){}",
+                g.splay.to_degrees(),
+                o.splay.describe(),
+                if o.splay == Origin::Fitted {
+                    ": no steady stance with the legs as they point at rest"
+                } else {
+                    ""
+                }
+            ));
+        }
         if self.scale < 1.0 {
             lines.push(format!(
                 "the fitted stride and step height were scaled by {} to find a stance that fits",
@@ -168,6 +207,15 @@ impl Fitted {
         let clearance = self.clearance.map_or(String::new(), |c| {
             format!("; body {c:.3} m above the ground")
         });
+        let links = self.margins.link_clearance;
+        let clearance = if links.is_finite() {
+            format!(
+                "{clearance}; links other than the feet {:.3} m above it at their lowest over the cycle",
+                links
+            )
+        } else {
+            clearance
+        };
         lines.push(format!(
             "least joint room over a cycle {:.0}° ({}); most loaded servo {} at {:.0} % of its effort on {} feet{clearance}",
             room.to_degrees(),
@@ -199,15 +247,17 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
     let (reach, o_reach) = pick(spec.reach, hints.reach);
     let (step_height, o_step) = pick(spec.step_height, hints.step_height);
     let (stride_length, o_stride) = pick(spec.stride_length, hints.stride_length);
+    let (splay, o_splay) = pick(spec.splay_deg.map(f64::to_radians), None);
     let origins = Origins {
         stance_height: o_stance,
         reach: o_reach,
         step_height: o_step,
         stride_length: o_stride,
+        splay: o_splay,
     };
     let leg = leg_length(model);
     let feet_down = minimum_support(&spec.offsets(), spec.duty_factor).max(1);
-    let gait = |scale: f64, h: f64, r: f64| Gait {
+    let gait = |scale: f64, h: f64, r: f64, splay: f64| Gait {
         name: spec.name.clone(),
         period: spec.period,
         duty_factor: spec.duty_factor,
@@ -215,6 +265,7 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
         step_height: step_height.unwrap_or(STEP_PER_LEG * leg * scale),
         stance_height: h,
         reach: r,
+        splay,
         swing: spec.swing,
         offsets: spec.offsets(),
     };
@@ -222,22 +273,48 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
     let measure = |gait: Gait, scale: f64| measure(model, gait, origins, feet_down, depth, scale);
     if let (Some(h), Some(r)) = (stance_height, reach) {
         // nothing to search: the stance is given; check it
-        return measure(gait(1.0, h, r), 1.0);
+        return measure(gait(1.0, h, r, splay.unwrap_or(0.0)), 1.0);
     }
     let scalable = stride_length.is_none() || step_height.is_none();
     let scales: &[f64] = if scalable { &[1.0, 0.5, 0.25] } else { &[1.0] };
     let mut closest: Vec<Assessment> = Vec::new();
+    let splays: &[f64] = match &splay {
+        Some(given) => std::slice::from_ref(given),
+        None => &SPLAYS,
+    };
     for &scale in scales {
-        let search = Search {
-            model,
-            leg,
-            body_depth: depth,
-            feet_down,
-            gait: &|h, r| gait(scale, h, r),
+        let search = |splay: f64| {
+            Search {
+                model,
+                leg,
+                body_depth: depth,
+                feet_down,
+                gait: &|h, r| gait(scale, h, r, splay),
+                link_margin: if splay == 0.0 {
+                    0.0
+                } else {
+                    SPLAYED_LINK_MARGIN
+                },
+            }
+            .run(stance_height, reach)
         };
-        let (best, near) = search.run(stance_height, reach);
-        if let Some((h, r)) = best {
-            return measure(gait(scale, h, r), scale);
+        let (best, near) = search(splays[0]);
+        if let Some(found) = best {
+            // far from steady with the legs as they point: the least splay that is steady
+            let tilt = || {
+                GaitController::for_cycle(model, gait(scale, found.height, found.reach, splays[0]))
+                    .map_or(0.0, |c| c.static_tilt(model))
+            };
+            let steady = (!found.steady && splay.is_none() && tilt() < SPLAY_BELOW)
+                .then(|| {
+                    splays[1..].iter().find_map(|&splay| {
+                        let (best, _) = search(splay);
+                        best.filter(|b| b.steady).map(|b| (b, splay))
+                    })
+                })
+                .flatten();
+            let (chosen, splay) = steady.unwrap_or((found, splays[0]));
+            return measure(gait(scale, chosen.height, chosen.reach, splay), scale);
         }
         closest = near;
     }
@@ -332,6 +409,9 @@ enum Problem {
     Torque(ServoLoad),
     /// The body's lowest point is this far above the ground, less than a step height.
     Clearance(f64),
+    /// A link other than a foot reaches this far below the level ground over the cycle
+    /// ([`super::margins::CycleMargins::link_clearance`]): a shin or a knee walked on.
+    Links(f64),
 }
 
 /// A candidate stance judged.
@@ -423,8 +503,20 @@ impl Assessment {
                 "{at}: the body's lowest point is {:.3} m above the ground, less than the step height {:.3} m",
                 c, self.step_height
             ),
+            Err(Problem::Links(c)) => format!(
+                "{at}: a link other than a foot reaches {:.1} mm into the level ground over the cycle",
+                -c * 1e3
+            ),
         }
     }
+}
+
+/// The stance a [`Search`] chose.
+#[derive(Debug, Clone, Copy)]
+struct Found {
+    height: f64,
+    reach: f64,
+    steady: bool,
 }
 
 /// The grid search over the free stance lengths.
@@ -435,6 +527,9 @@ struct Search<'a> {
     body_depth: Option<f64>,
     feet_down: usize,
     gait: &'a dyn Fn(f64, f64) -> Gait,
+    /// How far every link other than a foot must stay above the level ground over the cycle
+    /// (m): 0, or [`SPLAYED_LINK_MARGIN`] for a splayed stance.
+    link_margin: f64,
 }
 
 impl Search<'_> {
@@ -490,6 +585,10 @@ impl Search<'_> {
                 0.5,
             );
         }
+        if margins.link_clearance < self.link_margin {
+            let c = margins.link_clearance;
+            return judged(Err(Problem::Links(c)), -c / self.leg);
+        }
         let mean = margins.per_joint.iter().sum::<f64>() / margins.per_joint.len().max(1) as f64;
         Assessment {
             steady: margins.worst.1 >= STEADY_ROOM
@@ -500,7 +599,7 @@ impl Search<'_> {
 
     /// The best (stance height, reach) with the given ones held, and the failure closest to
     /// fitting of each kind (reach, torque, clearance).
-    fn run(&self, h: Option<f64>, r: Option<f64>) -> (Option<(f64, f64)>, Vec<Assessment>) {
+    fn run(&self, h: Option<f64>, r: Option<f64>) -> (Option<Found>, Vec<Assessment>) {
         let axis = |given: Option<f64>, from: f64, to: f64| match given {
             Some(v) => (v, v, 0.0),
             None => {
@@ -522,10 +621,10 @@ impl Search<'_> {
         };
         // the best stance, and the best steady one: the steady one is taken when there is one
         let mut best: [Option<Assessment>; 2] = [None, None];
-        let mut closest: [Option<Assessment>; 3] = [None, None, None];
+        let mut closest: [Option<Assessment>; 4] = [None, None, None, None];
         let consider = |a: Assessment,
                         best: &mut [Option<Assessment>; 2],
-                        closest: &mut [Option<Assessment>; 3]| {
+                        closest: &mut [Option<Assessment>; 4]| {
             match a.outcome {
                 Ok(score) => {
                     let better = |b: &Option<Assessment>| {
@@ -544,6 +643,7 @@ impl Search<'_> {
                         Problem::Stance(_) | Problem::Cycle { .. } => 0,
                         Problem::Torque(_) => 1,
                         Problem::Clearance(_) => 2,
+                        Problem::Links(_) => 3,
                     };
                     if closest[kind].as_ref().is_none_or(|c| a.penalty < c.penalty) {
                         closest[kind] = Some(a);
@@ -580,7 +680,11 @@ impl Search<'_> {
             }
         }
         (
-            chosen(&best).map(|b| (b.stance_height, b.reach)),
+            chosen(&best).map(|b| Found {
+                height: b.stance_height,
+                reach: b.reach,
+                steady: b.steady,
+            }),
             closest.into_iter().flatten().collect(),
         )
     }
@@ -621,6 +725,7 @@ mod tests {
             leg: leg_length(&model),
             body_depth: body_depth(&model),
             feet_down: 3,
+            link_margin: 0.0,
             gait: &|h, r| Gait {
                 stance_height: h,
                 reach: r,

@@ -4,7 +4,8 @@
 
 use super::controller::{GaitController, StanceError, VelocityCommand};
 use super::spec::Gait;
-use crate::robot::RobotModel;
+use crate::robot::{RobotModel, contact_set};
+use glam::DAffine3;
 
 /// Instants sampled per cycle.
 const SAMPLES: usize = 64;
@@ -19,6 +20,10 @@ pub struct CycleMargins {
     /// A leg whose foot target is out of reach, when (s into the cycle), and the leg's joint
     /// angles then (the closest reachable pose).
     pub unreached: Option<Unreached>,
+    /// The least height over the level ground of any contact sphere that is not a foot's
+    /// (shins, knees, the body; [`link_clearance`]) over the cycle (m): below zero a link
+    /// other than a foot walks on the ground. Infinite when no link has contact spheres.
+    pub link_clearance: f64,
 }
 
 /// A foot target out of a leg's reach during the cycle.
@@ -51,6 +56,10 @@ pub(super) fn sampled_margins(
     };
     let mut per_joint = vec![f64::INFINITY; model.joints.len()];
     let mut unreached = None;
+    let mut link_clearance = f64::INFINITY;
+    let ground = model.hips_plane() - gait.stance_height;
+    let others = not_feet(model);
+    let mut poses = Vec::new();
     for i in 0..samples {
         let t = gait.period * i as f64 / samples as f64;
         let targets = controller.targets(t, command, 1.0);
@@ -67,6 +76,8 @@ pub(super) fn sampled_margins(
                 per_joint[j] = per_joint[j].min((q - joint.lower).min(joint.upper - q));
             }
         }
+        model.link_poses_into(&model.pose_from_legs(&targets.joint_angles), &mut poses);
+        link_clearance = link_clearance.min(lowest_sphere(model, &poses, &others) - ground);
     }
     let worst = per_joint
         .iter()
@@ -78,7 +89,27 @@ pub(super) fn sampled_margins(
         per_joint,
         worst,
         unreached,
+        link_clearance,
     })
+}
+
+/// Per link, which of its contact spheres are not part of a foot's sole
+/// ([`contact_set::soles`]): the spheres that must stay off the ground.
+fn not_feet(model: &RobotModel) -> Vec<Vec<bool>> {
+    (0..model.links.len())
+        .map(|k| contact_set::soles(model, k).map(|s| s.is_none()).collect())
+        .collect()
+}
+
+/// The lowest point of any sphere `others` marks, the links posed by `poses` (body frame).
+fn lowest_sphere(model: &RobotModel, poses: &[DAffine3], others: &[Vec<bool>]) -> f64 {
+    let mut lowest = f64::INFINITY;
+    for ((link, pose), marked) in model.links.iter().zip(poses).zip(others) {
+        for (sphere, _) in link.contacts.iter().zip(marked).filter(|(_, m)| **m) {
+            lowest = lowest.min(pose.transform_point3(sphere.center).z - sphere.radius);
+        }
+    }
+    lowest
 }
 
 #[cfg(test)]
@@ -107,6 +138,7 @@ mod tests {
             step_height: 0.03,
             stance_height: 0.10,
             reach: 0.15,
+            splay: 0.0,
             swing: spec.swing,
             offsets,
         }

@@ -97,6 +97,7 @@ mod tests {
             step_height: 0.03,
             stance_height: 0.1,
             reach: 0.1,
+            splay: 0.0,
             swing: crate::gait::SwingShape::Sine,
             offsets: [0.0; 6],
         };

@@ -12,6 +12,7 @@
 //! step_height = 0.03    # swing apex above the stance
 //! stance_height = 0.10  # the hips' plane above the ground
 //! reach = 0.15          # horizontal foot distance from its hip
+//! splay_deg = 0         # front and rear feet turned towards the body's ends (degrees)
 //! [phase_offsets]       # cycle fraction at which each leg's stance starts
 //! lf = 0.0
 //! lm = 0.5
@@ -53,6 +54,10 @@ pub struct GaitSpec {
     /// Horizontal distance of each standing foot from its hip (m).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reach: Option<f64>,
+    /// How far the front and rear legs' standing feet are turned about their hips towards the
+    /// body's ends, from the legs' own direction (degrees; see [`Gait::splay`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub splay_deg: Option<f64>,
     #[serde(default)]
     pub swing: SwingShape,
     pub phase_offsets: BTreeMap<String, f64>,
@@ -70,6 +75,11 @@ pub struct Gait {
     pub stance_height: f64,
     /// Each standing foot's horizontal distance from its hip (m).
     pub reach: f64,
+    /// The front legs' standing feet turned this far about their hips towards the front, the
+    /// rear legs' towards the rear, from the direction each leg points at rest (rad; the middle
+    /// legs keep theirs). A robot whose legs all point sideways from hips close together fore
+    /// and aft stands on tripods shorter than its stride: splayed, their triangles lengthen.
+    pub splay: f64,
     pub swing: SwingShape,
     /// Cycle fraction at which each leg's stance starts, in [`LEG_NAMES`] order.
     pub offsets: [f64; 6],
@@ -91,6 +101,7 @@ impl Gait {
             step_height: Some(self.step_height),
             stance_height: Some(self.stance_height),
             reach: Some(self.reach),
+            splay_deg: (self.splay != 0.0).then(|| self.splay.to_degrees()),
             swing: self.swing,
             phase_offsets: LEG_NAMES
                 .iter()
@@ -172,6 +183,13 @@ impl GaitSpec {
         }
         if let Some(reach) = self.reach {
             positive("reach", reach)?;
+        }
+        if let Some(splay) = self.splay_deg
+            && !(splay.is_finite() && splay.abs() < 90.0)
+        {
+            return Err(format!(
+                "field `splay_deg`: expected an angle in degrees between -90 and 90, got {splay}"
+            ));
         }
         for name in LEG_NAMES {
             match self.phase_offsets.get(name) {

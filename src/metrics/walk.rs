@@ -144,6 +144,8 @@ pub struct StanceMetrics {
     pub reach: f64,
     pub step_height: f64,
     pub stride_length: f64,
+    /// The front and rear feet turned towards the body's ends (deg; `Gait::splay`).
+    pub splay_deg: f64,
     /// Where each length came from: "gait file", "robot file" or "fitted".
     pub origins: std::collections::BTreeMap<String, String>,
     /// The least distance of any joint to a limit over a cycle at the nominal speed on level
@@ -155,6 +157,9 @@ pub struct StanceMetrics {
     pub max_servo_joint: String,
     /// The body's lowest point above level ground, standing (m), when its shape is known.
     pub body_clearance: Option<f64>,
+    /// The lowest any link's contact sphere but a foot's comes to level ground over a cycle
+    /// (m; null: no link has contact spheres).
+    pub link_clearance: Option<f64>,
     /// The steepest tilt on which the walk keeps its centre of mass over its support (deg;
     /// `GaitController::static_tilt`).
     pub static_tilt_deg: f64,
@@ -169,6 +174,7 @@ impl StanceMetrics {
             ("reach", o.reach),
             ("step_height", o.step_height),
             ("stride_length", o.stride_length),
+            ("splay", o.splay),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v.describe().to_string()))
@@ -179,12 +185,14 @@ impl StanceMetrics {
             reach: g.reach,
             step_height: g.step_height,
             stride_length: g.stride_length,
+            splay_deg: g.splay.to_degrees(),
             origins,
             least_joint_room_deg: room.to_degrees(),
             least_room_joint: model.joints[joint].name.clone(),
             max_servo_share: fitted.load.share,
             max_servo_joint: model.joints[fitted.load.joint].name.clone(),
             body_clearance: fitted.clearance,
+            link_clearance: Some(fitted.margins.link_clearance).filter(|c| c.is_finite()),
             static_tilt_deg: fitted.static_tilt.to_degrees(),
         }
     }
