@@ -689,16 +689,19 @@ impl Walker {
         let robot = &sample.robot;
         self.feet = Some(robot.foot_positions);
         let to_body = robot.body.matrix3.transpose();
-        self.feel = robot.foot_contacts.map(|c| {
-            c.map_or(FootFeel::default(), |c| FootFeel {
+        // written in place, not built and copied over (every step)
+        for (feel, c) in self.feel.iter_mut().zip(&robot.foot_contacts) {
+            *feel = c.as_ref().map_or(FootFeel::default(), |c| FootFeel {
                 normal_force: c.normal_force,
                 force: to_body * c.force,
                 upright: Some(c.frame.normal.z),
-            })
-        });
+            });
+        }
         if self.compliant {
-            self.leg_forces = self.feel.map(|f| f.force);
-            self.leg_loads = robot.foot_contacts.map(|c| c.map_or(0.0, |c| c.load));
+            for (k, (feel, c)) in self.feel.iter().zip(&robot.foot_contacts).enumerate() {
+                self.leg_forces[k] = feel.force;
+                self.leg_loads[k] = c.as_ref().map_or(0.0, |c| c.load);
+            }
             for contact in &robot.link_contacts {
                 if let Some(k) = self.leg_of_link[contact.link] {
                     self.leg_forces[k] += to_body * contact.force.force;
