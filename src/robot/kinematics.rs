@@ -109,8 +109,9 @@ pub struct LegChain {
     pub(super) rest: [f64; MAX_LEG_JOINTS],
     /// The rest angles with zero for the three: what a short guess is filled with.
     fill: [f64; MAX_LEG_JOINTS],
-    /// Each joint's child link's centre of mass in the joint's turned frame.
+    /// Each joint's child link's centre of mass in the joint's turned frame, and its mass (kg).
     coms: [DVec3; MAX_LEG_JOINTS],
+    masses: [f64; MAX_LEG_JOINTS],
 }
 
 /// The result of an inverse-kinematics solve.
@@ -163,12 +164,14 @@ const NO_FRAMES: Frames = (
 
 /// A 3-joint leg's pose as the servos' load feed-forward reads it ([`LegChain::statics`]), body
 /// frame: each joint's position and unit axis, the centre of mass of each joint's child link,
-/// and the foot centre.
+/// and the foot centre; and each child link's mass (kg), so that the feed-forward, every step,
+/// need not look them up in the model.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LegStatics {
     pub joints: [(DVec3, DVec3); 3],
     pub coms: [DVec3; 3],
     pub foot: DVec3,
+    pub masses: [f64; 3],
 }
 
 /// The IK answer is accepted as reaching the target within this distance (m).
@@ -207,6 +210,7 @@ impl LegChain {
             rest: [f64::NAN; MAX_LEG_JOINTS],
             fill: [0.0; MAX_LEG_JOINTS],
             coms: [DVec3::ZERO; MAX_LEG_JOINTS],
+            masses: [0.0; MAX_LEG_JOINTS],
         };
         for k in 0..n {
             let previous = if k == 0 {
@@ -218,6 +222,7 @@ impl LegChain {
             chain.coms[k] = align[k]
                 .inverse()
                 .transform_point3(model.links[j[k].child].com);
+            chain.masses[k] = model.links[j[k].child].mass;
             chain.lower[k] = j[k].lower;
             chain.upper[k] = j[k].upper;
             if let Some(Some(rest)) = leg.posture.get(k) {
@@ -568,6 +573,7 @@ impl LegChain {
             out.coms[k] = *links[k] * self.coms[k] + joints[k].0;
         }
         out.foot = *foot;
+        out.masses = [self.masses[0], self.masses[1], self.masses[2]];
         true
     }
 
