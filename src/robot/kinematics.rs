@@ -464,8 +464,10 @@ impl LegChain {
         if self.is_redundant() {
             return super::redundant::solve(self, target, &guess);
         }
-        let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        let known = warm.as_ref().is_some_and(|w| w.answers(&q));
+        // a guess that is `warm`'s answer is within the limits already (an answer is clamped)
+        let guess = [guess[0], guess[1], guess[2]];
+        let known = warm.as_ref().is_some_and(|w| w.answers(&guess));
+        let mut q = if known { guess } else { self.clamp3(guess) };
         if !known {
             let w = warm.insert(IkWarm {
                 angles: q,
@@ -597,18 +599,26 @@ impl LegChain {
             }
         };
         // J's columns cᵢ = aᵢ × (foot − pᵢ) (the solve's, where it kept them): JJᵀ = Σ cᵢcᵢᵀ
-        // and A·Jᵀ = Σ aᵢcᵢᵀ
+        // and A·Jᵀ = Σ aᵢcᵢᵀ; JJᵀ summed on and above its diagonal only and mirrored, each entry
+        // below it being the same sum of the same products (cᵢₖcᵢₗ = cᵢₗcᵢₖ exactly)
         let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
-        let mut jjt = DMat3::from_diagonal(DVec3::splat(LAMBDA2));
+        let (mut xx, mut yy, mut zz) = (LAMBDA2, LAMBDA2, LAMBDA2);
+        let (mut yx, mut zx, mut zy) = (0.0, 0.0, 0.0);
         let mut ajt = DMat3::ZERO;
         for (i, (p, a)) in joints.iter().enumerate() {
             let c = match jacobian {
                 Some(j) => j.col(i),
                 None => a.cross(foot - *p),
             };
-            jjt += outer(c, c);
+            (xx, yx, zx) = (xx + c.x * c.x, yx + c.y * c.x, zx + c.z * c.x);
+            (yy, zy, zz) = (yy + c.y * c.y, zy + c.z * c.y, zz + c.z * c.z);
             ajt += outer(*a, c);
         }
+        let jjt = DMat3::from_cols(
+            DVec3::new(xx, yx, zx),
+            DVec3::new(yx, yy, zy),
+            DVec3::new(zx, zy, zz),
+        );
         (rotation, foot, ajt * jjt.inverse())
     }
 
