@@ -869,7 +869,8 @@ impl GaitController {
         let v = DVec3::new(command.forward, command.sideways, 0.0);
         let omega = DVec3::new(0.0, 0.0, command.yaw_rate);
         let mut out = GaitTargets {
-            joint_angles: self.last,
+            // every leg's written below
+            joint_angles: [LegAngles::three([0.0; 3]); 6],
             feet: [DVec3::ZERO; 6],
             phases: [LegPhase::Stance(0.0); 6],
             clamped: [false; 6],
