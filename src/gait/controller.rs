@@ -81,13 +81,13 @@ pub struct GaitController {
     chains: Vec<LegChain>,
     neutral: [DVec3; 6],
     last: [LegAngles; 6],
-    /// Each foot sphere's radius, and its link's orientation in the standing pose, for the
-    /// rolling offset (see the module's doc).
+    /// Each foot sphere's radius, and its link's orientation in the standing pose inverted
+    /// (transposed once, not every step), for the rolling offset (see the module's doc).
     radius: [f64; 6],
     /// How far each foot reaches across the ground, its sole's rim included
     /// ([`crate::robot::contact_set::sole_reach`]): what a pit must be wider than to take it.
     sole: [f64; 6],
-    rest: [DMat3; 6],
+    rest_inverse: [DMat3; 6],
     rolling: bool,
     /// The standing pose's angles per leg: the branch (knee bent the usual way) a solve that
     /// misses its target starts again from (see [`solve_on_branch`]).
@@ -122,12 +122,15 @@ pub struct GaitController {
     /// on the ground under it, not under its planned point ([`Self::feet_at`]).
     feet_at: Option<[DVec3; 6]>,
     /// The last planned foot points and their gait time, for the bound on a target's speed
-    /// ([`super::slew`]).
+    /// ([`super::slew`]), and that bound at the gait's stride, which every shorter stride has
+    /// too ([`slew::speed_limit`]): the walk's, not computed again for each leg every step.
     last_planned: [DVec3; 6],
     last_time: Option<f64>,
-    /// The fastest each joint's target may move (rad/s, at the gait's nominal stride) and the
-    /// last targets given ([`slew::joint_speed_limit`]).
-    joint_speed: [LegAngles; 6],
+    nominal_speed_limit: f64,
+    /// The fastest each joint's target may move (rad/s, at the gait's nominal stride:
+    /// [`slew::joint_speed_limit`] of the joints' nominal rates, taken once, not every step)
+    /// and the last targets given.
+    joint_speed_limit: [LegAngles; 6],
     last_angles: [LegAngles; 6],
     /// The body's contact spheres ([`crate::robot::Link::contacts`]) as the point under each
     /// (body frame, z = 0) and how far its bottom stands above the ground the feet stand on, and
@@ -199,7 +202,7 @@ impl GaitController {
     pub fn new(model: &RobotModel, spec: Gait) -> Result<Self, StanceError> {
         let mut controller = Self::for_cycle(model, spec)?;
         controller.vertical_room = controller.measured_vertical_room();
-        controller.joint_speed = controller.nominal_joint_speeds();
+        controller.joint_speed_limit = joint_speed_limits(controller.nominal_joint_speeds());
         controller.lean = Some(controller.measured_lean(model));
         Ok(controller)
     }
@@ -310,7 +313,7 @@ impl GaitController {
         }
         let radius = std::array::from_fn(|k| model.legs[k].foot.radius);
         let sole = std::array::from_fn(|k| crate::robot::contact_set::sole_reach(model, k));
-        let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]));
+        let rest = std::array::from_fn(|k| chains[k].foot_rotation(last[k]).transpose());
         let feet_ground = hips - spec.stance_height;
         let above = |c: &ContactSphere| c.center.z - c.radius - feet_ground;
         let body = &model.links[0].contacts;
@@ -322,6 +325,7 @@ impl GaitController {
         } else {
             Vec::new()
         };
+        let nominal_speed_limit = slew::speed_limit(&spec, spec.stride_length);
         Ok(GaitController {
             offsets: spec.offsets,
             spec,
@@ -330,7 +334,7 @@ impl GaitController {
             last,
             radius,
             sole,
-            rest,
+            rest_inverse: rest,
             rolling: true,
             home: last,
             warm_last: [None; 6],
@@ -347,11 +351,12 @@ impl GaitController {
             feet_at: None,
             last_planned: [DVec3::ZERO; 6],
             last_time: None,
-            joint_speed: last.map(|q| {
+            nominal_speed_limit,
+            joint_speed_limit: joint_speed_limits(last.map(|q| {
                 let mut infinite = q;
                 infinite.fill(f64::INFINITY);
                 infinite
-            }),
+            })),
             last_angles: last,
             belly,
             belly_margin: 0.5 * clearance,
@@ -864,7 +869,8 @@ impl GaitController {
         let v = DVec3::new(command.forward, command.sideways, 0.0);
         let omega = DVec3::new(0.0, 0.0, command.yaw_rate);
         let mut out = GaitTargets {
-            joint_angles: self.last,
+            // every leg's written below
+            joint_angles: [LegAngles::three([0.0; 3]); 6],
             feet: [DVec3::ZERO; 6],
             phases: [LegPhase::Stance(0.0); 6],
             clamped: [false; 6],
@@ -903,8 +909,9 @@ impl GaitController {
                 };
             }
             out.grounded[k] = phase.is_stance();
-            let down_room = self.room_left(k)[0];
-            if let Some(reactive) = &mut self.reactive {
+            // the room only the reactive gait reads, not taken for every leg of every step
+            let down_room = self.reactive.is_some().then(|| self.room_left(k)[0]);
+            if let (Some(reactive), Some(down_room)) = (&mut self.reactive, down_room) {
                 let base = foot - DVec3::Z * lift;
                 let height = reactive.offset(
                     k,
@@ -968,10 +975,14 @@ impl GaitController {
                 let last = self.last_planned[k].z;
                 foot.z = foot.z.max(last - most).min(last + most);
             }
+            let stride = d.length();
             if let Some(dt) = elapsed {
-                let stride = d.length();
-                let longest = slew::speed_limit(&self.spec, stride) * dt;
-                foot = slew::limited(self.last_planned[k], foot, longest);
+                let limit = if stride <= self.spec.stride_length {
+                    self.nominal_speed_limit
+                } else {
+                    slew::speed_limit(&self.spec, stride)
+                };
+                foot = slew::limited(self.last_planned[k], foot, limit * dt);
             }
             self.last_planned[k] = foot;
             if let Some(compliance) = &self.compliance {
@@ -983,9 +994,9 @@ impl GaitController {
             if let Some(dt) = elapsed {
                 // a leg solved again from its standing pose may change branch: the joints
                 // are bounded too
-                let scale = (d.length() / self.spec.stride_length).max(1.0);
+                let scale = (stride / self.spec.stride_length).max(1.0);
                 for (j, angle) in angles.iter_mut().enumerate() {
-                    let longest = slew::joint_speed_limit(&self.joint_speed[k], j) * scale * dt;
+                    let longest = self.joint_speed_limit[k][j] * scale * dt;
                     let last = self.last_angles[k][j];
                     *angle = angle.clamp(last - longest, last + longest);
                 }
@@ -1087,7 +1098,7 @@ impl GaitController {
                 solve_on_branch(chain, planned, &self.last[k], warm_last, home),
             );
         }
-        let (rest, radius) = (self.rest[k], self.radius[k]);
+        let (rest_inverse, radius) = (self.rest_inverse[k], self.radius[k]);
         // the offset o = r·(Δφ × ẑ) (horizontal), Δφ the foot link's turn at the answer for the
         // path's point G moved by o: from a pose with the foot at F and turn φ, to first order
         // Δφ = φ + J_L⁻¹·B·(G + o − F), a linear equation in o's two components (its own turn
@@ -1096,7 +1107,7 @@ impl GaitController {
         let grounded = planned - DVec3::Z * lift;
         let offset = |warm: Option<&IkWarm>, q: &LegAngles| {
             let (rotation, foot, b) = chain.foot_turn_map(warm, q);
-            let phi = DQuat::from_mat3(&(rotation * rest.transpose())).to_scaled_axis();
+            let phi = DQuat::from_mat3(&(rotation * rest_inverse)).to_scaled_axis();
             // a turn ε of the link adds J_L⁻¹·ε to its rotation vector φ (SO(3)'s inverse left
             // Jacobian, I − ½[φ]× + [φ]×²/12 to second order in φ), not ε itself
             let j_inv = |e: DVec3| {
@@ -1141,6 +1152,18 @@ fn splay_turn(k: usize) -> f64 {
         2 => left,
         _ => 0.0,
     }
+}
+
+/// Each joint's bound on its target's rate ([`slew::joint_speed_limit`]) from its leg's joints'
+/// fastest rates `speeds`.
+fn joint_speed_limits(speeds: [LegAngles; 6]) -> [LegAngles; 6] {
+    speeds.map(|leg| {
+        let mut limits = leg;
+        for (j, limit) in limits.iter_mut().enumerate() {
+            *limit = slew::joint_speed_limit(&leg, j);
+        }
+        limits
+    })
 }
 
 /// The most solves more a leg's first targets take to read the rolling offset at the pose it

@@ -109,8 +109,9 @@ pub struct LegChain {
     pub(super) rest: [f64; MAX_LEG_JOINTS],
     /// The rest angles with zero for the three: what a short guess is filled with.
     fill: [f64; MAX_LEG_JOINTS],
-    /// Each joint's child link's centre of mass in the joint's turned frame.
+    /// Each joint's child link's centre of mass in the joint's turned frame, and its mass (kg).
     coms: [DVec3; MAX_LEG_JOINTS],
+    masses: [f64; MAX_LEG_JOINTS],
 }
 
 /// The result of an inverse-kinematics solve.
@@ -163,12 +164,14 @@ const NO_FRAMES: Frames = (
 
 /// A 3-joint leg's pose as the servos' load feed-forward reads it ([`LegChain::statics`]), body
 /// frame: each joint's position and unit axis, the centre of mass of each joint's child link,
-/// and the foot centre.
+/// and the foot centre; and each child link's mass (kg), so that the feed-forward, every step,
+/// need not look them up in the model.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LegStatics {
     pub joints: [(DVec3, DVec3); 3],
     pub coms: [DVec3; 3],
     pub foot: DVec3,
+    pub masses: [f64; 3],
 }
 
 /// The IK answer is accepted as reaching the target within this distance (m).
@@ -207,6 +210,7 @@ impl LegChain {
             rest: [f64::NAN; MAX_LEG_JOINTS],
             fill: [0.0; MAX_LEG_JOINTS],
             coms: [DVec3::ZERO; MAX_LEG_JOINTS],
+            masses: [0.0; MAX_LEG_JOINTS],
         };
         for k in 0..n {
             let previous = if k == 0 {
@@ -218,6 +222,7 @@ impl LegChain {
             chain.coms[k] = align[k]
                 .inverse()
                 .transform_point3(model.links[j[k].child].com);
+            chain.masses[k] = model.links[j[k].child].mass;
             chain.lower[k] = j[k].lower;
             chain.upper[k] = j[k].upper;
             if let Some(Some(rest)) = leg.posture.get(k) {
@@ -459,8 +464,10 @@ impl LegChain {
         if self.is_redundant() {
             return super::redundant::solve(self, target, &guess);
         }
-        let mut q = self.clamp3([guess[0], guess[1], guess[2]]);
-        let known = warm.as_ref().is_some_and(|w| w.answers(&q));
+        // a guess that is `warm`'s answer is within the limits already (an answer is clamped)
+        let guess = [guess[0], guess[1], guess[2]];
+        let known = warm.as_ref().is_some_and(|w| w.answers(&guess));
+        let mut q = if known { guess } else { self.clamp3(guess) };
         if !known {
             let w = warm.insert(IkWarm {
                 angles: q,
@@ -568,6 +575,7 @@ impl LegChain {
             out.coms[k] = *links[k] * self.coms[k] + joints[k].0;
         }
         out.foot = *foot;
+        out.masses = [self.masses[0], self.masses[1], self.masses[2]];
         true
     }
 
@@ -591,18 +599,26 @@ impl LegChain {
             }
         };
         // J's columns cᵢ = aᵢ × (foot − pᵢ) (the solve's, where it kept them): JJᵀ = Σ cᵢcᵢᵀ
-        // and A·Jᵀ = Σ aᵢcᵢᵀ
+        // and A·Jᵀ = Σ aᵢcᵢᵀ; JJᵀ summed on and above its diagonal only and mirrored, each entry
+        // below it being the same sum of the same products (cᵢₖcᵢₗ = cᵢₗcᵢₖ exactly)
         let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
-        let mut jjt = DMat3::from_diagonal(DVec3::splat(LAMBDA2));
+        let (mut xx, mut yy, mut zz) = (LAMBDA2, LAMBDA2, LAMBDA2);
+        let (mut yx, mut zx, mut zy) = (0.0, 0.0, 0.0);
         let mut ajt = DMat3::ZERO;
         for (i, (p, a)) in joints.iter().enumerate() {
             let c = match jacobian {
                 Some(j) => j.col(i),
                 None => a.cross(foot - *p),
             };
-            jjt += outer(c, c);
+            (xx, yx, zx) = (xx + c.x * c.x, yx + c.y * c.x, zx + c.z * c.x);
+            (yy, zy, zz) = (yy + c.y * c.y, zy + c.z * c.y, zz + c.z * c.z);
             ajt += outer(*a, c);
         }
+        let jjt = DMat3::from_cols(
+            DVec3::new(xx, yx, zx),
+            DVec3::new(yx, yy, zy),
+            DVec3::new(zx, zy, zz),
+        );
         (rotation, foot, ajt * jjt.inverse())
     }
 

@@ -96,12 +96,13 @@ pub fn stance_loads_under(
         let leg = &model.legs[k];
         poses[leg.foot_link].transform_point3(leg.foot.center)
     });
-    stance_loads_at(model, model.centre_of_mass(poses), &feet, gravity, stance)
+    let mass = model.total_mass();
+    stance_loads_at(mass, model.centre_of_mass(poses), &feet, gravity, stance)
 }
 
-/// [`stance_loads_under`] with the legs posed by their IK answers ([`LegStatics`]): the centre
-/// of mass is the root link's and the legs' links', which must be all of the model's
-/// ([`legs_hold_every_link`]).
+/// [`stance_loads_under`] with the legs posed by their IK answers ([`LegStatics`], their links'
+/// masses with them): the centre of mass is the root link's and the legs' links', which must be
+/// all of the model's ([`legs_hold_every_link`]).
 pub fn stance_loads_of_legs(
     model: &RobotModel,
     legs: &[LegStatics; 6],
@@ -111,12 +112,14 @@ pub fn stance_loads_of_legs(
     let root = &model.links[0];
     let mut weighted = root.com * root.mass;
     for (leg, posed) in model.legs.iter().zip(legs) {
-        for (&j, &com) in leg.joints.iter().zip(&posed.coms) {
-            weighted += com * model.links[model.joints[j].child].mass;
+        for ((_, &com), &mass) in leg.joints.iter().zip(&posed.coms).zip(&posed.masses) {
+            weighted += com * mass;
         }
     }
-    let com = weighted / model.total_mass();
-    stance_loads_at(model, com, &legs.map(|l| l.foot), gravity, stance)
+    // the mass summed once (the walk's feed-forward reads it every step)
+    let mass = model.total_mass();
+    let com = weighted / mass;
+    stance_loads_at(mass, com, &legs.map(|l| l.foot), gravity, stance)
 }
 
 /// Whether every link of `model` is its root or the child of a joint of a leg of three joints
@@ -138,15 +141,16 @@ pub fn legs_hold_every_link(model: &RobotModel) -> bool {
         })
 }
 
-/// [`stance_loads_under`] of the feet at `feet` (body frame) with the centre of mass at `com`.
+/// [`stance_loads_under`] of the feet at `feet` (body frame) of a robot of `mass` (kg, the
+/// model's total) with its centre of mass at `com`.
 fn stance_loads_at(
-    model: &RobotModel,
+    mass: f64,
     com: DVec3,
     feet: &[DVec3; 6],
     gravity: DVec3,
     stance: [bool; 6],
 ) -> [f64; 6] {
-    let weight = model.total_mass() * gravity.length();
+    let weight = mass * gravity.length();
     let down = gravity.normalize_or(DVec3::NEG_Z);
     // two axes across gravity: the body's x and y when it stands level
     let across_y = down.cross(DVec3::X).normalize_or(DVec3::Y) * -1.0;
@@ -230,8 +234,8 @@ pub fn holding_torques_at(
     holding_torques_by(model, poses, joint_axis, gravity, loads, torques);
 }
 
-/// [`holding_torques_under`] with the legs posed by their IK answers ([`LegStatics`]; the
-/// model's links as [`legs_hold_every_link`] asks).
+/// [`holding_torques_under`] with the legs posed by their IK answers ([`LegStatics`], their
+/// links' masses with them; the model's links as [`legs_hold_every_link`] asks).
 pub fn holding_torques_of_legs(
     model: &RobotModel,
     legs: &[LegStatics; 6],
@@ -243,11 +247,25 @@ pub fn holding_torques_of_legs(
     torques.fill(0.0);
     for ((leg, posed), &load) in model.legs.iter().zip(legs).zip(loads) {
         let ground_force = up * load;
+        if let &[j0, j1, j2] = &leg.joints[..] {
+            // each link's weight once, not once per joint inboard of it, in loops of fixed
+            // length (the walk's feed-forward, every step)
+            let weights = posed.masses.map(|mass| gravity * mass);
+            for (i, j) in [j0, j1, j2].into_iter().enumerate() {
+                let (origin, axis) = posed.joints[i];
+                let mut moment = (posed.foot - origin).cross(ground_force);
+                for (&com, &weight) in posed.coms[i..].iter().zip(&weights[i..]) {
+                    moment += (com - origin).cross(weight);
+                }
+                torques[j] = -axis.dot(moment);
+            }
+            continue;
+        }
         for (i, &j) in leg.joints.iter().enumerate() {
             let (origin, axis) = posed.joints[i];
             let mut moment = (posed.foot - origin).cross(ground_force);
-            for (&outboard, &com) in leg.joints[i..].iter().zip(&posed.coms[i..]) {
-                let mass = model.links[model.joints[outboard].child].mass;
+            let outboard = leg.joints[i..].iter().zip(&posed.coms[i..]);
+            for ((_, &com), &mass) in outboard.zip(&posed.masses[i..]) {
                 moment += (com - origin).cross(gravity * mass);
             }
             torques[j] = -axis.dot(moment);

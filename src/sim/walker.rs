@@ -63,9 +63,11 @@ pub struct Walker {
     /// Every link is on a leg of three joints ([`statics::legs_hold_every_link`]): the
     /// feed-forward poses the legs from the gait's IK answers.
     legs_hold_every_link: bool,
-    /// The feed-forward's link poses and holding torques, kept between steps (no allocation).
+    /// The feed-forward's link poses (or legs posed by their IK answers) and holding torques,
+    /// kept between steps (no allocation, nothing zeroed: each step writes what it reads).
     poses: Vec<glam::DAffine3>,
     joint_frames: Vec<glam::DAffine3>,
+    leg_statics: [LegStatics; 6],
     torques: Vec<f64>,
     /// The ground plane the body rides above when following the terrain, smoothed (see
     /// [`Walker::ground_reference`]); None until the first step that follows it.
@@ -252,6 +254,7 @@ impl Walker {
             legs_hold_every_link,
             poses: Vec::new(),
             joint_frames: Vec::new(),
+            leg_statics: [LegStatics::default(); 6],
             torques: vec![0.0; n],
             ground_plane: None,
             standing: None,
@@ -500,7 +503,7 @@ impl Walker {
             }
         }
         if self.load_feedforward {
-            self.hold_load(stance);
+            self.hold_load(angles, stance);
         }
         if !self.joint_angles.is_empty() {
             // leg compliance's yield: the gait's angles sent part of the way to the joints'
@@ -537,22 +540,23 @@ impl Walker {
     /// The legs are posed from the gait's last IK solves, whose forward kinematics end on the
     /// targets' angles ([`GaitController::leg_statics`]), not by forward kinematics of all the
     /// links again (13.5k → 7.6k instructions of a walk's step on hex18).
-    fn hold_load(&mut self, stance: [bool; 6]) {
+    ///
+    /// `angles` are the legs' targets as [`Self::set_leg_targets`] has just written them.
+    fn hold_load(&mut self, angles: &[LegAngles; 6], stance: [bool; 6]) {
         let model = self.hexapod.model();
         let body = self.hexapod.body_frame().matrix3;
         let gravity = body.transpose() * DVec3::new(0.0, 0.0, -STANDARD_GRAVITY);
-        let mut legs = [LegStatics::default(); 6];
+        let legs = &mut self.leg_statics;
         let mut posed = self.legs_hold_every_link;
-        for (k, leg) in model.legs.iter().enumerate() {
+        for (k, q) in angles.iter().enumerate() {
             if !posed {
                 break;
             }
-            let q = [0, 1, 2].map(|i| self.targets_by_joint[leg.joints[i]]);
-            posed = self.controller.leg_statics(k, &q, &mut legs[k]);
+            posed = self.controller.leg_statics(k, q, &mut legs[k]);
         }
         if posed {
-            let loads = statics::stance_loads_of_legs(model, &legs, gravity, stance);
-            statics::holding_torques_of_legs(model, &legs, gravity, &loads, &mut self.torques);
+            let loads = statics::stance_loads_of_legs(model, legs, gravity, stance);
+            statics::holding_torques_of_legs(model, legs, gravity, &loads, &mut self.torques);
         } else {
             model.link_and_joint_poses_into(
                 &self.targets_by_joint,
@@ -689,16 +693,19 @@ impl Walker {
         let robot = &sample.robot;
         self.feet = Some(robot.foot_positions);
         let to_body = robot.body.matrix3.transpose();
-        self.feel = robot.foot_contacts.map(|c| {
-            c.map_or(FootFeel::default(), |c| FootFeel {
+        // written in place, not built and copied over (every step)
+        for (feel, c) in self.feel.iter_mut().zip(&robot.foot_contacts) {
+            *feel = c.as_ref().map_or(FootFeel::default(), |c| FootFeel {
                 normal_force: c.normal_force,
                 force: to_body * c.force,
                 upright: Some(c.frame.normal.z),
-            })
-        });
+            });
+        }
         if self.compliant {
-            self.leg_forces = self.feel.map(|f| f.force);
-            self.leg_loads = robot.foot_contacts.map(|c| c.map_or(0.0, |c| c.load));
+            for (k, (feel, c)) in self.feel.iter().zip(&robot.foot_contacts).enumerate() {
+                self.leg_forces[k] = feel.force;
+                self.leg_loads[k] = c.as_ref().map_or(0.0, |c| c.load);
+            }
             for contact in &robot.link_contacts {
                 if let Some(k) = self.leg_of_link[contact.link] {
                     self.leg_forces[k] += to_body * contact.force.force;
