@@ -64,7 +64,7 @@ const SPLAYS: [f64; 4] = [
 /// A stance steady to this tilt or more keeps the legs' own direction, steady or not. Measured
 /// on the ladders (rough-ground.md, *Splayed stances*): hexapod_description (17.5° → 30.3° at
 /// 15°) and MushroomRL (0° → 34.2° at 45°) fell far less splayed; WORMS (26.1° → 31.9° at 15°)
-/// diverged in 3 perceptive runs, settling on another knee branch.
+/// diverged in 3 perceptive runs, its front feet starting past the families' first drop.
 const SPLAY_BELOW: f64 = 20.0 * std::f64::consts::PI / 180.0;
 /// How far the links other than the feet of a splayed stance must stay above the level ground
 /// over the cycle (m): turned towards the ends, legs bring their shins lower (MushroomRL's to
@@ -597,8 +597,9 @@ impl Search<'_> {
         }
     }
 
-    /// The best (stance height, reach) with the given ones held, and the failure closest to
-    /// fitting of each kind (reach, torque, clearance).
+    /// The best (stance height, reach) with the given ones held, whether it is steady, and the
+    /// failure closest to fitting of each kind (reach, torque, the body's clearance, the other
+    /// links').
     fn run(&self, h: Option<f64>, r: Option<f64>) -> (Option<Found>, Vec<Assessment>) {
         let axis = |given: Option<f64>, from: f64, to: f64| match given {
             Some(v) => (v, v, 0.0),

@@ -111,8 +111,8 @@ pub fn stance_loads_of_legs(
 ) -> [f64; 6] {
     let root = &model.links[0];
     let mut weighted = root.com * root.mass;
-    for (leg, posed) in model.legs.iter().zip(legs) {
-        for ((_, &com), &mass) in leg.joints.iter().zip(&posed.coms).zip(&posed.masses) {
+    for posed in legs {
+        for (&com, &mass) in posed.coms.iter().zip(&posed.masses) {
             weighted += com * mass;
         }
     }
@@ -247,26 +247,13 @@ pub fn holding_torques_of_legs(
     torques.fill(0.0);
     for ((leg, posed), &load) in model.legs.iter().zip(legs).zip(loads) {
         let ground_force = up * load;
-        if let &[j0, j1, j2] = &leg.joints[..] {
-            // each link's weight once, not once per joint inboard of it, in loops of fixed
-            // length (the walk's feed-forward, every step)
-            let weights = posed.masses.map(|mass| gravity * mass);
-            for (i, j) in [j0, j1, j2].into_iter().enumerate() {
-                let (origin, axis) = posed.joints[i];
-                let mut moment = (posed.foot - origin).cross(ground_force);
-                for (&com, &weight) in posed.coms[i..].iter().zip(&weights[i..]) {
-                    moment += (com - origin).cross(weight);
-                }
-                torques[j] = -axis.dot(moment);
-            }
-            continue;
-        }
-        for (i, &j) in leg.joints.iter().enumerate() {
-            let (origin, axis) = posed.joints[i];
+        // each link's weight once, not once per joint inboard of it, in loops of the posed
+        // legs' fixed length (the walk's feed-forward, every step)
+        let weights = posed.masses.map(|mass| gravity * mass);
+        for (i, (&j, &(origin, axis))) in leg.joints.iter().zip(&posed.joints).enumerate() {
             let mut moment = (posed.foot - origin).cross(ground_force);
-            let outboard = leg.joints[i..].iter().zip(&posed.coms[i..]);
-            for ((_, &com), &mass) in outboard.zip(&posed.masses[i..]) {
-                moment += (com - origin).cross(gravity * mass);
+            for (&com, &weight) in posed.coms[i..].iter().zip(&weights[i..]) {
+                moment += (com - origin).cross(weight);
             }
             torques[j] = -axis.dot(moment);
         }
