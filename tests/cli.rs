@@ -242,6 +242,31 @@ fn sigint_leaves_a_readable_recording_and_incomplete_metrics() {
     }
 }
 
+/// A reader that closes the pipe (`hexsim run | head -1`) does not stop the run: its report
+/// lines are dropped, not a panic, and the files it was asked for are written.
+#[test]
+fn a_closed_stdout_is_no_panic_and_the_files_are_written() {
+    let dir = scratch("closed_stdout");
+    let json = dir.join("m.json");
+    let mut child = hexsim()
+        .args(["run", "--duration", "0.3", "--settle", "0.1", "--no-record"])
+        .arg("--metrics")
+        .arg(&json)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // the read end closed before the first line is written
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(metrics["complete"], true);
+}
+
 /// An absurd stiffness with a large step (allowed on purpose) diverges: the run stops with when,
 /// where and the likely cause, exits 1, and still writes its metrics marked incomplete.
 #[test]

@@ -119,21 +119,21 @@ pub fn ball(args: BallArgs) -> Result<ExitCode> {
     let Metrics::Ball(m) = &report.metrics else {
         unreachable!("a ball scenario reports ball metrics")
     };
-    println!(
+    out!(
         "ball on {terrain_name}: {:.2} s simulated{}",
         m.sim_time,
         if m.complete { "" } else { " (stopped early)" }
     );
-    println!(
+    out!(
         "  touch-downs {}, max penetration {:.3} mm, max normal force {:.2} N",
         m.touchdowns,
         m.max_penetration * 1e3,
         m.max_normal_force
     );
     if let Some(h) = m.first_apex_height {
-        println!("  first bounce apex: lowest point at z = {h:.4} m");
+        out!("  first bounce apex: lowest point at z = {h:.4} m");
     }
-    println!(
+    out!(
         "  final position ({:.3}, {:.3}, {:.3}) m, speed {:.4} m/s; energy {:.3} → {:.3} J (largest rise {:.2e} J)",
         m.final_position[0],
         m.final_position[1],

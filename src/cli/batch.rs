@@ -135,8 +135,8 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
     if batch::mark_regressions(&mut outcome.records, &regressions) {
         batch::results::write_all(&args.output, &outcome.records)?;
     }
-    println!();
-    print!(
+    out!();
+    out_part!(
         "{}",
         batch::summary::table(
             &outcome.records,
@@ -145,18 +145,18 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
         )
     );
     for change in &outcome.changed {
-        println!("run again (changed since its result): {change}");
+        out!("run again (changed since its result): {change}");
     }
     if outcome.resumed > 0 {
-        println!(
+        out!(
             "{} results kept from the earlier run (--resume)",
             outcome.resumed
         );
     }
     if !missing.is_empty() {
-        println!("not in the baseline: {} (not compared)", missing.join(", "));
+        out!("not in the baseline: {} (not compared)", missing.join(", "));
     }
-    println!(
+    out!(
         "{:.1} s wall, {:.0} steps/s over {jobs} thread{}; results in {}",
         outcome.wall_time,
         outcome.throughput(),
@@ -166,7 +166,7 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
     use hexsim::batch::results::Status;
     let any = |s: Status| outcome.records.iter().any(|r| r.status == s);
     if outcome.interrupted {
-        println!(
+        out!(
             "interrupted: {} scenarios not run; finish with --resume",
             outcome.not_run
         );

@@ -49,12 +49,18 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         mujoco: args.mujoco.clone(),
     };
     for (key, value) in hexsim::bench::configuration(&options) {
-        println!("{key:>13}: {value}");
+        out!("{key:>13}: {value}");
     }
-    println!();
-    println!(
+    out!();
+    out!(
         "{:<30} {:<10} {:>7} {:>9} {:>8} {:>12} {:>9}  notes",
-        "workload", "joints", "threads", "steps", "wall s", "steps/s", "best"
+        "workload",
+        "joints",
+        "threads",
+        "steps",
+        "wall s",
+        "steps/s",
+        "best"
     );
     let report = hexsim::bench::run_bench(&options, |f| {
         let mut notes = Vec::new();
@@ -73,7 +79,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
                 own * 1e6
             ));
         }
-        println!(
+        out!(
             "{:<30} {:<10} {:>7} {:>9} {:>8.2} {:>12.0} {:>9.0}  {}",
             f.workload,
             f.articulation.as_deref().unwrap_or("-"),
@@ -94,7 +100,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             f.workload.starts_with("batch") && f.articulation.as_deref() == Some(a.name())
         });
         if let (Some(s), Some(b)) = (single, batch) {
-            println!(
+            out!(
                 "{}: batch on {} threads = {:.2}× one thread",
                 a.name(),
                 b.threads,
@@ -104,7 +110,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     }
     if let Some(comparison) = &report.mujoco {
         let m = &comparison.figures;
-        println!(
+        out!(
             "MuJoCo {} on this machine, the same walk's {} steps: rollout {}, Python loop {:.0} \
              steps/s (best of {}; its base ended at x = {:.2} m, tilted {:.1}°)",
             m.mujoco_version,
@@ -124,7 +130,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         for a in &args.articulation {
             let (median, lo, hi) = comparison.ratios(a.name());
             let (ours, mujoco) = comparison.medians(a.name());
-            println!(
+            out!(
                 "{} walk: {median:.2}× MuJoCo's {theirs} (median of {} rounds, each run beside \
                  MuJoCo's: {lo:.2}–{hi:.2}×; {ours:.0} against {mujoco:.0} steps/s)",
                 a.name(),
@@ -132,13 +138,13 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             );
         }
     }
-    println!(
+    out!(
         "V1–V21 (docs/validation.md): cargo test --release --test validation_ball --test validation_hexapod --test validation_whole_body"
     );
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        out!("wrote {}", path.display());
     }
     Ok(())
 }

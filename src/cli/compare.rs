@@ -69,7 +69,7 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
     if let Some(d) = &comparison.description {
-        println!("{d}");
+        out!("{d}");
     }
     let outcomes = compare::run(&comparison, args.trajectories.as_deref(), jobs)?;
     // Ctrl-C cuts some runs short: their columns are marked, never mixed in unmarked
@@ -120,21 +120,21 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         .collect();
     let width = rows.iter().map(|(k, _)| k.len()).max().unwrap_or(6).max(6);
     let cell_width = names.iter().map(|n| n.len()).max().unwrap_or(8).max(10);
-    print!("{:width$}", "metric");
+    out_part!("{:width$}", "metric");
     for name in &names {
-        print!("  {name:>cell_width$}");
+        out_part!("  {name:>cell_width$}");
     }
-    println!();
+    out!();
     for (key, cells) in &rows {
-        print!("{key:width$}");
+        out_part!("{key:width$}");
         for cell in cells {
-            print!("  {cell:>cell_width$}");
+            out_part!("  {cell:>cell_width$}");
         }
-        println!();
+        out!();
     }
     for (outcome, entry) in outcomes.iter().zip(&json) {
         if let Some(failure) = entry["failure"].as_str() {
-            println!("{}: {failure}", outcome.name);
+            out!("{}: {failure}", outcome.name);
         }
     }
     if let Some(path) = &args.metrics {
@@ -144,11 +144,11 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
         });
         let text = serde_json::to_string_pretty(&all)? + "\n";
         hexsim::record::output::write_atomically(path, text.as_bytes())?;
-        println!("wrote {}", path.display());
+        out!("wrote {}", path.display());
     }
     if !args.no_record {
         let written = hexsim::compare::recording::write(&args.record, &comparison, &outcomes)?;
-        println!("wrote {}", written.display());
+        out!("wrote {}", written.display());
         if args.spawn {
             hexsim::record::rerun::spawn_viewer(&written)?;
         }

@@ -75,11 +75,11 @@ pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
     let outcome = batch::run(&scenarios, &options)?;
     let result = hexsim::ladder::summarise(&robot, &families, &rungs, &outcome.records);
     let table = result.table(&families);
-    println!("\n{table}");
+    out!("\n{table}");
     use hexsim::ladder::Outcome;
     let broken = |o: Outcome| matches!(o, Outcome::Diverged | Outcome::Error);
     for run in result.runs.iter().filter(|r| broken(r.outcome)) {
-        println!(
+        out!(
             "{} at {} ({}): {}",
             run.family,
             run.level,
@@ -98,13 +98,13 @@ pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
         &args.output.join("ladder.svg"),
         hexsim::ladder::chart::svg(&result).as_bytes(),
     )?;
-    println!(
+    out!(
         "{:.1} s wall; results in {}",
         outcome.wall_time,
         args.output.display()
     );
     if outcome.interrupted {
-        println!("interrupted: {} runs not run", outcome.not_run);
+        out!("interrupted: {} runs not run", outcome.not_run);
         return Ok(ExitCode::from(130));
     }
     Ok(ExitCode::SUCCESS)

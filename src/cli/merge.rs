@@ -28,7 +28,7 @@ pub fn merge(args: MergeArgs) -> Result<()> {
     }
     let merged = batch::merge(&parts)?;
     results::write_all(&args.output, &merged)?;
-    println!(
+    out!(
         "merged {} results from {} file(s) into {}",
         merged.len(),
         parts.len(),

@@ -1,6 +1,25 @@
 //! hexsim's command line: one file per command (its clap arguments and its function), as cargo
 //! keeps its `commands/`; what they share (warnings, the progress bar, the end of a run) here.
 
+/// `println!` for the commands' reports on stdout, which a closed pipe does not stop: piped into
+/// `head` (or a reader that quits), std's `println!` panics ("failed printing to stdout: Broken
+/// pipe") and the run dies before it writes its files. A report line that cannot be written is
+/// dropped; the work and the files it was asked for go on.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `print!` as [`out!`] is `println!`.
+macro_rules! out_part {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod ball;
 mod batch;
 mod bench;
@@ -156,14 +175,14 @@ pub(crate) const COMMAND_LINE: &str = "";
 /// also exits 1 for a walk not as commanded, unless `--allow-flags`.)
 pub(crate) fn conclude(report: &Report) -> ExitCode {
     for path in &report.written {
-        println!("  wrote {}", path.display());
+        out!("  wrote {}", path.display());
     }
     if let Some(rrd) = report
         .written
         .iter()
         .find(|p| p.extension().is_some_and(|e| e == "rrd"))
     {
-        println!(
+        out!(
             "  view it: `rerun {}` (the viewer: `pip install rerun-sdk==0.36.3`), or run with --spawn",
             rrd.display()
         );

@@ -60,7 +60,7 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     });
     let pool = rayon::ThreadPoolBuilder::new().num_threads(jobs).build()?;
     if let Some(d) = &opt.description {
-        println!("{d}");
+        out!("{d}");
     }
     let started = std::time::Instant::now();
     let setting = search::Setting {
@@ -74,14 +74,14 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     }
     let log_path = log::main_file(&args.output);
     if searched.interrupted {
-        println!(
+        out!(
             "interrupted: every finished evaluation is in {}; continue with --resume",
             log_path.display()
         );
     }
     let Some((objective, x)) = searched.best.clone() else {
         if !searched.interrupted {
-            println!(
+            out!(
                 "no candidate met the constraints; every evaluation is in {}",
                 log_path.display()
             );
@@ -95,7 +95,7 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     if !args.no_record {
         written.push(results.record(&opt, &args.file, &args.output, &searched)?);
     }
-    println!("{}", results.table.replace("**", ""));
+    out!("{}", results.table.replace("**", ""));
     if searched.interrupted {
         // the best so far is written; the checks would be cut short too
         return Ok(ExitCode::from(130));
@@ -109,21 +109,21 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
     print_checks(&checks);
     results.add_checks(&checks)?;
     let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-    println!("wrote {}", names.join(", "));
+    out!("wrote {}", names.join(", "));
     Ok(ExitCode::SUCCESS)
 }
 
 /// The start's objective, then a line a generation.
 fn print_progress(progress: Progress) {
     match progress {
-        Progress::Start(start) => println!(
+        Progress::Start(start) => out!(
             "start: objective {}",
             start.objective.map_or_else(
                 || format!("failed ({})", start.failure.clone().unwrap_or_default()),
                 |o| format!("{o:.4}")
             )
         ),
-        Progress::Generation(g) => println!(
+        Progress::Generation(g) => out!(
             "generation {}/{}: best {}, median {}, {} failed; {:.2} evaluations/s, ETA {:.0} s{}",
             g.number,
             g.of,
@@ -151,19 +151,19 @@ fn report_shard(
     let file = log::shard_file(&args.output, shard);
     match &searched.stopped_at {
         _ if searched.interrupted => {
-            println!(
+            out!(
                 "shard {shard} interrupted: its finished evaluations are in {}; run the step again",
                 file.display()
             );
             return ExitCode::from(130);
         }
-        None => println!(
+        None => out!(
             "the search's {} generations are all logged: finish with `hexsim optimize {} --output {} --resume` (the best gait, the summary, the checks and the recordings)",
             opt.generations,
             args.file.display(),
             args.output.display()
         ),
-        Some((generation, owed)) if searched.run > 0 => println!(
+        Some((generation, owed)) if searched.run > 0 => out!(
             "shard {shard}: ran {} evaluations of generation {generation}/{} into {}{}",
             searched.run,
             opt.generations,
@@ -176,7 +176,7 @@ fn report_shard(
                 )
             }
         ),
-        Some((generation, owed)) => println!(
+        Some((generation, owed)) => out!(
             "shard {shard}: nothing to run; generation {generation}/{} waits for the other shards' candidates {owed:?}",
             opt.generations
         ),
@@ -186,7 +186,7 @@ fn report_shard(
 
 /// The start and the best on every terrain and seed, in both articulations.
 fn print_checks(checks: &[CaseCheck]) {
-    println!(
+    out!(
         "objective                      start (impulse)  best (impulse)  start (multibody)  best (multibody)"
     );
     let cell = |v: &Option<f64>| v.map_or("failed".to_string(), |v| format!("{v:.4}"));
@@ -200,7 +200,7 @@ fn print_checks(checks: &[CaseCheck]) {
                 " (not searched)"
             }
         );
-        println!(
+        out!(
             "{label:30} {:>15}  {:>14}  {:>17}  {:>16}",
             cell(&c.start_impulse),
             cell(&c.best_impulse),

@@ -55,7 +55,7 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
     };
     let mut report = describe(&args.robot, &model, &gait);
     report.push_str(&walk_reach(&args.robot, args.gait.as_deref()));
-    print!("{report}");
+    out_part!("{report}");
     if args.strict && !model.warnings.is_empty() {
         anyhow::bail!(
             "{}: {} warning{} treated as errors (--strict)",
@@ -79,7 +79,7 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
                 workspace: args.workspace,
             },
         )?;
-        println!("recording: {}", written.display());
+        out!("recording: {}", written.display());
         if args.spawn {
             hexsim::record::rerun::spawn_viewer(&written)?;
         }

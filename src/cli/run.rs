@@ -286,7 +286,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let Metrics::Walk(m) = &report.metrics else {
         unreachable!("a walk scenario reports walk metrics")
     };
-    println!(
+    out!(
         "{gait_name} ({}) on {terrain_name}: walked {:.2} s{}",
         scenario
             .spec
@@ -299,13 +299,17 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     if let Some(robot) = scenario.robot()
         && robot.forward.from != hexsim::robot::legs::ForwardFrom::Urdf
     {
-        println!("  walking direction {}", robot.forward.describe());
+        out!("  walking direction {}", robot.forward.describe());
     }
-    println!(
+    out!(
         "  distance {:.3} m (forward {:.3}, sideways {:.3}), mean speed {:.4} m/s, heading change {:.2}°",
-        m.distance, m.forward_distance, m.sideways_distance, m.mean_speed, m.heading_change_deg
+        m.distance,
+        m.forward_distance,
+        m.sideways_distance,
+        m.mean_speed,
+        m.heading_change_deg
     );
-    println!(
+    out!(
         "  max roll {:.2}°, max pitch {:.2}°; body height {:.4} ± {:.4} m; deepest foot {:.2} mm",
         m.max_roll_deg,
         m.max_pitch_deg,
@@ -313,36 +317,36 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         m.body_height_std,
         m.max_penetration * 1e3
     );
-    println!("  ground: {}", m.ground.describe());
+    out!("  ground: {}", m.ground.describe());
     let mm = |slip: &[f64; 6]| -> String {
         let each: Vec<String> = slip.iter().map(|s| format!("{:.1}", s * 1e3)).collect();
         each.join(" ")
     };
-    println!(
+    out!(
         "  foot slip in contact (mm, lf lm lr rf rm rr): {}; of it under load: {}",
         mm(&m.foot_slip),
         mm(&m.foot_slip_loaded)
     );
     if m.time_off_terrain > 0.0 {
-        println!(
+        out!(
             "  warning: the body was beyond the terrain's grid for {:.2} s, on the flat apron its edges extend to",
             m.time_off_terrain
         );
     }
     if let Some(h) = m.body_height_min.filter(|h| *h < 0.0) {
-        println!(
+        out!(
             "  warning: the body went {:.1} mm into the ground (its hips below the terrain): the robot collapsed where its links have no collision geometry to hold it",
             -h * 1e3
         );
     }
     if let Some(ringing) = &m.servo_ringing {
-        println!(
+        out!(
             "  warning: {}; the walk's figures are not its servo's",
             hexsim::sim::ringing::describe(&ringing.joint, ringing.from)
         );
     }
     if let Some(t) = m.fell_at {
-        println!(
+        out!(
             "  warning: the robot fell at {t:.2} s into the walk (its body tilted past {:.0}°){}",
             hexsim::metrics::walk::FALL_TILT.to_degrees(),
             if scenario.spec.stop_at_fall == Some(true) {
@@ -358,7 +362,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             .iter()
             .map(|(link, t)| format!("{link} {t:.2} s"))
             .collect();
-        println!(
+        out!(
             "  {}: links other than the feet touched the ground ({}), {:.2} mm deep at most",
             if m.body_contact_time > 0.0 {
                 "warning"
@@ -370,21 +374,21 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     if m.command_progress < -hexsim::metrics::walk::BACKWARDS_NOISE {
-        println!(
+        out!(
             "  warning: the body went {:.3} m backwards against the command (slid?)",
             -m.command_progress
         );
     }
     for flag in m.walk_flags.iter().filter(|f| !f.starts_with("went ")) {
-        println!("  warning: not the walk commanded: it {flag}");
+        out!("  warning: not the walk commanded: it {flag}");
     }
     if m.clamped_ik_steps > 0 {
-        println!(
+        out!(
             "  warning: {} steps had foot targets out of reach (IK clamped)",
             m.clamped_ik_steps
         );
     }
-    println!("  {:.0} steps/s", report.steps_per_second);
+    out!("  {:.0} steps/s", report.steps_per_second);
     let mut code = conclude(&report);
     let judged = report.failure.is_none() && m.complete && !args.allow_flags;
     if judged && !m.walk_flags.is_empty() {

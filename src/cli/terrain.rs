@@ -51,7 +51,7 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
             let grid = terrain::load(&terrain)?;
             if let Some(path) = stl {
                 write_streamed(&path, |out| Ok(terrain::io::stl_to(&grid, out)?))?;
-                println!("wrote {}", path.display());
+                out!("wrote {}", path.display());
             }
             if let Some(path) = png {
                 let mut read_back = (0.0, 0.0);
@@ -62,14 +62,14 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
                 let (offset, scale) = read_back;
                 let [x0, x1] = grid.x_range();
                 let [y0, y1] = grid.y_range();
-                println!(
+                out!(
                     "wrote {} — to read it back: kind = \"png\", height_scale = {scale}, height_offset = {offset}, x_range = [{x0}, {x1}], y_range = [{y0}, {y1}]",
                     path.display()
                 );
             }
             if let Some(path) = csv {
                 write_streamed(&path, |out| Ok(terrain::io::csv_to(&grid, out)?))?;
-                println!("wrote {}", path.display());
+                out!("wrote {}", path.display());
             }
             Ok(())
         }
@@ -77,18 +77,18 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
             let grid = terrain::load(&terrain)?;
             let (lo, hi) = grid.height_bounds();
             let (dx, dy) = grid.spacing();
-            println!("{}", terrain.display());
-            println!(
+            out!("{}", terrain.display());
+            out!(
                 "  {} × {} samples, cell {dx:.4} × {dy:.4} m",
                 grid.cols(),
                 grid.rows()
             );
-            println!("  x ∈ {:?}, y ∈ {:?} m", grid.x_range(), grid.y_range());
-            println!(
+            out!("  x ∈ {:?}, y ∈ {:?} m", grid.x_range(), grid.y_range());
+            out!(
                 "  height ∈ [{lo:.4}, {hi:.4}] m ({:.4} m peak to peak)",
                 hi - lo
             );
-            println!("  interpolation {:?}", grid.interpolation());
+            out!("  interpolation {:?}", grid.interpolation());
             Ok(())
         }
     }
