@@ -589,8 +589,6 @@ impl GaitController {
         }
     }
 
-    /// The fraction of the way leg `k`'s joint targets are to be sent to its joints' angles
-    /// (leg compliance's yield; 0 when it is off).
     /// Gravity as the body feels it (body frame, any length: an IMU's reading), for the lean
     /// ([`super::lean`]), one step of `dt` (s).
     pub fn feel_gravity(&mut self, down: DVec3, dt: f64) {
@@ -610,6 +608,8 @@ impl GaitController {
         self.lean.as_ref().map_or(DVec3::ZERO, Lean::shift)
     }
 
+    /// The fraction of the way leg `k`'s joint targets are to be sent to its joints' angles
+    /// (leg compliance's yield; 0 when it is off).
     pub fn leg_yield(&self, k: usize) -> f64 {
         self.compliance.as_ref().map_or(0.0, |c| c.yielded(k))
     }
