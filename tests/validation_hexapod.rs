@@ -582,6 +582,60 @@ fn v21_impulse_levelled_holds_at_every_heading() {
     assert!(moved.iter().all(|&m| m < 5.0), "{moved:.3?} mm");
 }
 
+/// Set down level on a 25° slope and following the terrain, the robot first stands as it was set
+/// down and leaves for the levelled stance at a landing's pace: its first targets are the blind
+/// settle's (within a landing's step), and no target moves 0.05 rad in a step. Taken at once,
+/// the ground moved hex18's first targets 0.55 rad from the pose it was set down
+/// in (WORMS's by 0.5 rad on the ladder's stairs, throwing its body at 3.8 m/s).
+#[test]
+fn a_perceptive_settle_leaves_the_pose_set_down_at_a_landings_pace() {
+    let first_targets = |following: bool| {
+        let ground = terrain::slope([14.0, 4.0], [0.0, 0.0], 25f64.to_radians(), 0.0).unwrap();
+        let place = Placement {
+            x: -4.0,
+            ..Default::default()
+        };
+        let mut walker = walker(
+            hex18(),
+            ground,
+            place,
+            tripod(),
+            1.0,
+            Articulation::Multibody,
+        );
+        walker.terrain_following = following;
+        let samples: Vec<Vec<f64>> = (0..300)
+            .map(|_| walker.step().robot.joint_targets)
+            .collect();
+        samples
+    };
+    let (blind, following) = (first_targets(false), first_targets(true));
+    let apart = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    };
+    let first = apart(&blind[0], &following[0]);
+    let steepest = following
+        .windows(2)
+        .map(|w| apart(&w[0], &w[1]))
+        .fold(0.0, f64::max);
+    let travelled = apart(&following[0], following.last().unwrap());
+    println!(
+        "first targets {first:.4} rad from the blind settle's; at most {steepest:.4} rad a step; {travelled:.3} rad in 0.3 s"
+    );
+    assert!(
+        first < 0.01,
+        "first targets {first} rad from the pose set down"
+    );
+    assert!(steepest < 0.05, "a target moved {steepest} rad in a step");
+    assert!(
+        travelled > 0.05,
+        "never left the pose set down: {travelled} rad"
+    );
+}
+
 /// Up and down a 25° slope (μs = 0.9), blind and following the terrain, 20 s: the stance holds
 /// its ground — forward at least V13's 70 % of nominal and no more than nominal (sliding down
 /// would add to it), no foot sliding 0.1 m (the third-party robots' bar). Measured: up 2.092 m

@@ -125,6 +125,10 @@ pub struct GaitController {
     /// ([`super::slew`]), and that bound at the gait's stride, which every shorter stride has
     /// too ([`slew::speed_limit`]): the walk's, not computed again for each leg every step.
     last_planned: [DVec3; 6],
+    /// The feet's targets at the last step of a perceptive stand ([`Self::settling_on`]); None
+    /// before the first, when the feet stand where the robot was set down: at their neutral
+    /// points.
+    settled: Option<[DVec3; 6]>,
     last_time: Option<f64>,
     nominal_speed_limit: f64,
     /// The fastest each joint's target may move (rad/s, at the gait's nominal stride:
@@ -350,6 +354,7 @@ impl GaitController {
             swinging: [false; 6],
             feet_at: None,
             last_planned: [DVec3::ZERO; 6],
+            settled: None,
             last_time: None,
             nominal_speed_limit,
             joint_speed_limit: joint_speed_limits(last.map(|q| {
@@ -820,12 +825,42 @@ impl GaitController {
     /// The legs' angles standing still, each foot at its neutral point on the ground it rests on
     /// there ([`foothold::resting_ground`]: a pit narrower than the foot holds it on its rims).
     pub fn standing_on(&mut self, ground: impl Fn(DVec3) -> f64) -> [LegAngles; 6] {
+        self.stand(ground, None)
+    }
+
+    /// [`Self::standing_on`] for a robot standing still before a perceptive walk, `dt` (s) a
+    /// step: each foot's target rises or sinks from where the robot was set down (its neutral
+    /// point, on level ground) no faster than a swing lands ([`slew::landing_speed`]), as a
+    /// walk's stance targets do ([`Self::targets_on`]). Taken at once, the ground ahead of WORMS,
+    /// splayed at the top of the ladder's 12 cm stairs down, moved every femur target 0.5 rad
+    /// in a step; its legs swung with every foot in the air and threw the 79 kg body at 3.8 m/s
+    /// (the run diverged).
+    pub fn settling_on(&mut self, ground: impl Fn(DVec3) -> f64, dt: f64) -> [LegAngles; 6] {
+        let most = self.landing_speed() * dt;
+        let from = self.settled.unwrap_or(self.neutral);
+        let angles = self.stand(ground, Some((from, most)));
+        self.settled = Some(self.last_planned);
+        angles
+    }
+
+    /// The legs' angles standing, each foot on the ground under its neutral point; with
+    /// `bound` = (the feet's last targets, a distance), no foot's target moves more than that
+    /// distance up or down from its last.
+    fn stand(
+        &mut self,
+        ground: impl Fn(DVec3) -> f64,
+        bound: Option<([DVec3; 6], f64)>,
+    ) -> [LegAngles; 6] {
         self.last_time = None;
         let angles = std::array::from_fn(|k| {
             let mut foot = self.neutral[k];
             self.stance_ground[k] = foothold::resting_ground(&ground, foot, self.sole[k]);
             self.rim[k] = self.stance_ground[k] - ground(foot);
             foot.z += self.stance_ground[k];
+            if let Some((last, most)) = bound {
+                foot.z = foot.z.clamp(last[k].z - most, last[k].z + most);
+            }
+            self.last_planned[k] = foot;
             let (_, solution) = self.place(k, foot, 0.0, true);
             self.last[k] = solution.angles;
             solution.angles

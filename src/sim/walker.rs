@@ -683,7 +683,7 @@ impl Walker {
             let plane = self.ground_reference(&standing);
             let reference = self.body_reference(plane, &standing);
             let ground = Self::ground_within_reach(&self.hexapod, reference);
-            let angles = self.controller.standing_on(ground);
+            let angles = self.controller.settling_on(ground, self.hexapod.dt());
             self.set_leg_targets(&angles, [true; 6]);
         } else if self.load_feedforward {
             let angles = self.controller.standing_on(|_| 0.0);
