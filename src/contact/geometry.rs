@@ -89,12 +89,31 @@ pub fn sphere_faces_from(
     orientation: Orientation,
     last: &mut Option<(f64, f64)>,
 ) -> Faces {
-    let cliffs = terrain.has_cliffs();
-    let start = match *last {
-        Some((dx, dy)) if !cliffs => (center.x + dx, center.y + dy),
-        _ => (center.x, center.y),
-    };
+    let start = search_start(terrain, center, *last);
     let below = closest_from(terrain, center, radius, orientation, start);
+    faces_from_below(terrain, center, radius, orientation, below, last)
+}
+
+/// Where [`sphere_faces_from`]'s search from below starts: where the last one ended, `last`
+/// (an offset from the centre), on a smooth grid; else below the centre.
+pub fn search_start(terrain: &HeightGrid, center: DVec3, last: Option<(f64, f64)>) -> (f64, f64) {
+    match last {
+        Some((dx, dy)) if !terrain.has_cliffs() => (center.x + dx, center.y + dy),
+        _ => (center.x, center.y),
+    }
+}
+
+/// [`sphere_faces_from`] from its search from below's answer `below` (the closest point found
+/// from [`search_start`]: [`closest_from_each`] finds several spheres' at once).
+pub fn faces_from_below(
+    terrain: &HeightGrid,
+    center: DVec3,
+    radius: f64,
+    orientation: Orientation,
+    below: SphereGeometry,
+    last: &mut Option<(f64, f64)>,
+) -> Faces {
+    let cliffs = terrain.has_cliffs();
     *last = (!cliffs && below.penetration > 0.0)
         .then_some((below.point.x - center.x, below.point.y - center.y));
     if cliffs {
@@ -404,11 +423,142 @@ fn closest_from(
     center: DVec3,
     radius: f64,
     orientation: Orientation,
-    (mut x, mut y): (f64, f64),
+    start: (f64, f64),
 ) -> SphereGeometry {
-    // the search needs only the normal at each point; the ground frame is made once, at the end
-    // (the exact normal's frame is a function of the normal alone)
-    let at = |x: f64, y: f64| match orientation {
+    let mut search = Search::new(terrain, orientation, center, start);
+    for _ in 1..CLOSEST_POINT_ITERATIONS {
+        if !search.advance(terrain, orientation) {
+            break;
+        }
+    }
+    search.finish(terrain, orientation, radius)
+}
+
+/// [`closest_from`] for up to six spheres at once, in their order: `spheres` their centres,
+/// radii and starts (a robot's feet, each from [`search_start`]). Each sphere's search is its own,
+/// the same arithmetic, but they take turns, an iteration of each a round: alone, a search is
+/// one chain of latencies (each iteration's surface, square root and division wait on the
+/// last's), and the processor works on one sphere's iteration while another's waits.
+pub fn closest_from_each(
+    terrain: &HeightGrid,
+    orientation: Orientation,
+    spheres: &[(DVec3, f64, (f64, f64))],
+) -> [Option<SphereGeometry>; 6] {
+    let mut searches: [Option<Search>; 6] = [None; 6];
+    assert!(spheres.len() <= searches.len(), "at most six at once");
+    for (search, &(center, _, start)) in searches.iter_mut().zip(spheres) {
+        *search = Some(Search::new(terrain, orientation, center, start));
+    }
+    let searches = &mut searches[..spheres.len()];
+    let mut going = [true; 6];
+    for _ in 1..CLOSEST_POINT_ITERATIONS {
+        let mut any = false;
+        for (search, going) in searches.iter_mut().zip(&mut going) {
+            if *going {
+                let search = search.as_mut().expect("set above");
+                *going = search.advance(terrain, orientation);
+                any |= *going;
+            }
+        }
+        if !any {
+            break;
+        }
+    }
+    let mut found = [None; 6];
+    for ((search, &(_, radius, _)), found) in searches.iter().zip(spheres).zip(&mut found) {
+        *found = search.map(|s| s.finish(terrain, orientation, radius));
+    }
+    found
+}
+
+/// The closest-point search's state between iterations ([`closest_from`]).
+#[derive(Clone, Copy)]
+struct Search {
+    center: DVec3,
+    x: f64,
+    y: f64,
+    surface: DVec3,
+    normal: DVec3,
+    /// Where d·κ < −1 (the centre beyond the hollow's centre of curvature) the plain iteration
+    /// overshoots and oscillates: each time a step grows, the steps are shortened by half.
+    relax: f64,
+    last_step: f64,
+}
+
+impl Search {
+    /// The search at `start`, on the ground there.
+    fn new(
+        terrain: &HeightGrid,
+        orientation: Orientation,
+        center: DVec3,
+        (x, y): (f64, f64),
+    ) -> Self {
+        let (height, normal) = height_and_normal(terrain, orientation, x, y);
+        Search {
+            center,
+            x,
+            y,
+            surface: DVec3::new(x, y, height),
+            normal,
+            relax: 1.0,
+            last_step: f64::INFINITY,
+        }
+    }
+
+    /// One iteration: the foot of the perpendicular from the centre onto the tangent plane, and
+    /// the ground there. False (nothing moved) once the step to it is below the tolerance.
+    #[inline]
+    fn advance(&mut self, terrain: &HeightGrid, orientation: Orientation) -> bool {
+        let Search { x, y, .. } = *self;
+        let distance = (self.center - self.surface).dot(self.normal);
+        let foot = self.center - distance * self.normal;
+        let step = ((foot.x - x).powi(2) + (foot.y - y).powi(2)).sqrt();
+        if step < CLOSEST_POINT_TOLERANCE {
+            return false;
+        }
+        if step > self.last_step {
+            self.relax *= 0.5;
+        }
+        self.last_step = step;
+        let relax = self.relax;
+        (self.x, self.y) = (x + relax * (foot.x - x), y + relax * (foot.y - y));
+        let height;
+        (height, self.normal) = height_and_normal(terrain, orientation, self.x, self.y);
+        self.surface = DVec3::new(self.x, self.y, height);
+        true
+    }
+
+    /// The contact where the search stands: its ground frame (made once, here: the exact
+    /// normal's frame is a function of the normal alone) and the gap to its surface point.
+    fn finish(
+        &self,
+        terrain: &HeightGrid,
+        orientation: Orientation,
+        radius: f64,
+    ) -> SphereGeometry {
+        let frame = match orientation {
+            Orientation::Exact => GroundFrame::from_normal(self.normal),
+            Orientation::Paper { .. } => terrain.height_and_frame(self.x, self.y, orientation).1,
+        };
+        let offset = self.center - self.surface;
+        let distance = offset.length().copysign(offset.dot(frame.normal));
+        SphereGeometry {
+            penetration: radius - distance,
+            point: self.surface,
+            frame,
+        }
+    }
+}
+
+/// The ground's height and normal at (x, y): all the search needs at each point.
+#[inline]
+fn height_and_normal(
+    terrain: &HeightGrid,
+    orientation: Orientation,
+    x: f64,
+    y: f64,
+) -> (f64, DVec3) {
+    match orientation {
         Orientation::Exact => {
             let s = terrain.surface(x, y);
             (s.height, s.normal())
@@ -417,39 +567,6 @@ fn closest_from(
             let (height, frame) = terrain.height_and_frame(x, y, orientation);
             (height, frame.normal)
         }
-    };
-    let (height, mut normal) = at(x, y);
-    let mut surface = DVec3::new(x, y, height);
-    // Where d·κ < −1 (the centre beyond the hollow's centre of curvature) the plain iteration
-    // overshoots and oscillates: each time a step grows, the steps are shortened by half.
-    let mut relax = 1.0;
-    let mut last_step = f64::INFINITY;
-    for _ in 1..CLOSEST_POINT_ITERATIONS {
-        let distance = (center - surface).dot(normal);
-        let foot = center - distance * normal;
-        let step = ((foot.x - x).powi(2) + (foot.y - y).powi(2)).sqrt();
-        if step < CLOSEST_POINT_TOLERANCE {
-            break;
-        }
-        if step > last_step {
-            relax *= 0.5;
-        }
-        last_step = step;
-        (x, y) = (x + relax * (foot.x - x), y + relax * (foot.y - y));
-        let height;
-        (height, normal) = at(x, y);
-        surface = DVec3::new(x, y, height);
-    }
-    let frame = match orientation {
-        Orientation::Exact => GroundFrame::from_normal(normal),
-        Orientation::Paper { .. } => terrain.height_and_frame(x, y, orientation).1,
-    };
-    let offset = center - surface;
-    let distance = offset.length().copysign(offset.dot(frame.normal));
-    SphereGeometry {
-        penetration: radius - distance,
-        point: surface,
-        frame,
     }
 }
 

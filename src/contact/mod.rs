@@ -20,7 +20,10 @@ mod paper;
 mod rolling;
 
 pub use friction::{FrictionLaw, FrictionOutcome};
-pub use geometry::{Faces, MAX_FACES, SphereGeometry, sphere_faces, sphere_geometry};
+pub use geometry::{
+    Faces, MAX_FACES, SphereGeometry, closest_from_each, faces_from_below, search_start,
+    sphere_faces, sphere_geometry,
+};
 pub use joint::respond_jointly;
 pub use normal::{NormalLaw, REFERENCE_DAMPING, REFERENCE_STIFFNESS, exact_decay_factor};
 pub use paper::paper_geometry;
@@ -421,6 +424,16 @@ impl ContactModel {
             }
             _ => geometry::sphere_faces_from(terrain, center, radius, self.orientation, last),
         }
+    }
+
+    /// Whether [`Self::sphere_faces_from`] is [`geometry::sphere_faces_from`]'s search (every
+    /// contact but the paper's own with its angles), whose first closest-point searches can be
+    /// taken several spheres at once ([`closest_from_each`]).
+    pub fn searches_from_below(&self) -> bool {
+        !matches!(
+            (self.variant, self.orientation),
+            (Variant::Paper, Orientation::Paper { .. })
+        )
     }
 
     /// Checks every parameter, naming the bad one (`normal.damping`, `friction.mu_static`, …).

@@ -24,6 +24,7 @@ use super::engine::Engine;
 use crate::contact::joint::{JointContact, JointSolver};
 use crate::contact::{
     ContactForce, ContactModel, ContactState, MAX_FACES, SphereGeometry, Variant,
+    closest_from_each, faces_from_below, search_start,
 };
 use crate::robot::{ContactSphere, RobotModel, contact_set};
 use crate::terrain::HeightGrid;
@@ -161,23 +162,37 @@ impl GroundContacts {
         self.ids.clear();
         self.points.clear();
         self.inputs.clear();
-        // the feet
+        // the feet near the ground: their closest-point searches taken together (in turns, so
+        // that one waits on its latencies while another computes: `closest_from_each`), then
+        // each one's faces, in the feet's order
+        let mut near = [(0, (DVec3::ZERO, 0.0, (0.0, 0.0))); 6];
+        let mut n_near = 0;
         for (k, leg) in model.legs.iter().enumerate() {
             let frame = &frames[leg.foot_link];
-            let sphere = ContactSphere {
-                center: leg.foot.center,
-                radius: leg.foot.radius,
-            };
-            self.find(
-                k,
-                leg.foot_link,
-                &sphere,
-                frame,
-                terrain,
-                contact,
-                bodies,
-                model,
-            );
+            let center = frame.transform_point3(leg.foot.center);
+            let r = leg.foot.radius;
+            if !self.near_ground(k, center, r, terrain) {
+                continue;
+            }
+            if contact.searches_from_below() {
+                let start = search_start(terrain, center, self.last_search[k]);
+                near[n_near] = (k, (center, r, start));
+                n_near += 1;
+            } else {
+                let faces = contact.sphere_faces_from(terrain, center, r, &mut self.last_search[k]);
+                self.add_faces(k, leg.foot_link, faces.as_slice(), frame, bodies, model);
+            }
+        }
+        let spheres: [_; 6] = std::array::from_fn(|m| near[m].1);
+        let below = closest_from_each(terrain, contact.orientation, &spheres[..n_near]);
+        for (&(k, (center, r, _)), below) in near[..n_near].iter().zip(below) {
+            let below = below.expect("one answer a sphere");
+            let orientation = contact.orientation;
+            let last = &mut self.last_search[k];
+            let faces = faces_from_below(terrain, center, r, orientation, below, last);
+            let leg = &model.legs[k];
+            let frame = &frames[leg.foot_link];
+            self.add_faces(k, leg.foot_link, faces.as_slice(), frame, bodies, model);
         }
         // the links' spheres, those near the ground
         for l in 0..self.links.len() {
@@ -310,23 +325,45 @@ impl GroundContacts {
         bodies: &[RigidBodyHandle],
         model: &RobotModel,
     ) -> bool {
-        let slots = id * MAX_FACES..(id + 1) * MAX_FACES;
         let center = frame.transform_point3(sphere.center);
         let r = sphere.radius;
-        // a sphere well clear of the ground needs no closest-point search; one that touched
-        // last step (a stance foot: nearly always it still does) is searched without asking the
-        // cells around it: were it clear of their bounds, the search would find the same, a gap
-        // (no surface point within its radius), and the same slots and search state are reset
+        if !self.near_ground(id, center, r, terrain) {
+            return false;
+        }
+        let faces = contact.sphere_faces_from(terrain, center, r, &mut self.last_search[id]);
+        self.add_faces(id, link, faces.as_slice(), frame, bodies, model)
+    }
+
+    /// Whether sphere `id` (centre `center`, radius `r`) may touch the terrain; if not, its
+    /// slots and search state are reset. A sphere well clear of the ground needs no
+    /// closest-point search; one that touched last step (a stance foot: nearly always it still
+    /// does) is searched without asking the cells around it: were it clear of their bounds, the
+    /// search would find the same, a gap (no surface point within its radius), and the same
+    /// slots and search state are reset.
+    fn near_ground(&mut self, id: usize, center: DVec3, r: f64, terrain: &HeightGrid) -> bool {
         if center.z - r > self.ceiling
             || (self.last_search[id].is_none()
                 && center.z - r > terrain.ceiling_near(center.x, center.y, r))
         {
-            self.slots[slots].fill(Slot::default());
+            self.slots[id * MAX_FACES..(id + 1) * MAX_FACES].fill(Slot::default());
             self.last_search[id] = None;
             return false;
         }
-        let faces = contact.sphere_faces_from(terrain, center, r, &mut self.last_search[id]);
-        let faces = faces.as_slice();
+        true
+    }
+
+    /// Adds sphere `id`'s `faces` (of link `link`, posed by `frame`) to this step's contacts, if
+    /// it touches; false (its faces' states reset) if the nearest is a gap.
+    fn add_faces(
+        &mut self,
+        id: usize,
+        link: usize,
+        faces: &[SphereGeometry],
+        frame: &DAffine3,
+        bodies: &[RigidBodyHandle],
+        model: &RobotModel,
+    ) -> bool {
+        let slots = id * MAX_FACES..(id + 1) * MAX_FACES;
         if faces[0].penetration <= 0.0 {
             self.slots[slots].fill(Slot::default());
             return false;

@@ -518,3 +518,50 @@ fn a_sphere_in_a_groove_presses_into_both_faces() {
         }
     }
 }
+
+/// Searches taken in turns end where each alone ends, bit for bit: from warm starts near the
+/// answer and cold ones below the centre, touching and clear, on the paper's natural terrain
+/// and in a hollow of the ball-scale one (dozens of iterations), in both orientations.
+#[test]
+fn searches_in_turns_are_each_the_search_alone() {
+    let grids = [
+        crate::terrain::natural(5489, 100, [2.0, 2.0], [0.0, 0.0], 0.04).unwrap(),
+        crate::terrain::natural(5489, 100, [2.0, 2.0], [0.0, 0.0], 0.4).unwrap(),
+    ];
+    let orientations = [
+        Orientation::Exact,
+        Orientation::Paper { xe: 0.01, ye: 0.01 },
+    ];
+    for (terrain, orientation) in grids.iter().flat_map(|g| orientations.map(|o| (g, o))) {
+        for round in 0..20 {
+            let t = round as f64;
+            let spheres: Vec<(DVec3, f64, (f64, f64))> = (0..1 + round % 6)
+                .map(|k| {
+                    let (x, y) = (
+                        0.3 * (0.7 * t + k as f64).sin(),
+                        0.3 * (1.3 * t - k as f64).cos(),
+                    );
+                    let r = 0.01 + 0.01 * (k % 3) as f64;
+                    let z = terrain.height(x, y) + r * (0.9 - 0.1 * k as f64);
+                    let start = if k % 2 == 0 {
+                        (x, y)
+                    } else {
+                        (x + 1e-3, y - 2e-3)
+                    };
+                    (DVec3::new(x, y, z), r, start)
+                })
+                .collect();
+            let together = closest_from_each(terrain, orientation, &spheres);
+            for (k, &(center, r, start)) in spheres.iter().enumerate() {
+                let alone = closest_from(terrain, center, r, orientation, start);
+                let turn = together[k].expect("one answer a sphere");
+                let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                assert_eq!(turn.penetration.to_bits(), alone.penetration.to_bits());
+                assert_eq!(bits(turn.point), bits(alone.point));
+                assert_eq!(bits(turn.frame.normal), bits(alone.frame.normal));
+                assert_eq!(bits(turn.frame.tangent_x), bits(alone.frame.tangent_x));
+            }
+            assert!(together[spheres.len()..].iter().all(Option::is_none));
+        }
+    }
+}
