@@ -250,7 +250,8 @@ pub fn significant(x: f64) -> f64 {
 
 #[derive(Debug, Clone, Default)]
 struct Accumulators {
-    start: Option<(glam::DVec3, f64)>,
+    /// The body's position at the walk's start.
+    start: Option<glam::DVec3>,
     walk_steps: u64,
     roll2: f64,
     pitch2: f64,
@@ -267,8 +268,12 @@ struct Accumulators {
     near_limit_steps: Vec<u64>,
     /// The terrain grid's x and y ranges, if known.
     terrain: Option<([f64; 2], [f64; 2])>,
-    /// Steps each model link touched the ground with a sphere other than its foot.
+    /// Steps each model link touched the ground with a sphere other than its foot, and the
+    /// links' names.
     link_steps: Vec<u64>,
+    link_names: Vec<String>,
+    /// The sine and cosine of the heading at the walk's start.
+    start_heading: (f64, f64),
     /// The body's position at the last step (for [`HexapodMetrics::command_progress`]).
     last_position: Option<glam::DVec3>,
     /// Whether any step was commanded to move, to move sideways, or to turn.
@@ -388,6 +393,49 @@ impl HexapodMetrics {
         self.walk_flags = flags;
     }
 
+    /// Brings the figures derived from the step sums (distances, means, fractions, the links'
+    /// contact times, the cost of transport) up to the last step observed. Derived once a
+    /// stretch of steps and at the end, not every step ([`crate::runner::walk::WalkSession`]):
+    /// the same figures, without a dozen divisions, square roots and a sine a step.
+    pub fn update(&mut self) {
+        let a = &self.acc;
+        let (Some(start), Some(position)) = (a.start, a.last_position) else {
+            return; // no step walked yet
+        };
+        let dt = a.dt;
+        let moved = position - start;
+        let (s_h, c_h) = a.start_heading;
+        self.forward_distance = moved.x * c_h + moved.y * s_h;
+        self.sideways_distance = -moved.x * s_h + moved.y * c_h;
+        self.distance = moved.truncate().length();
+        self.walk_time = a.walk_steps as f64 * dt;
+        self.mean_speed = self.distance / self.walk_time;
+        self.heading_change_deg = a.yaw_total.to_degrees();
+        let n = a.walk_steps as f64;
+        self.rms_roll_deg = (a.roll2 / n).sqrt().to_degrees();
+        self.rms_pitch_deg = (a.pitch2 / n).sqrt().to_degrees();
+        self.body_height_mean = a.height / n;
+        self.body_height_std = (a.height2 / n - self.body_height_mean.powi(2))
+            .max(0.0)
+            .sqrt();
+        for k in 0..6 {
+            self.stance_fraction[k] = a.stance_steps[k] as f64 / n;
+            self.mean_normal_force[k] = a.force_sum[k] / n;
+        }
+        for (name, &steps) in a.link_names.iter().zip(&a.link_steps) {
+            if steps > 0 {
+                self.link_contact_time
+                    .insert(name.clone(), steps as f64 * dt);
+            }
+        }
+        if let Some(&steps) = a.link_steps.first().filter(|&&s| s > 0) {
+            self.body_contact_time = steps as f64 * dt;
+        }
+        let weight_distance = a.mass * crate::sim::STANDARD_GRAVITY * self.distance;
+        self.cost_of_transport =
+            (weight_distance > 0.0).then(|| self.servo_energy / weight_distance);
+    }
+
     /// Also measures the time spent beyond a terrain grid of these x and y ranges.
     pub fn on_terrain(mut self, x: [f64; 2], y: [f64; 2]) -> Self {
         self.acc.terrain = Some((x, y));
@@ -398,6 +446,7 @@ impl HexapodMetrics {
 impl Observer<WalkSample, Walker> for HexapodMetrics {
     fn finish(&mut self, complete: bool) -> Result<Option<PathBuf>> {
         self.complete = complete;
+        self.update();
         self.judge();
         crate::record::metadata::write(self.output.as_ref(), self)
     }
@@ -425,8 +474,9 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         let a = &mut self.acc;
         let (roll, pitch, yaw) = r.roll_pitch_yaw();
         let position = r.body.translation;
-        let (start, heading) = *a.start.get_or_insert((position, yaw));
         if a.walk_steps == 0 {
+            a.start = Some(position);
+            a.start_heading = yaw.sin_cos();
             a.yaw_prev = yaw;
         }
         a.walk_steps += 1;
@@ -451,36 +501,21 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             self.command_progress += (position - last).truncate().dot(step);
         }
         a.last_position = Some(position);
-        let moved = position - start;
-        let (s_h, c_h) = heading.sin_cos();
-        self.forward_distance = moved.x * c_h + moved.y * s_h;
-        self.sideways_distance = -moved.x * s_h + moved.y * c_h;
-        self.distance = moved.truncate().length();
-        self.walk_time = a.walk_steps as f64 * dt;
-        self.mean_speed = self.distance / self.walk_time;
-        self.heading_change_deg = a.yaw_total.to_degrees();
         let body_tilt = tilt(&r.body.matrix3);
         if body_tilt > FALL_TILT && self.fell_at.is_none() {
-            self.fell_at = Some(self.walk_time);
+            self.fell_at = Some(a.walk_steps as f64 * dt);
         }
         self.max_body_tilt_deg = self.max_body_tilt_deg.max(body_tilt.to_degrees());
         self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
         self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
         a.roll2 += roll * roll;
         a.pitch2 += pitch * pitch;
-        let n = a.walk_steps as f64;
-        self.rms_roll_deg = (a.roll2 / n).sqrt().to_degrees();
-        self.rms_pitch_deg = (a.pitch2 / n).sqrt().to_degrees();
         self.body_height_min = Some(
             self.body_height_min
                 .map_or(r.body_height, |h| h.min(r.body_height)),
         );
         a.height += r.body_height;
         a.height2 += r.body_height * r.body_height;
-        self.body_height_mean = a.height / n;
-        self.body_height_std = (a.height2 / n - self.body_height_mean.powi(2))
-            .max(0.0)
-            .sqrt();
         for (k, c) in r.foot_contacts.iter().enumerate() {
             if let Some(c) = c {
                 a.stance_steps[k] += 1;
@@ -491,11 +526,12 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
                 self.peak_normal_force[k] = self.peak_normal_force[k].max(c.normal_force);
                 self.max_penetration = self.max_penetration.max(c.penetration);
             }
-            self.stance_fraction[k] = a.stance_steps[k] as f64 / n;
-            self.mean_normal_force[k] = a.force_sum[k] / n;
         }
         let model = walker.hexapod().model();
-        a.link_steps.resize(model.links.len(), 0);
+        if a.link_names.len() != model.links.len() {
+            a.link_names = model.links.iter().map(|l| l.name.clone()).collect();
+            a.link_steps.resize(model.links.len(), 0);
+        }
         let mut last = None;
         for c in &r.link_contacts {
             self.max_link_penetration = self.max_link_penetration.max(c.force.penetration);
@@ -503,12 +539,6 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             if last != Some(c.link) {
                 last = Some(c.link);
                 a.link_steps[c.link] += 1;
-                let time = a.link_steps[c.link] as f64 * dt;
-                self.link_contact_time
-                    .insert(model.links[c.link].name.clone(), time);
-                if c.link == 0 {
-                    self.body_contact_time = time;
-                }
             }
         }
         for ((q, &(lower, upper)), steps) in r
@@ -531,9 +561,6 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             .map(|(t, v)| (t * v).abs())
             .sum();
         self.servo_energy += power * dt;
-        let weight_distance = a.mass * crate::sim::STANDARD_GRAVITY * self.distance;
-        self.cost_of_transport =
-            (weight_distance > 0.0).then(|| self.servo_energy / weight_distance);
         Ok(())
     }
 }

@@ -261,6 +261,8 @@ impl WalkSession {
         let (walking, mut list) = self.parts();
         let taken = looping.advance(walking, steps, &mut list);
         self.looping = Some(looping);
+        // the metrics' derived figures, read between stretches ([`Self::metrics`])
+        self.metrics.update();
         taken
     }
 
