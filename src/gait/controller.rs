@@ -124,11 +124,8 @@ pub struct GaitController {
     /// The last planned foot points and their gait time, for the bound on a target's speed
     /// ([`super::slew`]), and that bound at the gait's stride, which every shorter stride has
     /// too ([`slew::speed_limit`]): the walk's, not computed again for each leg every step.
+    /// Before any, the neutral points: where the robot is set down ([`Self::settling_on`]).
     last_planned: [DVec3; 6],
-    /// The feet's targets at the last step of a perceptive stand ([`Self::settling_on`]); None
-    /// before the first, when the feet stand where the robot was set down: at their neutral
-    /// points.
-    settled: Option<[DVec3; 6]>,
     last_time: Option<f64>,
     nominal_speed_limit: f64,
     /// The fastest each joint's target may move (rad/s, at the gait's nominal stride:
@@ -353,8 +350,7 @@ impl GaitController {
             stance_ground: [f64::NAN; 6],
             swinging: [false; 6],
             feet_at: None,
-            last_planned: [DVec3::ZERO; 6],
-            settled: None,
+            last_planned: neutral,
             last_time: None,
             nominal_speed_limit,
             joint_speed_limit: joint_speed_limits(last.map(|q| {
@@ -557,7 +553,7 @@ impl GaitController {
             before = now;
         }
         (self.last, self.last_time) = (last, None);
-        self.last_planned = [DVec3::ZERO; 6];
+        self.last_planned = self.neutral;
         self.last_angles = last;
         speed
     }
@@ -837,10 +833,7 @@ impl GaitController {
     /// (the run diverged).
     pub fn settling_on(&mut self, ground: impl Fn(DVec3) -> f64, dt: f64) -> [LegAngles; 6] {
         let most = self.landing_speed() * dt;
-        let from = self.settled.unwrap_or(self.neutral);
-        let angles = self.stand(ground, Some((from, most)));
-        self.settled = Some(self.last_planned);
-        angles
+        self.stand(ground, Some((self.last_planned, most)))
     }
 
     /// The legs' angles standing, each foot on the ground under its neutral point; with
