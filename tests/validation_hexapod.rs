@@ -168,6 +168,23 @@ fn walker(
     walker_with(model, ground, placement, controller, settle, articulation)
 }
 
+/// hex18 with the tripod on `ground`, set down level at (x, 0) heading +x, settling 1 s, on the
+/// multibody.
+fn hex18_from(ground: HeightGrid, x: f64) -> Walker {
+    let place = Placement {
+        x,
+        ..Default::default()
+    };
+    walker(
+        hex18(),
+        ground,
+        place,
+        tripod(),
+        1.0,
+        Articulation::Multibody,
+    )
+}
+
 /// [`walker`] with a controller of its own.
 fn walker_with(
     model: Arc<RobotModel>,
@@ -591,18 +608,7 @@ fn v21_impulse_levelled_holds_at_every_heading() {
 fn a_perceptive_settle_leaves_the_pose_set_down_at_a_landings_pace() {
     let first_targets = |following: bool| {
         let ground = terrain::slope([14.0, 4.0], [0.0, 0.0], 25f64.to_radians(), 0.0).unwrap();
-        let place = Placement {
-            x: -4.0,
-            ..Default::default()
-        };
-        let mut walker = walker(
-            hex18(),
-            ground,
-            place,
-            tripod(),
-            1.0,
-            Articulation::Multibody,
-        );
+        let mut walker = hex18_from(ground, -4.0);
         walker.terrain_following = following;
         let samples: Vec<Vec<f64>> = (0..300)
             .map(|_| walker.step().robot.joint_targets)
@@ -652,20 +658,7 @@ fn walks_up_and_down_a_25_degree_slope() {
         for following in [false, true] {
             let ground =
                 terrain::slope([14.0, 4.0], [0.0, 0.0], 25f64.to_radians(), ascent).unwrap();
-            let place = Placement {
-                x: -4.0,
-                y: 0.0,
-                yaw: 0.0,
-                ..Default::default()
-            };
-            let mut walker = walker(
-                hex18(),
-                ground,
-                place,
-                gait.clone(),
-                1.0,
-                Articulation::Multibody,
-            );
+            let mut walker = hex18_from(ground, -4.0);
             walker.terrain_following = following;
             let samples: Vec<HexapodSample> = (0..21_000).map(|_| walker.step().robot).collect();
             let forward =
@@ -717,20 +710,7 @@ fn walk_over(
     reactive: bool,
     following: bool,
 ) -> RoughWalk {
-    let place = Placement {
-        x: from,
-        y: 0.0,
-        yaw: 0.0,
-        ..Default::default()
-    };
-    let mut walker = walker(
-        hex18(),
-        ground,
-        place,
-        tripod(),
-        1.0,
-        Articulation::Multibody,
-    );
+    let mut walker = hex18_from(ground, from);
     walker.reactive = reactive;
     walker.terrain_following = following;
     let mut targets = vec![];
