@@ -309,6 +309,54 @@ fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
     assert!(tilt < 10.0, "tilted {tilt}°");
 }
 
+/// harika (0.40 kg, its belly 18 mm above its feet) perceptive at the lip of `ladder/gaps.toml`'s
+/// 8 cm trenches: its belly drops into the trench, and the legs, walking on, shove it against
+/// the far wall. No leg presses past its cap (its loads run one way), so before the body's
+/// contacts counted in the legs' squeeze (`gait::compliance`) the wall held the body with
+/// 4 of its weights, 4.79 mm deep (5.32 mm on the ladder's run). Counted, the legs yield
+/// once the squeeze passes its cap of 2 weights: the wall can be pressed no deeper than its
+/// static sink under those, 2·W/k.
+#[test]
+fn legs_shoving_the_body_against_a_wall_give_way() {
+    let dir = scratch("ladder-harika");
+    let urdf = project_file("tests/data/third_party/harika_hexapod/hexapod/urdf/hexapod.urdf");
+    let family = std::fs::read_to_string(project_file("ladder/gaps.toml")).unwrap();
+    let scenario = format!(
+        "robot = {urdf:?}\nfollow_terrain = true\n{}",
+        &family[..family.find("[sweep]").unwrap()]
+    )
+    .replace(
+        "../gaits/tripod.toml",
+        &project_file("gaits/tripod.toml").display().to_string(),
+    )
+    .replace("width = 0.02", "width = 0.08")
+    .replace("x = -0.5", "x = 0.3")
+    .replace("duration = 25.0", "duration = 8.0");
+    let file = dir.join("gaps.toml");
+    std::fs::write(&file, scenario).unwrap();
+    let json = dir.join("m.json");
+    let mut cmd = hexsim();
+    cmd.arg("run")
+        .arg(&file)
+        .arg("--no-record")
+        .arg("--metrics")
+        .arg(&json)
+        .arg("--allow-flags");
+    let m = metrics_of(cmd, &json, "harika at an 8 cm trench");
+    let weight = hexsim::robot::load(&urdf).unwrap().total_mass() * 9.80665;
+    let k = m["ground"]["stiffness"].as_f64().unwrap();
+    let squeezed = 2.0 * weight / k;
+    let belly = m["link_contact_time"]["dummy_link"].as_f64().unwrap_or(0.0);
+    let deepest = m["max_link_penetration"].as_f64().unwrap();
+    println!(
+        "belly down {belly:.2} s, deepest link {:.2} mm against {:.2} mm under 2 weights",
+        deepest * 1e3,
+        squeezed * 1e3
+    );
+    assert!(belly > 1.0, "the belly touched for {belly} s");
+    assert!(deepest < squeezed, "{deepest} m deep, {squeezed} m under 2 weights");
+}
+
 /// A walk whose scenario stops at its fall (`stop_at_fall`, as the ladder's families do) ends on
 /// the step its body first tilts past 45° from upright: complete (its result decided, not cut
 /// short), the metrics' `fell_at` its last moment and its body's largest tilt just past 45°,

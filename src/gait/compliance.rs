@@ -32,6 +32,10 @@
 //! weights yields every leg at the rate of its excess (each leg at the larger of its own excess
 //! and the squeeze's). A landing, however hard, squeezes nothing. A foot pressing several faces at
 //! once (wedged in a crack) counts each face's force ([`crate::contact::ContactForce::load`]).
+//! The body's own contacts count in the squeeze too: legs that shove the body against a wall
+//! press it there with forces no leg feels as its own (harika perceptive over 8 cm gaps, its
+//! belly against the far wall: 16 N, 4.2 of its weights, 5.3 mm into the wall, while every leg
+//! stayed under its cap).
 
 use glam::DVec3;
 
@@ -58,6 +62,30 @@ pub const YIELD_RATE: f64 = 50.0;
 /// forces no single leg's servos hold. A landing, all forces up, squeezes nothing.
 pub const SQUEEZE_CAP: f64 = 2.0;
 
+/// The ground's forces on the robot over a step, as leg compliance reads them (body frame).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GroundForces {
+    /// Each leg's: its foot's and its links' summed.
+    pub legs: [DVec3; 6],
+    /// Each leg's load: the magnitudes of its contacts' forces summed.
+    pub leg_loads: [f64; 6],
+    /// The body's (every link off the legs), summed.
+    pub body: DVec3,
+    /// The body's load.
+    pub body_load: f64,
+}
+
+impl GroundForces {
+    /// Legs' forces and loads alone, the body touching nothing.
+    pub fn of_legs(legs: [DVec3; 6], leg_loads: [f64; 6]) -> Self {
+        GroundForces {
+            legs,
+            leg_loads,
+            ..Default::default()
+        }
+    }
+}
+
 /// Per leg, how far its foot target has given way (body frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Compliance {
@@ -80,14 +108,16 @@ impl Compliance {
         }
     }
 
-    /// Each leg's ground force over the last step (`forces`, body frame; its foot's and its
-    /// links' summed) moves its displacement on by `dt`, and its load (`loads`: the magnitudes
-    /// of those forces summed) its yield.
-    pub fn feel(&mut self, forces: &[DVec3; 6], loads: &[f64; 6], dt: f64) {
+    /// Each leg's ground force over the last step (`ground.legs`, body frame; its foot's and its
+    /// links' summed) moves its displacement on by `dt`, and its load (`ground.leg_loads`: the
+    /// magnitudes of those forces summed) its yield; the body's contacts count in the squeeze.
+    pub fn feel(&mut self, ground: &GroundForces, dt: f64) {
+        let (forces, loads) = (&ground.legs, &ground.leg_loads);
         let cap = CAP * self.weight;
         let decay = (-dt / RELEASE_TIME).exp();
-        let net = forces.iter().sum::<DVec3>().length();
-        let robot_excess = loads.iter().sum::<f64>() - net - SQUEEZE_CAP * self.weight;
+        let net = (forces.iter().sum::<DVec3>() + ground.body).length();
+        let squeezed = loads.iter().sum::<f64>() + ground.body_load - net;
+        let robot_excess = squeezed - SQUEEZE_CAP * self.weight;
         for (yielded, &load) in self.yielded.iter_mut().zip(loads) {
             let excess = (load - cap).max(robot_excess);
             if excess > 0.0 {
@@ -134,7 +164,10 @@ mod tests {
         let mut c = Compliance::new(10.0, 0.05);
         let forces = [DVec3::new(3.0, -2.0, 29.7); 6];
         for _ in 0..1000 {
-            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
+            c.feel(
+                &GroundForces::of_legs(forces, forces.map(|f| f.length())),
+                1e-3,
+            );
         }
         assert!((0..6).all(|k| c.offset(k) == DVec3::ZERO && c.yielded(k) == 0.0));
     }
@@ -148,18 +181,18 @@ mod tests {
         let forces = [DVec3::ZERO; 6];
         let mut loads = [0.0; 6];
         loads[4] = 80.0;
-        c.feel(&forces, &loads, 1e-3);
+        c.feel(&GroundForces::of_legs(forces, loads), 1e-3);
         assert!((0..6).all(|k| (c.yielded(k) - 6.0 * YIELD_RATE * 1e-3).abs() < 1e-12));
         assert_eq!(c.offset(4), DVec3::ZERO);
         // bounded at 1: the servos' springs hold nothing
         for _ in 0..100 {
-            c.feel(&forces, &loads, 1e-3);
+            c.feel(&GroundForces::of_legs(forces, loads), 1e-3);
         }
         assert_eq!(c.yielded(4), 1.0);
         // under both caps it decays over RELEASE_TIME
         loads[4] = 19.0;
         for _ in 0..100 {
-            c.feel(&forces, &loads, 1e-3);
+            c.feel(&GroundForces::of_legs(forces, loads), 1e-3);
         }
         assert!((c.yielded(4) - (-1.0f64).exp()).abs() < 1e-9);
     }
@@ -176,21 +209,61 @@ mod tests {
         forces[1] = DVec3::new(-24.0, 0.0, 7.0);
         let loads = forces.map(|f| f.length());
         assert!(loads.iter().all(|&l| l < CAP * w));
-        c.feel(&forces, &loads, 1e-3);
+        c.feel(&GroundForces::of_legs(forces, loads), 1e-3);
         let rate = (66.0 - 30.0 - SQUEEZE_CAP * w) / w * YIELD_RATE;
         assert!((0..6).all(|k| (c.yielded(k) - rate * 1e-3).abs() < 1e-12));
         // a hard landing, every foot with 2.5 weights up (15 in all): nothing squeezed, no yield
         let mut c = Compliance::new(w, 0.05);
         let forces = [DVec3::new(0.0, 0.0, 25.0); 6];
-        c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
+        c.feel(
+            &GroundForces::of_legs(forces, forces.map(|f| f.length())),
+            1e-3,
+        );
         assert!((0..6).all(|k| c.yielded(k) == 0.0));
         // a leg over its own cap yields at the larger of its excess and the squeeze's: a grip
         // (60 N of load, no net force) is 3 weights over the leg's cap, 4 over the squeeze's
         let mut c = Compliance::new(w, 0.05);
         let mut loads = [0.0; 6];
         loads[0] = 60.0;
-        c.feel(&[DVec3::ZERO; 6], &loads, 1e-3);
+        c.feel(&GroundForces::of_legs([DVec3::ZERO; 6], loads), 1e-3);
         assert!((0..6).all(|k| (c.yielded(k) - 4.0 * YIELD_RATE * 1e-3).abs() < 1e-12));
+    }
+
+    #[test]
+    fn legs_shoving_the_body_against_a_wall_all_yield() {
+        let w = 10.0;
+        // the body pressed against a wall with 25 N by three legs pushing it forwards (each
+        // 8.33 N forwards, 10 N up, under its cap of 30 N), three more standing with 0 N:
+        // the legs' own squeeze is nothing (their forces run the same way), but with the wall's
+        // the loads, 3·13.0 + 25 = 64.1 N, against a net force of 30 N up, squeeze 3.4 weights
+        let leg = DVec3::new(25.0 / 3.0, 0.0, 10.0);
+        let mut legs = [DVec3::ZERO; 6];
+        legs[..3].fill(leg);
+        let leg_loads = legs.map(|f| f.length());
+        let wall = DVec3::new(-25.0, 0.0, 0.0);
+        let alone = GroundForces::of_legs(legs, leg_loads);
+        let mut c = Compliance::new(w, 0.05);
+        c.feel(&alone, 1e-3);
+        assert!((0..6).all(|k| c.yielded(k) == 0.0));
+        let shoved = GroundForces {
+            body: wall,
+            body_load: wall.length(),
+            ..alone
+        };
+        c.feel(&shoved, 1e-3);
+        let squeezed = 3.0 * leg.length() + 25.0 - 30.0;
+        let rate = (squeezed - SQUEEZE_CAP * w) / w * YIELD_RATE;
+        assert!(rate > 0.0);
+        assert!((0..6).all(|k| (c.yielded(k) - rate * 1e-3).abs() < 1e-12));
+        // the body resting on the ground beside its legs squeezes nothing
+        let mut c = Compliance::new(w, 0.05);
+        let resting = GroundForces {
+            body: DVec3::new(0.0, 0.0, 50.0),
+            body_load: 50.0,
+            ..GroundForces::of_legs([DVec3::new(0.0, 0.0, 5.0); 6], [5.0; 6])
+        };
+        c.feel(&resting, 1e-3);
+        assert!((0..6).all(|k| c.yielded(k) == 0.0));
     }
 
     #[test]
@@ -200,20 +273,29 @@ mod tests {
         // 2 weights over the cap along +x: 0.2 m/s
         forces[2] = DVec3::new(50.0, 0.0, 0.0);
         for _ in 0..100 {
-            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
+            c.feel(
+                &GroundForces::of_legs(forces, forces.map(|f| f.length())),
+                1e-3,
+            );
         }
         let o = c.offset(2);
         assert!((o.x - 0.02).abs() < 1e-9 && o.y == 0.0 && o.z == 0.0, "{o}");
         assert_eq!(c.offset(0), DVec3::ZERO);
         // bounded
         for _ in 0..1000 {
-            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
+            c.feel(
+                &GroundForces::of_legs(forces, forces.map(|f| f.length())),
+                1e-3,
+            );
         }
         assert!((c.offset(2).length() - 0.05).abs() < 1e-12);
         // released over RELEASE_TIME
         forces[2] = DVec3::ZERO;
         for _ in 0..100 {
-            c.feel(&forces, &forces.map(|f| f.length()), 1e-3);
+            c.feel(
+                &GroundForces::of_legs(forces, forces.map(|f| f.length())),
+                1e-3,
+            );
         }
         let expected = 0.05 * (-1.0f64).exp();
         assert!((c.offset(2).length() - expected).abs() < 1e-9);

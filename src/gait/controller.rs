@@ -22,7 +22,7 @@
 //! an execution detail like the servos' load feed-forward.
 
 use super::clearance::{self, SwingGround};
-use super::compliance::Compliance;
+use super::compliance::{Compliance, GroundForces};
 use super::foothold;
 use super::lean::{self, HorizontalRoom, Lean};
 use super::reactive::{FootFeel, Reactive};
@@ -582,11 +582,11 @@ impl GaitController {
         self.compliance = compliance;
     }
 
-    /// Each leg's ground force over the last step (body frame) and its load (the magnitudes of
-    /// its contacts' forces summed), for leg compliance (ignored when it is off).
-    pub fn feel_forces(&mut self, forces: &[DVec3; 6], loads: &[f64; 6], dt: f64) {
+    /// The ground's forces on the legs and the body over the last step (body frame), for leg
+    /// compliance (ignored when it is off).
+    pub fn feel_forces(&mut self, ground: &GroundForces, dt: f64) {
         if let Some(compliance) = &mut self.compliance {
-            compliance.feel(forces, loads, dt);
+            compliance.feel(ground, dt);
         }
     }
 

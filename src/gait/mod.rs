@@ -17,7 +17,7 @@ mod slew;
 mod spec;
 
 pub use command::{CommandChange, CommandSchedule};
-pub use compliance::Compliance;
+pub use compliance::{Compliance, GroundForces};
 pub use controller::{
     GaitController, GaitTargets, REACH_TOLERANCE, StanceError, StanceTrack, VelocityCommand,
 };

@@ -4,8 +4,8 @@ use super::engine::STANDARD_GRAVITY;
 use super::hexapod::{Hexapod, HexapodSample};
 use crate::gait::reach::ReachTally;
 use crate::gait::{
-    Compliance, FootFeel, GaitController, GaitTargets, HeadingHold, Reactive, StanceTrack,
-    VelocityCommand, away_from_edges,
+    Compliance, FootFeel, GaitController, GaitTargets, GroundForces, HeadingHold, Reactive,
+    StanceTrack, VelocityCommand, away_from_edges,
 };
 use crate::robot::kinematics::{LegAngles, LegStatics};
 use crate::robot::{RobotModel, statics};
@@ -48,11 +48,9 @@ pub struct Walker {
     feel: [FootFeel; 6],
     /// Where each foot's centre was after the last step (world); None before the first.
     feet: Option<[DVec3; 6]>,
-    /// Each leg's ground force in the last step, its foot's and its links' (body frame);
-    /// summed only for leg compliance, the one that reads it.
-    leg_forces: [DVec3; 6],
-    /// Each leg's load in the last step: the magnitudes of its contacts' forces summed.
-    leg_loads: [f64; 6],
+    /// The ground's forces on each leg (its foot's and its links') and on the body in the last
+    /// step (body frame); summed only for leg compliance, the one that reads them.
+    ground_forces: GroundForces,
     /// The joints' angles after the last step (by model joint), for leg compliance's yield;
     /// empty before the first step.
     joint_angles: Vec<f64>,
@@ -246,8 +244,7 @@ impl Walker {
             heading: None,
             feel: [FootFeel::default(); 6],
             feet: None,
-            leg_forces: [DVec3::ZERO; 6],
-            leg_loads: [0.0; 6],
+            ground_forces: GroundForces::default(),
             joint_angles: Vec::new(),
             leg_of_link,
             given_targets: None,
@@ -641,8 +638,7 @@ impl Walker {
             }
             self.controller.feel(self.feel);
             let dt = self.hexapod.dt();
-            self.controller
-                .feel_forces(&self.leg_forces, &self.leg_loads, dt);
+            self.controller.feel_forces(&self.ground_forces, dt);
             if self.lean {
                 let body = self.hexapod.body_frame().matrix3;
                 self.controller
@@ -702,14 +698,23 @@ impl Walker {
             });
         }
         if self.compliant {
+            let ground = &mut self.ground_forces;
             for (k, (feel, c)) in self.feel.iter().zip(&robot.foot_contacts).enumerate() {
-                self.leg_forces[k] = feel.force;
-                self.leg_loads[k] = c.as_ref().map_or(0.0, |c| c.load);
+                ground.legs[k] = feel.force;
+                ground.leg_loads[k] = c.as_ref().map_or(0.0, |c| c.load);
             }
+            (ground.body, ground.body_load) = (DVec3::ZERO, 0.0);
             for contact in &robot.link_contacts {
-                if let Some(k) = self.leg_of_link[contact.link] {
-                    self.leg_forces[k] += to_body * contact.force.force;
-                    self.leg_loads[k] += contact.force.load;
+                let force = to_body * contact.force.force;
+                match self.leg_of_link[contact.link] {
+                    Some(k) => {
+                        ground.legs[k] += force;
+                        ground.leg_loads[k] += contact.force.load;
+                    }
+                    None => {
+                        ground.body += force;
+                        ground.body_load += contact.force.load;
+                    }
                 }
             }
             self.joint_angles.clone_from(&robot.joint_angles);
