@@ -354,7 +354,10 @@ fn legs_shoving_the_body_against_a_wall_give_way() {
         squeezed * 1e3
     );
     assert!(belly > 1.0, "the belly touched for {belly} s");
-    assert!(deepest < squeezed, "{deepest} m deep, {squeezed} m under 2 weights");
+    assert!(
+        deepest < squeezed,
+        "{deepest} m deep, {squeezed} m under 2 weights"
+    );
 }
 
 /// A walk whose scenario stops at its fall (`stop_at_fall`, as the ladder's families do) ends on

@@ -215,10 +215,11 @@ fn a_foot_wedged_in_a_crack_its_own_width_stays_in_the_physics() {
             String::from_utf8_lossy(&out.stderr)
         );
         // the blind tripod wedges its feet and drags them (measured: the worst foot slid 1.04 m
-        // of 1.19 m on the gaps, 1.29 of 1.06 m on the stones): flagged as skating, exit 1
+        // of 1.19 m on the gaps, 1.08 of 0.87 m on the stones, where it also turned 15°):
+        // flagged as skating, exit 1
         assert_eq!(out.status.code(), Some(1), "{name}: {text}");
         assert!(
-            text.contains("error: not the walk commanded (skated)"),
+            text.contains("error: not the walk commanded (skated"),
             "{name}: {text}"
         );
         let m: serde_json::Value =
