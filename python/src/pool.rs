@@ -4,8 +4,10 @@
 //! of that, and waking sleeping ones nearly as much (two worlds on 2 cores ran 1.63× one world in
 //! 20-step calls, 1.94× in long ones). So the calling thread does the first share of the worlds
 //! itself, and a pool of the others, kept between calls and kept awake a moment after each, does
-//! the rest; at the end the calling thread spins for the pool's shares instead of sleeping (two
-//! worlds' 20-step calls: 1.72–1.79× one world sleeping, 1.83–1.89× spinning; docs/python.md).
+//! the rest; at the end the calling thread waits awake for the pool's shares instead of sleeping
+//! (two worlds' 20-step calls: 1.72–1.79× one world sleeping, 1.83–1.89× spinning;
+//! docs/python.md), yielding its core at each look so that a busy machine's other work — or the
+//! pool's own thread — can have it.
 
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -46,11 +48,14 @@ pub(crate) fn for_each<T: Send>(items: &mut [T], threads: usize, work: impl Fn(&
         // is already queued, so none goes to sleep looking for it
         let call = CALLS.fetch_add(1, Ordering::Relaxed) + 1;
         run(first);
-        // the pool's shares end within microseconds of this one's: spin for them rather than
-        // sleep on the scope's lock, whose wake-up on a VM costs tens of microseconds
+        // the pool's shares end within microseconds of this one's: wait for them awake rather
+        // than sleep on the scope's lock, whose wake-up on a VM costs tens of microseconds —
+        // yielding the core at each look, not spinning on it: where other work holds the other
+        // cores, the pool's thread may be waiting for this very core (a pure spin then burnt
+        // the whole 2 ms a call: two worlds ran 0.19× one world beside another job)
         let started = Instant::now();
         while done.load(Ordering::Acquire) < spawned && started.elapsed() < WAIT_SPINNING {
-            std::hint::spin_loop();
+            std::thread::yield_now();
         }
         call
     });
@@ -65,7 +70,8 @@ fn keep_awake(pool: &rayon::ThreadPool, threads: usize, call: u64) {
         pool.spawn(move || {
             let started = Instant::now();
             while CALLS.load(Ordering::Relaxed) == call && started.elapsed() < KEEP_AWAKE {
-                std::hint::spin_loop();
+                // awake, but giving the core to whatever else wants it
+                std::thread::yield_now();
             }
         });
     }
