@@ -254,6 +254,13 @@ impl LegChain {
         LegAngles::fitted(q, self.n, &self.fill)
     }
 
+    /// A 3-joint leg's angles from `q`, as [`Self::angles`] gives them (a short `q` filled as
+    /// there), without the copy through [`LegAngles`] (a call to `memcpy` of `q`'s length).
+    #[inline]
+    fn three(&self, q: &[f64]) -> [f64; 3] {
+        std::array::from_fn(|k| q.get(k).copied().unwrap_or(self.fill[k]))
+    }
+
     /// Angles with `three` on the three joints that place the foot (in order from the body) and
     /// a redundant leg's other joints at rest: a starting guess stated as a 3-joint leg's.
     pub fn from_three(&self, three: [f64; 3]) -> LegAngles {
@@ -461,11 +468,10 @@ impl LegChain {
         tolerance: f64,
         follow: bool,
     ) -> IkSolution {
-        let guess = self.angles(guess.as_ref());
         if self.is_redundant() {
-            return super::redundant::solve(self, target, &guess);
+            return super::redundant::solve(self, target, &self.angles(guess.as_ref()));
         }
-        let three = [guess[0], guess[1], guess[2]];
+        let three = self.three(guess.as_ref());
         let mut solve = IkSolve::new(self, target, three, warm, tolerance, follow);
         let warm = warm.as_mut().expect("set by IkSolve::new");
         while solve.advance(self, warm) {}
@@ -786,8 +792,7 @@ pub fn solve_warm_each(
     for k in 0..6 {
         let chain = &chains[k];
         if !chain.is_redundant() {
-            let guess = chain.angles(&guesses[k]);
-            let guess = [guess[0], guess[1], guess[2]];
+            let guess = chain.three(&guesses[k]);
             let solve = IkSolve::new(chain, targets[k], guess, &mut warms[k], IK_TOLERANCE, true);
             solves[k] = Some(solve);
         }
