@@ -29,7 +29,9 @@ use super::reactive::{FootFeel, Reactive};
 use super::schedule::{LegPhase, leg_phase};
 use super::slew;
 use super::spec::{Gait, SwingShape};
-use crate::robot::kinematics::{IK_TOLERANCE, IkSolution, IkWarm, LegAngles, LegChain, LegStatics};
+use crate::robot::kinematics::{
+    self, IK_TOLERANCE, IkSolution, IkWarm, LegAngles, LegChain, LegStatics,
+};
 use crate::robot::{ContactSphere, RobotModel};
 use glam::{DMat2, DMat3, DQuat, DVec2, DVec3};
 
@@ -914,6 +916,11 @@ impl GaitController {
         let elapsed = self.last_time.map(|last| t - last).filter(|&dt| dt > 0.0);
         self.last_time = Some(t);
         let lean = self.lean();
+        // each leg's planned point, then the six placed at once ([`Self::place_each`]), then
+        // each leg's joints bounded
+        let mut planned = [DVec3::ZERO; 6];
+        let mut lifts = [0.0; 6];
+        let mut strides = [0.0; 6];
         for (k, &phase) in phases.iter().enumerate() {
             let n = self.neutral[k] + lean;
             // ground displacement under the foot over one stance, seen from the body
@@ -1016,7 +1023,11 @@ impl GaitController {
             if let Some(compliance) = &self.compliance {
                 foot += compliance.offset(k);
             }
-            let (foot, solution) = self.place(k, foot, lift, elapsed.is_none());
+            (planned[k], lifts[k], strides[k]) = (foot, lift, stride);
+        }
+        let (feet, solutions) = self.place_each(&planned, &lifts, elapsed.is_none());
+        for (k, &phase) in phases.iter().enumerate() {
+            let (foot, solution, stride) = (feet[k], &solutions[k], strides[k]);
             self.last[k] = solution.angles;
             let mut angles = solution.angles;
             if let Some(dt) = elapsed {
@@ -1126,40 +1137,97 @@ impl GaitController {
                 solve_on_branch(chain, planned, &self.last[k], warm_last, home),
             );
         }
-        let (rest_inverse, radius) = (self.rest_inverse[k], self.radius[k]);
-        // the offset o = r·(Δφ × ẑ) (horizontal), Δφ the foot link's turn at the answer for the
-        // path's point G moved by o: from a pose with the foot at F and turn φ, to first order
-        // Δφ = φ + J_L⁻¹·B·(G + o − F), a linear equation in o's two components (its own turn
-        // moves the offset by a tenth or so: were it near a whole one, as on no leg built to
-        // walk, it is read without it)
         let grounded = planned - DVec3::Z * lift;
-        let offset = |warm: Option<&IkWarm>, q: &LegAngles| {
-            let (rotation, foot, b) = chain.foot_turn_map(warm, q);
-            let phi = DQuat::from_mat3(&(rotation * rest_inverse)).to_scaled_axis();
-            // a turn ε of the link adds J_L⁻¹·ε to its rotation vector φ (SO(3)'s inverse left
-            // Jacobian, I − ½[φ]× + [φ]×²/12 to second order in φ), not ε itself
-            let j_inv = |e: DVec3| {
-                let pe = phi.cross(e);
-                e - 0.5 * pe + phi.cross(pe) / 12.0
-            };
-            let roll = |turn: DVec3| DVec2::new(turn.y, -turn.x) * radius;
-            let p = roll(phi + j_inv(b * (grounded - foot)));
-            let m = DMat2::from_cols(roll(j_inv(b.x_axis)), roll(j_inv(b.y_axis)));
-            let a = DMat2::IDENTITY - m;
-            if a.determinant() > 0.5 {
-                a.inverse() * p
-            } else {
-                p
+        let rolled = self.rolling_offset(k, grounded, &self.last[k]);
+        let target = planned + rolled;
+        let warm_last = &mut self.warm_last[k];
+        let solution = solve_on_branch(chain, target, &self.last[k], warm_last, home);
+        self.placed(k, planned, grounded, rolled, solution, fresh)
+    }
+
+    /// [`Self::place`] of the six legs, `planned` and `lifts` theirs: the same arithmetic leg by
+    /// leg, in stages across the legs — the rolling offsets ([`Self::rolling_offsets`]), then
+    /// the solves from the last answers in turns ([`kinematics::solve_warm_each`]), then each
+    /// leg's solve again from its standing pose where it missed, and a fresh start's passes —
+    /// so that one leg's part computes while another's waits on its latencies. The feet's
+    /// targets and the legs' answers.
+    fn place_each(
+        &mut self,
+        planned: &[DVec3; 6],
+        lifts: &[f64; 6],
+        fresh: bool,
+    ) -> ([DVec3; 6], [IkSolution; 6]) {
+        let mut feet = *planned;
+        let mut grounded = [DVec3::ZERO; 6];
+        let mut rolled = [DVec3::ZERO; 6];
+        if self.rolling {
+            grounded = std::array::from_fn(|k| planned[k] - DVec3::Z * lifts[k]);
+            rolled = self.rolling_offsets(&grounded);
+            // (not planned + 0 without rolling: a −0 coordinate would become +0)
+            feet = std::array::from_fn(|k| planned[k] + rolled[k]);
+        }
+        let mut solutions =
+            kinematics::solve_warm_each(&self.chains, &feet, &self.last, &mut self.warm_last);
+        for k in 0..6 {
+            let (chain, home) = (&self.chains[k], &self.home[k]);
+            solutions[k] = or_from_home(chain, feet[k], solutions[k], home);
+            if self.rolling && fresh {
+                (feet[k], solutions[k]) =
+                    self.placed(k, planned[k], grounded[k], rolled[k], solutions[k], fresh);
             }
-        };
-        let mut rolled = offset(warm_last.as_ref(), &self.last[k]).extend(0.0);
-        let mut solution = solve_on_branch(chain, planned + rolled, &self.last[k], warm_last, home);
+        }
+        (feet, solutions)
+    }
+
+    /// Leg `k`'s rolling offset (horizontal) for the point `grounded` on the ground, read from
+    /// its last answer's pose `last` (and the forward kinematics the solve left with it).
+    fn rolling_offset(&self, k: usize, grounded: DVec3, last: &LegAngles) -> DVec3 {
+        let (rotation, foot, b) = self.chains[k].foot_turn_map(self.warm_last[k].as_ref(), last);
+        let phi = DQuat::from_mat3(&(rotation * self.rest_inverse[k])).to_scaled_axis();
+        offset_for_turn(phi, b, grounded - foot, self.radius[k])
+    }
+
+    /// [`Self::rolling_offset`] of the six legs at their last answers, in stages across the
+    /// legs — each leg's turn map ([`LegChain::foot_turn_map`]), then each one's turn as a
+    /// quaternion, then as a rotation vector, then each one's offset — so that one leg's
+    /// divisions, square roots and `atan2` overlap another's.
+    fn rolling_offsets(&self, grounded: &[DVec3; 6]) -> [DVec3; 6] {
+        let mut turned = [DMat3::ZERO; 6];
+        let mut feet = [DVec3::ZERO; 6];
+        let mut maps = [DMat3::ZERO; 6];
+        for k in 0..6 {
+            let (rotation, foot, b) =
+                self.chains[k].foot_turn_map(self.warm_last[k].as_ref(), &self.last[k]);
+            (turned[k], feet[k], maps[k]) = (rotation * self.rest_inverse[k], foot, b);
+        }
+        let quats = turned.map(|turned| DQuat::from_mat3(&turned));
+        let phis = quats.map(DQuat::to_scaled_axis);
+        std::array::from_fn(|k| {
+            offset_for_turn(phis[k], maps[k], grounded[k] - feet[k], self.radius[k])
+        })
+    }
+
+    /// Leg `k`'s foot centre target and answer, rolling, from its first `solution` for the
+    /// planned point moved on by the offset `rolled`: with `fresh` (see [`Self::place`]) the
+    /// offset read again at each answer and the leg solved again until it holds.
+    #[inline]
+    fn placed(
+        &mut self,
+        k: usize,
+        planned: DVec3,
+        grounded: DVec3,
+        mut rolled: DVec3,
+        mut solution: IkSolution,
+        fresh: bool,
+    ) -> (DVec3, IkSolution) {
         // a pose far from the last (the first targets), the first-order turn read again at
         // each answer until it holds
         for _ in 0..if fresh { FRESH_PASSES } else { 0 } {
-            let next = offset(warm_last.as_ref(), &solution.angles).extend(0.0);
+            let next = self.rolling_offset(k, grounded, &solution.angles);
             let change = next.distance(rolled);
             rolled = next;
+            let (chain, home) = (&self.chains[k], &self.home[k]);
+            let warm_last = &mut self.warm_last[k];
             solution = solve_on_branch(chain, planned + rolled, &solution.angles, warm_last, home);
             if change < FRESH_TOLERANCE {
                 break;
@@ -1167,6 +1235,33 @@ impl GaitController {
         }
         (planned + rolled, solution)
     }
+}
+
+/// The rolling offset (horizontal) of a foot of `radius` whose link has turned by `phi`, `b` the
+/// map from a small motion of the foot to the link's turn ([`LegChain::foot_turn_map`]) and
+/// `to_ground` the foot's motion to the point on the ground it is planned for. The offset
+/// o = r·(Δφ × ẑ), Δφ the foot link's turn at the answer for the path's point G moved by o: from
+/// a pose with the foot at F and turn φ, to first order Δφ = φ + J_L⁻¹·B·(G + o − F), a linear
+/// equation in o's two components (its own turn moves the offset by a tenth or so: were it near
+/// a whole one, as on no leg built to walk, it is read without it).
+#[inline]
+fn offset_for_turn(phi: DVec3, b: DMat3, to_ground: DVec3, radius: f64) -> DVec3 {
+    // a turn ε of the link adds J_L⁻¹·ε to its rotation vector φ (SO(3)'s inverse left
+    // Jacobian, I − ½[φ]× + [φ]×²/12 to second order in φ), not ε itself
+    let j_inv = |e: DVec3| {
+        let pe = phi.cross(e);
+        e - 0.5 * pe + phi.cross(pe) / 12.0
+    };
+    let roll = |turn: DVec3| DVec2::new(turn.y, -turn.x) * radius;
+    let p = roll(phi + j_inv(b * to_ground));
+    let m = DMat2::from_cols(roll(j_inv(b.x_axis)), roll(j_inv(b.y_axis)));
+    let a = DMat2::IDENTITY - m;
+    let offset = if a.determinant() > 0.5 {
+        a.inverse() * p
+    } else {
+        p
+    };
+    offset.extend(0.0)
 }
 
 /// Which way [`Gait::splay`] turns leg `k`'s standing foot about its hip ([`crate::robot::LEG_NAMES`]
@@ -1219,6 +1314,18 @@ fn solve_on_branch(
     home: &LegAngles,
 ) -> IkSolution {
     let followed = chain.solve_warm(target, last, warm);
+    or_from_home(chain, target, followed, home)
+}
+
+/// [`solve_on_branch`]'s answer from `followed`, the solve from the last answer: it, where it
+/// reaches `target`; else the leg solved again from its standing pose `home`, and the closer
+/// answer kept.
+fn or_from_home(
+    chain: &LegChain,
+    target: DVec3,
+    followed: IkSolution,
+    home: &LegAngles,
+) -> IkSolution {
     if followed.error <= REACH_TOLERANCE {
         return followed;
     }
@@ -1337,6 +1444,63 @@ mod tests {
             }
         }
         assert!(worst < 0.3, "an answer jumped {worst:.3} rad: {at}");
+    }
+
+    /// The six legs placed in stages ([`GaitController::place_each`]: the rolling offsets, then
+    /// the solves in turns) are each leg placed alone ([`GaitController::place`]), bit for bit:
+    /// the feet's targets, the answers and the warm state each leg's solve leaves. hex18 and
+    /// ant_bot, rolling and not, over targets that circle the standing feet, lift and swing out
+    /// of reach and back (ant_bot's legs then start again from their standing pose), with a
+    /// fresh start (the rolling offset read again until it holds) now and then.
+    #[test]
+    fn legs_placed_in_stages_are_each_leg_placed_alone() {
+        let spec = crate::gait::tripod_for_tests();
+        let mut missed = 0;
+        for model in [crate::robot::hex18_for_tests(), ant_bot()] {
+            let gait = crate::gait::fit(&model, &spec).unwrap().gait;
+            for rolling in [true, false] {
+                let controller = || {
+                    GaitController::for_cycle(&model, gait.clone())
+                        .unwrap()
+                        .with_rolling_feet(rolling)
+                };
+                let (mut staged, mut alone) = (controller(), controller());
+                for step in 0..300 {
+                    let t = step as f64;
+                    let fresh = step % 75 == 0;
+                    let reach = 0.01 + 0.2 * (std::f64::consts::PI * t / 300.0).sin().powi(4);
+                    let planned: [DVec3; 6] = std::array::from_fn(|k| {
+                        let turn = 0.07 * t + k as f64;
+                        staged.neutral[k] + reach * DVec3::new(turn.cos(), turn.sin(), 0.0)
+                    });
+                    let lifts: [f64; 6] =
+                        std::array::from_fn(|k| 0.03 * (0.1 * t + k as f64).sin().max(0.0));
+                    let planned = std::array::from_fn(|k| planned[k] + DVec3::Z * lifts[k]);
+                    let (feet, solutions) = staged.place_each(&planned, &lifts, fresh);
+                    for k in 0..6 {
+                        let (foot, solution) = alone.place(k, planned[k], lifts[k], fresh);
+                        let at = format!("{} leg {k}, step {step}, rolling {rolling}", model.name);
+                        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+                        assert_eq!(bits(foot), bits(feet[k]), "{at}");
+                        let angles = |s: &IkSolution| -> Vec<u64> {
+                            s.angles.iter().map(|a| a.to_bits()).collect()
+                        };
+                        assert_eq!(angles(&solution), angles(&solutions[k]), "{at}");
+                        assert_eq!(
+                            solution.error.to_bits(),
+                            solutions[k].error.to_bits(),
+                            "{at}"
+                        );
+                        missed += usize::from(solution.error > REACH_TOLERANCE);
+                        // as the plan does after placing a leg
+                        (alone.last[k], staged.last[k]) = (solution.angles, solutions[k].angles);
+                    }
+                    let warm = |c: &GaitController| format!("{:?}", c.warm_last);
+                    assert_eq!(warm(&alone), warm(&staged), "step {step}");
+                }
+            }
+        }
+        assert!(missed > 50, "only {missed} targets out of reach");
     }
 
     /// ant_bot, from `tests/data/third_party`.

@@ -254,6 +254,13 @@ impl LegChain {
         LegAngles::fitted(q, self.n, &self.fill)
     }
 
+    /// A 3-joint leg's angles from `q`, as [`Self::angles`] gives them (a short `q` filled as
+    /// there), without the copy through [`LegAngles`] (a call to `memcpy` of `q`'s length).
+    #[inline]
+    fn three(&self, q: &[f64]) -> [f64; 3] {
+        std::array::from_fn(|k| q.get(k).copied().unwrap_or(self.fill[k]))
+    }
+
     /// Angles with `three` on the three joints that place the foot (in order from the body) and
     /// a redundant leg's other joints at rest: a starting guess stated as a 3-joint leg's.
     pub fn from_three(&self, three: [f64; 3]) -> LegAngles {
@@ -451,7 +458,8 @@ impl LegChain {
         self.solve_within(target, guess, warm, IK_TOLERANCE, true)
     }
 
-    /// [`Self::solve_warm`] to `tolerance` (m), on the branch of `guess` if `follow`.
+    /// [`Self::solve_warm`] to `tolerance` (m), on the branch of `guess` if `follow`: a 3-joint
+    /// leg's [`IkSolve`] taken to its end.
     fn solve_within(
         &self,
         target: DVec3,
@@ -460,95 +468,14 @@ impl LegChain {
         tolerance: f64,
         follow: bool,
     ) -> IkSolution {
-        let guess = self.angles(guess.as_ref());
         if self.is_redundant() {
-            return super::redundant::solve(self, target, &guess);
+            return super::redundant::solve(self, target, &self.angles(guess.as_ref()));
         }
-        // a guess that is `warm`'s answer is within the limits already (an answer is clamped)
-        let guess = [guess[0], guess[1], guess[2]];
-        let known = warm.as_ref().is_some_and(|w| w.answers(&guess));
-        let mut q = if known { guess } else { self.clamp3(guess) };
-        if !known {
-            let w = warm.insert(IkWarm {
-                angles: q,
-                frames: [NO_FRAMES; 2],
-                jacobians: [None; 2],
-                now: 0,
-            });
-            self.frames3_into(q, &mut w.frames[0]);
-        }
-        let IkWarm {
-            angles,
-            frames,
-            jacobians,
-            now,
-        } = warm.as_mut().expect("set above");
-        let mut error = target - frames[*now].1;
-        let mut distance = error.length();
-        let mut lambda2 = LAMBDA2;
-        'solve: for _ in 0..50 {
-            if distance < tolerance {
-                break;
-            }
-            let (j, det) = jacobians[*now].unwrap_or_else(|| {
-                let j = Self::jacobian_of(&frames[*now].0, frames[*now].1);
-                (j, j.determinant())
-            });
-            let trial = 1 - *now;
-            // a trial is taken if it comes closer and, following, stays on the branch (see
-            // [`same_branch`]); its Jacobian, computed for that, is kept for the next iteration
-            // (and the next solve, and [`Self::foot_turn_map`]) if it is taken
-            let progress = |frames: &Frames, jacobian: &mut Option<(DMat3, f64)>| {
-                *jacobian = None;
-                let closer = (target - frames.1).length();
-                let taken = closer < distance
-                    && (!follow || {
-                        let to = Self::jacobian_of(&frames.0, frames.1);
-                        let to_det = to.determinant();
-                        *jacobian = Some((to, to_det));
-                        same_branch(det, to_det)
-                    });
-                taken.then_some(closer)
-            };
-            let next = loop {
-                let step = self.step_within_limits(j, q, error, lambda2);
-                let next = self.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z]);
-                self.frames3_into(next, &mut frames[trial]);
-                if let Some(closer) = progress(&frames[trial], &mut jacobians[trial]) {
-                    lambda2 = (lambda2 * 0.1).max(LAMBDA2);
-                    distance = closer;
-                    break next;
-                }
-                if lambda2 == LAMBDA2 {
-                    // no progress: try a half step
-                    let half = self.clamp3([
-                        q[0] + 0.5 * step.x,
-                        q[1] + 0.5 * step.y,
-                        q[2] + 0.5 * step.z,
-                    ]);
-                    self.frames3_into(half, &mut frames[trial]);
-                    if let Some(closer) = progress(&frames[trial], &mut jacobians[trial]) {
-                        distance = closer;
-                        break half;
-                    }
-                }
-                // still none: damp harder (Levenberg–Marquardt), towards the gradient's
-                // direction, until the step is too short to matter; a solve that need not
-                // follow its guess stops here, as the stance fit was tuned on
-                lambda2 *= 10.0;
-                if !follow || lambda2 > LAMBDA2_MAX {
-                    break 'solve;
-                }
-            };
-            q = next;
-            *now = trial;
-            error = target - frames[*now].1;
-        }
-        *angles = q;
-        IkSolution {
-            angles: LegAngles::three(q),
-            error: distance,
-        }
+        let three = self.three(guess.as_ref());
+        let mut solve = IkSolve::new(self, target, three, warm, tolerance, follow);
+        let warm = warm.as_mut().expect("set by IkSolve::new");
+        while solve.advance(self, warm) {}
+        solve.finish(warm)
     }
 
     /// The leg's pose for the load feed-forward at `q`, from the forward kinematics of the solve
@@ -636,6 +563,269 @@ impl LegChain {
     }
 }
 
+/// The most iterations a 3-joint leg's solve takes (each a damped step, with the shorter trials
+/// it may take when the step does not come closer).
+const MOST_ITERATIONS: usize = 50;
+
+/// A 3-joint leg's solve between two of its trials ([`LegChain::solve_warm`]): where it stands
+/// and what it tries next. A trial is three parts — [`IkSolve::step`], the angles tried;
+/// [`IkSolve::forward`], their forward kinematics; [`IkSolve::judge`], taken or not — so that
+/// several legs' solves can take turns ([`solve_warm_each`]), and [`IkSolve::advance`] takes
+/// them one after the other: a solve alone is this state advanced to its end, the same
+/// arithmetic, bit for bit, as in turns.
+#[derive(Debug, Clone, Copy)]
+struct IkSolve {
+    target: DVec3,
+    /// The answer so far, the foot's error there and that error's length.
+    q: [f64; 3],
+    error: DVec3,
+    distance: f64,
+    /// The damped least squares' λ² for the next full step.
+    lambda2: f64,
+    tolerance: f64,
+    follow: bool,
+    /// Iterations begun.
+    iterations: usize,
+    /// This iteration's Jacobian and its determinant, and its last full step (half of which is
+    /// tried when it does not come closer).
+    jacobian: DMat3,
+    det: f64,
+    step: DVec3,
+    /// The angles being tried.
+    trial: [f64; 3],
+    next: Next,
+}
+
+/// What an [`IkSolve`] tries next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Next {
+    /// A new iteration: the Jacobian where the answer stands, then its full step.
+    Iteration,
+    /// The iteration's full step, at the present damping.
+    Full,
+    /// Half the full step just refused.
+    Half,
+    /// No more: the answer stands.
+    Done,
+}
+
+impl IkSolve {
+    /// The solve of `chain` for `target` from `guess` (its three angles), in `warm`: from the
+    /// forward kinematics there when they are those of `guess` (the last answer, bit for bit),
+    /// else from `guess` within the joints' limits, its forward kinematics computed there.
+    #[inline(always)]
+    fn new(
+        chain: &LegChain,
+        target: DVec3,
+        guess: [f64; 3],
+        warm: &mut Option<IkWarm>,
+        tolerance: f64,
+        follow: bool,
+    ) -> Self {
+        // a guess that is `warm`'s answer is within the limits already (an answer is clamped)
+        let known = warm.as_ref().is_some_and(|w| w.answers(&guess));
+        let q = if known { guess } else { chain.clamp3(guess) };
+        let warm = if known {
+            warm.as_mut().expect("known")
+        } else {
+            let w = warm.insert(IkWarm {
+                angles: q,
+                frames: [NO_FRAMES; 2],
+                jacobians: [None; 2],
+                now: 0,
+            });
+            chain.frames3_into(q, &mut w.frames[0]);
+            w
+        };
+        let error = target - warm.frames().1;
+        let distance = error.length();
+        IkSolve {
+            target,
+            q,
+            error,
+            distance,
+            lambda2: LAMBDA2,
+            tolerance,
+            follow,
+            iterations: 0,
+            jacobian: DMat3::ZERO,
+            det: 0.0,
+            step: DVec3::ZERO,
+            trial: q,
+            next: if distance < tolerance {
+                Next::Done
+            } else {
+                Next::Iteration
+            },
+        }
+    }
+
+    /// One trial: a step from the answer, taken if it comes closer and, following, stays on
+    /// the branch (see [`same_branch`]); if not, half of it, then steps damped harder
+    /// (Levenberg–Marquardt, towards the gradient's direction) until one is too short to
+    /// matter. A solve that need not follow its guess stops at the first damping, as the stance
+    /// fit was tuned on. False once the solve has ended (nothing tried).
+    #[inline(always)]
+    fn advance(&mut self, chain: &LegChain, warm: &mut IkWarm) -> bool {
+        if !self.step(chain, warm) {
+            return false;
+        }
+        self.forward(chain, warm);
+        self.judge(warm)
+    }
+
+    /// A trial's first part: the angles it tries (`trial`), the iteration's damped step or
+    /// half of it. False once the solve has ended (nothing to try).
+    #[inline(always)]
+    fn step(&mut self, chain: &LegChain, warm: &IkWarm) -> bool {
+        if self.next == Next::Done {
+            return false;
+        }
+        if self.next == Next::Iteration {
+            self.iterations += 1;
+            // the Jacobian a solve kept with the answer's frames, if it computed one there
+            (self.jacobian, self.det) = warm.jacobians[warm.now].unwrap_or_else(|| {
+                let (joints, foot, ..) = warm.frames();
+                let j = LegChain::jacobian_of(joints, *foot);
+                (j, j.determinant())
+            });
+            self.next = Next::Full;
+        }
+        let q = self.q;
+        self.trial = if self.next == Next::Full {
+            self.step = chain.step_within_limits(self.jacobian, q, self.error, self.lambda2);
+            let step = self.step;
+            chain.clamp3([q[0] + step.x, q[1] + step.y, q[2] + step.z])
+        } else {
+            // no progress: a half step
+            let step = self.step;
+            chain.clamp3([
+                q[0] + 0.5 * step.x,
+                q[1] + 0.5 * step.y,
+                q[2] + 0.5 * step.z,
+            ])
+        };
+        true
+    }
+
+    /// A trial's second part: its forward kinematics, into `warm`'s buffer that is not the
+    /// answer's.
+    #[inline(always)]
+    fn forward(&self, chain: &LegChain, warm: &mut IkWarm) {
+        chain.frames3_into(self.trial, &mut warm.frames[1 - warm.now]);
+    }
+
+    /// A trial's last part: taken if it comes closer and, following, stays on the branch (its
+    /// frames and Jacobian then the answer's), and what to try next. False once the solve has
+    /// ended.
+    #[inline(always)]
+    fn judge(&mut self, warm: &mut IkWarm) -> bool {
+        let full = self.next == Next::Full;
+        let trial = 1 - warm.now;
+        if let Some(closer) = self.progress(&warm.frames[trial], &mut warm.jacobians[trial]) {
+            if full {
+                self.lambda2 = (self.lambda2 * 0.1).max(LAMBDA2);
+            }
+            self.distance = closer;
+            self.q = self.trial;
+            warm.now = trial;
+            self.error = self.target - warm.frames[trial].1;
+            let ended = self.iterations == MOST_ITERATIONS || self.distance < self.tolerance;
+            self.next = if ended { Next::Done } else { Next::Iteration };
+        } else if full && self.lambda2 == LAMBDA2 {
+            self.next = Next::Half;
+        } else {
+            // still none: damp harder, towards the gradient's direction; a solve that need not
+            // follow its guess stops here
+            self.lambda2 *= 10.0;
+            let ended = !self.follow || self.lambda2 > LAMBDA2_MAX;
+            self.next = if ended { Next::Done } else { Next::Full };
+        }
+        self.next != Next::Done
+    }
+
+    /// The distance to the target from the trial whose forward kinematics are `frames`, if it
+    /// is taken: it comes closer and, following, stays on the branch. The Jacobian computed for
+    /// that is kept in `jacobian` (for the next iteration, the next solve and
+    /// [`LegChain::foot_turn_map`]), None where none was.
+    #[inline(always)]
+    fn progress(&self, frames: &Frames, jacobian: &mut Option<(DMat3, f64)>) -> Option<f64> {
+        *jacobian = None;
+        let closer = (self.target - frames.1).length();
+        let taken = closer < self.distance
+            && (!self.follow || {
+                let to = LegChain::jacobian_of(&frames.0, frames.1);
+                let to_det = to.determinant();
+                *jacobian = Some((to, to_det));
+                same_branch(self.det, to_det)
+            });
+        taken.then_some(closer)
+    }
+
+    /// The answer, its angles kept in `warm` with their forward kinematics.
+    #[inline(always)]
+    fn finish(&self, warm: &mut IkWarm) -> IkSolution {
+        warm.angles = self.q;
+        IkSolution {
+            angles: LegAngles::three(self.q),
+            error: self.distance,
+        }
+    }
+}
+
+/// [`LegChain::solve_warm`] of a hexapod's six legs at once: `chains`, and per leg its target,
+/// its guess (the last answer) and the warm state that answer left. Each 3-joint leg's solve is
+/// its own, the same arithmetic, but they take turns, a trial of each a round, and each
+/// trial's parts in stages across the legs: every leg's step, then every leg's forward
+/// kinematics, then every leg's test. Alone, a solve is one chain of latencies (the step's
+/// division, three `sincos`, the frames turned one after the other, the distance's square
+/// root, each waiting on the last); in stages, the processor computes one leg's part while
+/// another's waits. A redundant leg is solved alone (no warm state), after the others.
+pub fn solve_warm_each(
+    chains: &[LegChain],
+    targets: &[DVec3; 6],
+    guesses: &[LegAngles; 6],
+    warms: &mut [Option<IkWarm>; 6],
+) -> [IkSolution; 6] {
+    assert_eq!(chains.len(), 6, "six legs");
+    let mut solves: [Option<IkSolve>; 6] = [None; 6];
+    for k in 0..6 {
+        let chain = &chains[k];
+        if !chain.is_redundant() {
+            let guess = chain.three(&guesses[k]);
+            let solve = IkSolve::new(chain, targets[k], guess, &mut warms[k], IK_TOLERANCE, true);
+            solves[k] = Some(solve);
+        }
+    }
+    let mut going = true;
+    while going {
+        going = false;
+        let mut tried = [false; 6];
+        for k in 0..6 {
+            if let (Some(solve), Some(warm)) = (&mut solves[k], &warms[k]) {
+                tried[k] = solve.step(&chains[k], warm);
+            }
+        }
+        for k in 0..6 {
+            if let (true, Some(solve), Some(warm)) = (tried[k], &solves[k], &mut warms[k]) {
+                solve.forward(&chains[k], warm);
+            }
+        }
+        for k in 0..6 {
+            if let (true, Some(solve), Some(warm)) = (tried[k], &mut solves[k], &mut warms[k]) {
+                going |= solve.judge(warm);
+            }
+        }
+    }
+    std::array::from_fn(|k| match (&solves[k], &mut warms[k]) {
+        (Some(solve), Some(warm)) => solve.finish(warm),
+        _ => {
+            let chain = &chains[k];
+            super::redundant::solve(chain, targets[k], &chain.angles(&guesses[k]))
+        }
+    })
+}
+
 /// Whether a pose whose Jacobian's determinant is `to` is on the same side of the leg's
 /// singular poses as one whose is `from`: det J changes sign where the leg passes through one
 /// (stretched, or its foot on the coxa's axis), and a knee's two branches have opposite signs.
@@ -645,4 +835,95 @@ impl LegChain {
 fn same_branch(from: f64, to: f64) -> bool {
     // a pose on the singular set itself (a straight leg at zero angles) belongs to neither
     from == 0.0 || from * to > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn chains_of(model: &RobotModel) -> Vec<LegChain> {
+        model
+            .legs
+            .iter()
+            .map(|leg| LegChain::new(model, leg))
+            .collect()
+    }
+
+    /// Solves taken in turns ([`solve_warm_each`]) end where each alone ([`LegChain::solve_warm`])
+    /// ends, bit for bit: the answers, their errors and the warm state each leaves. hex18's six
+    /// legs, and the same with two of them a tarsus leg's (redundant, solved alone), follow
+    /// targets that circle their standing feet and drift out of reach and back (a step's motion:
+    /// one iteration; out of reach: half steps and harder damping), with now and then a guess
+    /// that is not the last answer, or no warm state (cold: several iterations).
+    #[test]
+    fn solves_in_turns_are_each_the_solve_alone() {
+        let hex18 = crate::robot::hex18_for_tests();
+        let tarsus = super::super::urdf::from_str_with(
+            include_str!("../../tests/data/robots/hex18_tarsus.urdf"),
+            None,
+            std::path::Path::new("tests/data/robots/hex18_tarsus.urdf"),
+        )
+        .expect("hex18_tarsus loads");
+        let (plain, tarsi) = (chains_of(&hex18), chains_of(&tarsus));
+        let mixed: Vec<LegChain> = (0..6)
+            .map(|k| {
+                if k % 3 == 1 {
+                    tarsi[k].clone()
+                } else {
+                    plain[k].clone()
+                }
+            })
+            .collect();
+        let (mut missed, mut cold) = (0, 0);
+        for chains in [&plain, &mixed] {
+            let mut last: [LegAngles; 6] =
+                std::array::from_fn(|k| chains[k].from_three([0.0, -0.3, 1.2]));
+            let standing: [DVec3; 6] = std::array::from_fn(|k| chains[k].foot_position(last[k]));
+            let mut warms: [Option<IkWarm>; 6] = [None; 6];
+            for round in 0..400 {
+                let t = round as f64;
+                let targets: [DVec3; 6] = std::array::from_fn(|k| {
+                    let turn = 0.05 * t + k as f64;
+                    // out to 0.3 m from the standing foot and back, past every leg's reach
+                    let radius = 0.02 + 0.28 * (std::f64::consts::PI * t / 400.0).sin().powi(4);
+                    standing[k] + radius * DVec3::new(turn.cos(), turn.sin(), 0.3 * turn.sin())
+                });
+                let guesses: [LegAngles; 6] = std::array::from_fn(|k| {
+                    if (round + k) % 37 == 0 {
+                        cold += 1;
+                        chains[k].from_three([0.1, 0.2, 0.5])
+                    } else {
+                        last[k]
+                    }
+                });
+                if round % 50 == 0 {
+                    warms = [None; 6];
+                }
+                let mut warms_alone = warms;
+                let alone: [IkSolution; 6] = std::array::from_fn(|k| {
+                    chains[k].solve_warm(targets[k], guesses[k], &mut warms_alone[k])
+                });
+                let in_turns = solve_warm_each(chains, &targets, &guesses, &mut warms);
+                for k in 0..6 {
+                    let bits = |s: &IkSolution| {
+                        let angles: Vec<u64> = s.angles.iter().map(|a| a.to_bits()).collect();
+                        (angles, s.error.to_bits())
+                    };
+                    assert_eq!(
+                        bits(&alone[k]),
+                        bits(&in_turns[k]),
+                        "leg {k}, round {round}"
+                    );
+                    // the frames and Jacobians left (Debug prints each float's bits apart)
+                    assert_eq!(format!("{:?}", warms_alone[k]), format!("{:?}", warms[k]));
+                    missed += usize::from(in_turns[k].error > 1e-3);
+                }
+                last = in_turns.map(|s| s.angles);
+            }
+        }
+        assert!(
+            missed > 100 && cold > 10,
+            "{missed} out of reach, {cold} cold"
+        );
+    }
 }
