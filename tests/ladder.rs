@@ -4,6 +4,30 @@
 mod common;
 use common::*;
 
+/// `ladder/<name>.toml` as one scenario: its text before `[sweep]` (each swept value at the
+/// family's own, its first level), the gait's path made absolute, `header` put first.
+fn one_level(name: &str, header: &str) -> String {
+    let family = std::fs::read_to_string(project_file(&format!("ladder/{name}.toml"))).unwrap();
+    format!("{header}{}", &family[..family.find("[sweep]").unwrap()]).replace(
+        "../gaits/tripod.toml",
+        &project_file("gaits/tripod.toml").display().to_string(),
+    )
+}
+
+/// `hexsim run` of the scenario `file` with `extra` flags, its walk flags allowed: its metrics
+/// (written beside it), the test failing as `what` if the run does not succeed.
+fn run_for_metrics(file: &std::path::Path, extra: &[&str], what: &str) -> serde_json::Value {
+    let json = file.with_file_name("m.json");
+    let mut cmd = hexsim();
+    cmd.arg("run")
+        .arg(file)
+        .args(extra)
+        .arg("--metrics")
+        .arg(&json)
+        .arg("--allow-flags");
+    metrics_of(cmd, &json, what)
+}
+
 /// Runs `hexsim ladder FAMILY [extra] -o OUT -q`, which must exit 0, and returns its standard
 /// output and its `ladder.json`.
 fn run_ladder(
@@ -230,13 +254,8 @@ fn perceptive_swings_land_on_the_ground_as_the_body_pitches_over_an_edge() {
 #[test]
 fn a_foot_beside_a_low_box_finds_its_edge_wherever_it_stands() {
     let dir = scratch("ladder-ramp");
-    let family = std::fs::read_to_string(project_file("ladder/obstacles.toml")).unwrap();
-    let scenario = family[..family.find("[sweep]").unwrap()]
-        .replace(
-            "../gaits/tripod.toml",
-            &project_file("gaits/tripod.toml").display().to_string(),
-        )
-        .replace("height = [0.01, 0.02]", "height = [0.01, 0.04]");
+    let scenario =
+        one_level("obstacles", "").replace("height = [0.01, 0.02]", "height = [0.01, 0.04]");
     let file = dir.join("obstacles.toml");
     std::fs::write(&file, scenario).unwrap();
     let terrain = hexsim::scenario::load_file(&file).unwrap()[0]
@@ -274,28 +293,16 @@ fn a_foot_beside_a_low_box_finds_its_edge_wherever_it_stands() {
 #[test]
 fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
     let dir = scratch("ladder-worms");
-    let family = std::fs::read_to_string(project_file("ladder/stones.toml")).unwrap();
-    let scenario = format!(
-        "robot = {:?}\nfollow_terrain = true\nreactive_gait = true\n{}",
-        project_file("tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf"),
-        &family[..family.find("[sweep]").unwrap()]
-    )
-    .replace(
-        "../gaits/tripod.toml",
-        &project_file("gaits/tripod.toml").display().to_string(),
-    )
-    .replace("gap = 0.02", "gap = 0.10")
-    .replace("duration = 25.0", "duration = 0.5");
+    let header = format!(
+        "robot = {:?}\nfollow_terrain = true\nreactive_gait = true\n",
+        project_file("tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf")
+    );
+    let scenario = one_level("stones", &header)
+        .replace("gap = 0.02", "gap = 0.10")
+        .replace("duration = 25.0", "duration = 0.5");
     let file = dir.join("stones.toml");
     std::fs::write(&file, scenario).unwrap();
-    let json = dir.join("m.json");
-    let mut cmd = hexsim();
-    cmd.arg("run")
-        .arg(&file)
-        .arg("--metrics")
-        .arg(&json)
-        .arg("--allow-flags");
-    let m = metrics_of(cmd, &json, "WORMS settling over 10 cm pits");
+    let m = run_for_metrics(&file, &[], "WORMS settling over 10 cm pits");
     let tilt = m["max_roll_deg"]
         .as_f64()
         .unwrap()
@@ -320,29 +327,16 @@ fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
 fn legs_shoving_the_body_against_a_wall_give_way() {
     let dir = scratch("ladder-harika");
     let urdf = project_file("tests/data/third_party/harika_hexapod/hexapod/urdf/hexapod.urdf");
-    let family = std::fs::read_to_string(project_file("ladder/gaps.toml")).unwrap();
-    let scenario = format!(
-        "robot = {urdf:?}\nfollow_terrain = true\n{}",
-        &family[..family.find("[sweep]").unwrap()]
-    )
-    .replace(
-        "../gaits/tripod.toml",
-        &project_file("gaits/tripod.toml").display().to_string(),
+    let scenario = one_level(
+        "gaps",
+        &format!("robot = {urdf:?}\nfollow_terrain = true\n"),
     )
     .replace("width = 0.02", "width = 0.08")
     .replace("x = -0.5", "x = 0.3")
     .replace("duration = 25.0", "duration = 8.0");
     let file = dir.join("gaps.toml");
     std::fs::write(&file, scenario).unwrap();
-    let json = dir.join("m.json");
-    let mut cmd = hexsim();
-    cmd.arg("run")
-        .arg(&file)
-        .arg("--no-record")
-        .arg("--metrics")
-        .arg(&json)
-        .arg("--allow-flags");
-    let m = metrics_of(cmd, &json, "harika at an 8 cm trench");
+    let m = run_for_metrics(&file, &["--no-record"], "harika at an 8 cm trench");
     let weight = hexsim::robot::load(&urdf).unwrap().total_mass() * 9.80665;
     let k = m["ground"]["stiffness"].as_f64().unwrap();
     let squeezed = 2.0 * weight / k;

@@ -1444,20 +1444,7 @@ fn the_load_feedforward_holds_the_stance_height() {
     // the hips' mean height over the 0.2 s before `seconds` (1 s standing first)
     let height = |feedforward: bool, seconds: f64| {
         let ground = terrain::flat([4.0, 4.0], [0.0, 0.0], 0.0).unwrap();
-        let place = Placement {
-            x: 0.0,
-            y: 0.0,
-            yaw: 0.0,
-            ..Default::default()
-        };
-        let mut w = walker(
-            hex18(),
-            ground,
-            place,
-            tripod(),
-            1.0,
-            Articulation::Multibody,
-        );
+        let mut w = hex18_from(ground, 0.0);
         w.load_feedforward = feedforward;
         let samples: Vec<HexapodSample> = (0..(seconds / DT).round() as usize)
             .map(|_| w.step().robot)
