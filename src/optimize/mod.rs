@@ -592,6 +592,11 @@ pub fn judge(case: &Case, report: &anyhow::Result<Report>) -> Result<HexapodMetr
         }
     })?;
     if let Some(failure) = &report.failure {
+        // a run whose set-up Ctrl-C cut short reports it as its failure (the terrain's
+        // generation, "interrupted"): an interruption too, run again on --resume
+        if crate::interrupt::interrupted() {
+            return Err(INTERRUPTED.into());
+        }
         return Err(format!("{label}: {failure}"));
     }
     if let Some(check) = report.checks.iter().find(|c| !c.passed) {
