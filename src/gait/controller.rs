@@ -22,7 +22,7 @@
 //! an execution detail like the servos' load feed-forward.
 
 use super::clearance::{self, SwingGround};
-use super::compliance::{Compliance, GroundForces};
+use super::compliance::{Compliance, GroundForces, Release};
 use super::foothold;
 use super::lean::{self, HorizontalRoom, Lean};
 use super::reactive::{FootFeel, Reactive};
@@ -584,11 +584,22 @@ impl GaitController {
         self.compliance = compliance;
     }
 
-    /// The ground's forces on the legs and the body over the last step (body frame), for leg
-    /// compliance (ignored when it is off).
-    pub fn feel_forces(&mut self, ground: &GroundForces, dt: f64) {
+    /// The ground's forces on the legs and the body over the last step (body frame), and each
+    /// leg's joints' largest distance from the gait's angles (rad), for leg compliance (ignored
+    /// when it is off).
+    pub fn feel_forces(&mut self, ground: &GroundForces, gaps: &[f64; 6], dt: f64) {
         if let Some(compliance) = &mut self.compliance {
-            compliance.feel(ground, dt);
+            compliance.feel(ground, gaps, dt);
+        }
+    }
+
+    /// How fast a loaded leg takes back what it gave way ([`super::compliance`]): its foot at
+    /// the landing speed, its joints at the landing speed over the leg's outstretched length.
+    pub fn compliance_release(&self) -> Release {
+        let foot_speed = self.landing_speed();
+        Release {
+            joint_speed: std::array::from_fn(|k| foot_speed / self.chains[k].length()),
+            foot_speed,
         }
     }
 

@@ -17,7 +17,7 @@ mod slew;
 mod spec;
 
 pub use command::{CommandChange, CommandSchedule};
-pub use compliance::{Compliance, GroundForces};
+pub use compliance::{Compliance, GroundForces, Release};
 pub use controller::{
     GaitController, GaitTargets, REACH_TOLERANCE, StanceError, StanceTrack, VelocityCommand,
 };

@@ -606,6 +606,25 @@ impl Walker {
         Ok(())
     }
 
+    /// Per leg, its joints' largest distance from the angles the gait sent them last (rad):
+    /// what a yielded leg has to take back (nothing before the walk's first targets).
+    fn leg_gaps(&self) -> [f64; 6] {
+        let mut gaps = [0.0f64; 6];
+        if let Some(targets) = &self.last_targets
+            && !self.joint_angles.is_empty()
+        {
+            for (gap, (leg, angles)) in gaps
+                .iter_mut()
+                .zip(self.hexapod.model().legs.iter().zip(&targets.joint_angles))
+            {
+                for (&j, &a) in leg.joints.iter().zip(angles) {
+                    *gap = (*gap).max((self.joint_angles[j] - a).abs());
+                }
+            }
+        }
+        gaps
+    }
+
     pub fn step(&mut self) -> WalkSample {
         let mut sample = WalkSample::default();
         self.step_into(&mut sample);
@@ -633,12 +652,21 @@ impl Walker {
             if self.compliant != self.controller.is_compliant() {
                 let weight = self.hexapod.model().total_mass() * STANDARD_GRAVITY;
                 let longest = 2.0 * self.controller.gait().step_height;
-                self.controller
-                    .set_compliance(self.compliant.then(|| Compliance::new(weight, longest)));
+                let release = self.controller.compliance_release();
+                self.controller.set_compliance(
+                    self.compliant
+                        .then(|| Compliance::new(weight, longest, release)),
+                );
             }
             self.controller.feel(self.feel);
             let dt = self.hexapod.dt();
-            self.controller.feel_forces(&self.ground_forces, dt);
+            // read only while a leg has yielded: nothing else uses them
+            let gaps = if (0..6).any(|k| self.controller.leg_yield(k) > 0.0) {
+                self.leg_gaps()
+            } else {
+                [0.0; 6]
+            };
+            self.controller.feel_forces(&self.ground_forces, &gaps, dt);
             if self.lean {
                 let body = self.hexapod.body_frame().matrix3;
                 self.controller
