@@ -595,8 +595,13 @@ impl GaitController {
 
     /// How fast a loaded leg takes back what it gave way ([`super::compliance`]): its foot at
     /// the landing speed, its joints at the landing speed over the leg's outstretched length.
+    /// A gait whose feet do not lift (`step_height = 0`) has no landing speed: its legs are
+    /// released over [`super::compliance::RELEASE_TIME`] alone, not held yielded.
     pub fn compliance_release(&self) -> Release {
         let foot_speed = self.landing_speed();
+        if foot_speed <= 0.0 {
+            return Release::FREE;
+        }
         Release {
             joint_speed: std::array::from_fn(|k| foot_speed / self.chains[k].length()),
             foot_speed,
@@ -1747,6 +1752,28 @@ mod tests {
     #[test]
     fn a_stance_target_rises_at_the_landing_speed() {
         stance_targets_follow_a_step_at_the_landing_speed(-0.05);
+    }
+
+    /// A loaded leg's release follows the landing speed, its joints that speed over the leg's
+    /// reach; a gait whose feet do not lift has none and releases by time, not never.
+    #[test]
+    fn compliance_is_released_at_the_landing_speed_or_by_time() {
+        let (model, gait) = hex18_tripod();
+        let c = GaitController::new(&model, gait.clone()).unwrap();
+        let release = c.compliance_release();
+        let landing = slew::landing_speed(&gait);
+        assert!(landing > 0.0);
+        assert_eq!(release.foot_speed, landing);
+        for k in 0..6 {
+            let reach = c.chains()[k].length();
+            assert_eq!(release.joint_speed[k], landing / reach);
+        }
+        let flat = Gait {
+            step_height: 0.0,
+            ..gait
+        };
+        let c = GaitController::new(&model, flat).unwrap();
+        assert_eq!(c.compliance_release(), Release::FREE);
     }
 
     /// The ground planned under the feet steps down by `depth` (up where negative) 20 ms into
