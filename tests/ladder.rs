@@ -14,13 +14,28 @@ fn one_level(name: &str, header: &str) -> String {
     )
 }
 
-/// `hexsim run` of the scenario `file` with `extra` flags, its walk flags allowed: its metrics
-/// (written beside it), the test failing as `what` if the run does not succeed.
-fn run_for_metrics(file: &std::path::Path, extra: &[&str], what: &str) -> serde_json::Value {
-    let json = file.with_file_name("m.json");
+/// `hexsim run` of [`one_level`]`(family, header)` with each `(from, to)` of `edits` replaced,
+/// written to a scratch folder, with `extra` flags and its walk flags allowed: its metrics, the
+/// test failing as `what` if the run does not succeed.
+fn run_level(
+    family: &str,
+    header: &str,
+    edits: &[(&str, &str)],
+    extra: &[&str],
+    what: &str,
+) -> serde_json::Value {
+    let dir = scratch(&format!("ladder-{family}"));
+    let scenario = edits
+        .iter()
+        .fold(one_level(family, header), |text, (from, to)| {
+            text.replace(from, to)
+        });
+    let file = dir.join(format!("{family}.toml"));
+    std::fs::write(&file, scenario).unwrap();
+    let json = dir.join("m.json");
     let mut cmd = hexsim();
     cmd.arg("run")
-        .arg(file)
+        .arg(&file)
         .args(extra)
         .arg("--metrics")
         .arg(&json)
@@ -292,17 +307,20 @@ fn a_foot_beside_a_low_box_finds_its_edge_wherever_it_stands() {
 /// the ground its sole rests on (`foothold::resting_ground`): the pits' rims.
 #[test]
 fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
-    let dir = scratch("ladder-worms");
     let header = format!(
         "robot = {:?}\nfollow_terrain = true\nreactive_gait = true\n",
         project_file("tests/data/third_party/worms/worms_assets/urdf/hexapod.urdf")
     );
-    let scenario = one_level("stones", &header)
-        .replace("gap = 0.02", "gap = 0.10")
-        .replace("duration = 25.0", "duration = 0.5");
-    let file = dir.join("stones.toml");
-    std::fs::write(&file, scenario).unwrap();
-    let m = run_for_metrics(&file, &[], "WORMS settling over 10 cm pits");
+    let m = run_level(
+        "stones",
+        &header,
+        &[
+            ("gap = 0.02", "gap = 0.10"),
+            ("duration = 25.0", "duration = 0.5"),
+        ],
+        &[],
+        "WORMS settling over 10 cm pits",
+    );
     let tilt = m["max_roll_deg"]
         .as_f64()
         .unwrap()
@@ -325,18 +343,18 @@ fn a_heavy_robot_settles_over_pits_narrower_than_its_feet() {
 /// static sink under those, 2·W/k.
 #[test]
 fn legs_shoving_the_body_against_a_wall_give_way() {
-    let dir = scratch("ladder-harika");
     let urdf = project_file("tests/data/third_party/harika_hexapod/hexapod/urdf/hexapod.urdf");
-    let scenario = one_level(
+    let m = run_level(
         "gaps",
         &format!("robot = {urdf:?}\nfollow_terrain = true\n"),
-    )
-    .replace("width = 0.02", "width = 0.08")
-    .replace("x = -0.5", "x = 0.3")
-    .replace("duration = 25.0", "duration = 8.0");
-    let file = dir.join("gaps.toml");
-    std::fs::write(&file, scenario).unwrap();
-    let m = run_for_metrics(&file, &["--no-record"], "harika at an 8 cm trench");
+        &[
+            ("width = 0.02", "width = 0.08"),
+            ("x = -0.5", "x = 0.3"),
+            ("duration = 25.0", "duration = 8.0"),
+        ],
+        &["--no-record"],
+        "harika at an 8 cm trench",
+    );
     let weight = hexsim::robot::load(&urdf).unwrap().total_mass() * 9.80665;
     let k = m["ground"]["stiffness"].as_f64().unwrap();
     let squeezed = 2.0 * weight / k;
@@ -363,17 +381,20 @@ fn legs_shoving_the_body_against_a_wall_give_way() {
 /// every ladder run.
 #[test]
 fn a_yielded_leg_takes_its_load_back_without_a_kick() {
-    let dir = scratch("ladder-mushroom");
     let header = format!(
         "robot = {:?}\nfollow_terrain = false\nreactive_gait = true\n",
         project_file("tests/data/third_party/mushroom_hexapod/hexapod.urdf")
     );
-    let scenario = one_level("stones", &header)
-        .replace("gap = 0.02", "gap = 0.04")
-        .replace("duration = 25.0", "duration = 14.9");
-    let file = dir.join("stones.toml");
-    std::fs::write(&file, scenario).unwrap();
-    let m = run_for_metrics(&file, &["--no-record"], "MushroomRL over 4 cm stones");
+    let m = run_level(
+        "stones",
+        &header,
+        &[
+            ("gap = 0.02", "gap = 0.04"),
+            ("duration = 25.0", "duration = 14.9"),
+        ],
+        &["--no-record"],
+        "MushroomRL over 4 cm stones",
+    );
     let foot = m["max_penetration"].as_f64().unwrap();
     let link = m["max_link_penetration"].as_f64().unwrap();
     println!(
