@@ -475,3 +475,46 @@ fn a_walk_that_stops_at_its_fall_ends_on_the_step_it_fell() {
     assert_eq!(flagged["walk_time"].as_f64(), Some(fell_at), "{flagged}");
     assert!(fell_at < 10.0 && flagged["complete"] == true, "{flagged}");
 }
+
+/// A robot set down where it cannot stand falls before its walk, and the run says so: bullet
+/// (0.41 m tall over feet close under it) set down parallel to a 25° slope, facing down it,
+/// slides and pitches over its front feet within its second of settling. Its `fell_at` is
+/// before the walk (negative), its tilt the fall's, the walk stopped there (`stop_at_fall`) and
+/// never begun, and the summary says it fell while it settled. Before, the fall went unseen
+/// until the walk's first step: "fell at 0.00 s into the walk", its tilt 115° and its pitch 64°.
+#[test]
+fn a_robot_that_falls_while_it_settles_is_reported_falling_before_its_walk() {
+    let dir = scratch("settle-fall");
+    let file = dir.join("settle.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "robot = {:?}\ngait = {:?}\nduration = 4.0\nstop_at_fall = true\n\
+             [terrain.source]\nkind = \"slope\"\nangle_deg = 25.0\nsize = [10.0, 10.0]\n\
+             [start]\nattitude = \"ground\"\nx = 1.0\ny = 0.0\nheading_deg = 180.0\n",
+            project_file("tests/data/third_party/bullet_syropod/robot/bullet.urdf"),
+            project_file("gaits/tripod.toml")
+        ),
+    )
+    .unwrap();
+    let json = dir.join("settle.json");
+    let out = hexsim()
+        .arg("run")
+        .arg(&file)
+        .args(["--no-record", "--allow-flags", "--metrics"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let fell_at = metrics["fell_at"].as_f64().expect("bullet falls on 25°");
+    // the settling lasts 1 s: the fall within it
+    assert!((-1.0..0.0).contains(&fell_at), "{metrics}");
+    assert_eq!(metrics["complete"], true, "{stdout}");
+    assert_eq!(metrics["walk_time"].as_f64(), Some(0.0), "{metrics}");
+    let tilt = metrics["max_body_tilt_deg"].as_f64().unwrap();
+    assert!(tilt > 45.0 && tilt < 46.0, "{tilt}");
+    assert!(stdout.contains("fell while it settled"), "{stdout}");
+    assert!(stdout.contains("the walk stopped there"), "{stdout}");
+}

@@ -346,8 +346,13 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     if let Some(t) = m.fell_at {
+        let when = if t < 0.0 {
+            format!("while it settled, {:.2} s before the walk", -t)
+        } else {
+            format!("at {t:.2} s into the walk")
+        };
         out!(
-            "  warning: the robot fell at {t:.2} s into the walk (its body tilted past {:.0}°){}",
+            "  warning: the robot fell {when} (its body tilted past {:.0}°){}",
             hexsim::metrics::walk::FALL_TILT.to_degrees(),
             if scenario.spec.stop_at_fall == Some(true) {
                 "; the walk stopped there (stop_at_fall)"

@@ -81,8 +81,8 @@ pub struct HexapodMetrics {
     pub link_contact_time: std::collections::BTreeMap<String, f64>,
     /// Seconds the body (the root link) touched the ground: a walking robot's belly does not.
     pub body_contact_time: f64,
-    /// When the robot fell (s into the walk): the first time its body tilted past [`FALL_TILT`]
-    /// from upright; None if it never did.
+    /// When the robot fell (s into the walk; negative: while it settled, before the walk): the
+    /// first time its body tilted past [`FALL_TILT`] from upright; None if it never did.
     pub fell_at: Option<f64>,
     /// Mechanical work done by the servos, ∫Σ|τ·q̇| dt (J), and the cost of transport E/(m·g·d):
     /// none for a robot that did not move (d = 0), whose cost per metre is undefined, not 0 — a
@@ -469,7 +469,18 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             });
         }
         if s.settling {
-            return Ok(()); // not part of the walk
+            // not part of the walk, but a robot set down where it cannot stand (bullet, 0.41 m
+            // tall, parallel to a 25° slope) falls before it walks: when (s before the walk,
+            // negative) and how far, not a fall "at 0.00 s into the walk" and a tilt of 0
+            let body_tilt = tilt(&r.body.matrix3);
+            if body_tilt > FALL_TILT && self.fell_at.is_none() {
+                self.fell_at = Some(walker.gait_time());
+                let (roll, pitch, _) = r.roll_pitch_yaw();
+                self.max_body_tilt_deg = self.max_body_tilt_deg.max(body_tilt.to_degrees());
+                self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
+                self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
+            }
+            return Ok(());
         }
         let a = &mut self.acc;
         let (roll, pitch, yaw) = r.roll_pitch_yaw();

@@ -123,8 +123,9 @@ impl Stepper for Walking {
     }
 
     fn ended(&self, sample: &WalkSample) -> bool {
-        // the metrics' test of a fall, on the same samples (the walk's, not the settling's)
-        self.stop_at_fall && !sample.settling && tilt(&sample.robot.body.matrix3) > FALL_TILT
+        // the metrics' test of a fall, on the same samples (settling's too: a robot set down
+        // where it cannot stand falls before its walk)
+        self.stop_at_fall && tilt(&sample.robot.body.matrix3) > FALL_TILT
     }
 }
 

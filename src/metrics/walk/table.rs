@@ -199,7 +199,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
     Metric {
         name: "fell_at",
         unit: "s",
-        what: "when the body first tilted past 45° from upright (absent: it never fell)",
+        what: "when the body first tilted past 45° from upright, s into the walk (negative: while it settled; absent: it never fell)",
         noise: None,
         better: Better::Neither,
         bounds: &[],
