@@ -829,7 +829,8 @@ fn impulse_joints_walk_light_legs_as_the_multibody_does() {
 /// joint room standing tall on legs hanging under its hips (stance height 0.224 m, reach
 /// 0.053 m), where its walk keeps its centre of mass over the support on tilts up to 24.5° only,
 /// and it fell in 15 of its 104 ladder runs; the fit now takes the stance with the most room
-/// among those steady to 30° with 15° of joint room, lower and wider. The CSIRO Bullet stands
+/// among those steady to 35° with 15° of joint room, lower and wider (35.6°; at a bar of 30°
+/// until 2026-12-05, 30.3°). The CSIRO Bullet stands
 /// 0.42 m tall on servos of 8.4 N·m that cannot hold it lower: no stance is steady, the report
 /// says so, and its stance is the one with the most room, as before.
 #[test]
@@ -852,16 +853,16 @@ fn the_fitted_stance_is_steady_where_a_steady_one_exists() {
     );
     let tilt = degrees_after(&nikita, "over the support on tilts up to");
     let room = degrees_after(&nikita, "least joint room over a cycle");
-    assert!(tilt >= 30.0 && room >= 15.0, "{nikita}");
+    assert!(tilt >= 35.0 && room >= 15.0, "{nikita}");
     assert!(
-        !nikita.contains("less than the 30° of a steady stance"),
+        !nikita.contains("less than the 35° of a steady stance"),
         "{nikita}"
     );
     let bullet = report("tests/data/third_party/bullet_syropod/robot/bullet.urdf");
     let tilt = degrees_after(&bullet, "over the support on tilts up to");
-    assert!(tilt < 30.0, "{bullet}");
+    assert!(tilt < 35.0, "{bullet}");
     assert!(
-        bullet.contains("less than the 30° of a steady stance: the fit found none"),
+        bullet.contains("less than the 35° of a steady stance: the fit found none"),
         "{bullet}"
     );
     assert!(
