@@ -15,13 +15,13 @@
 //!   A grid over h ∈ [0.05, 0.95]·L, r ∈ [0.05, 1]·L, refined twice around the best cell.
 //!   Among the stances that pass, a steady one is preferred: its walk on level ground keeps the
 //!   centre of mass over the support on a tilt of [`STEADY_TILT`] any way, with [`STEADY_ROOM`]
-//!   of joint room; the most room alone chose tall stances on legs hanging under the hips, which
-//!   fell over on slopes and edges. No stance may put a link other than a foot on the level
+//!   of joint room (else one steady to [`STEADY_FALLBACK_TILT`]); the most room alone chose tall
+//!   stances on legs hanging under the hips, which fell over on slopes and edges. No stance may put a link other than a foot on the level
 //!   ground over the cycle (a shin or a knee walked on).
 //! - Splay: when the stance found is steady to less than [`SPLAY_BELOW`] (legs that all point
 //!   sideways from hips close together stand on tripods shorter than their stride), the front
 //!   and rear feet are turned towards the body's ends by the least of [`SPLAYS`] that gives a
-//!   steady stance (else one steady to [`SPLAYED_STEADY_TILT`]), its links
+//!   steady stance (else one steady to [`STEADY_FALLBACK_TILT`]), its links
 //!   [`SPLAYED_LINK_MARGIN`] clear of the ground (a gait file may give `splay_deg` itself).
 //! - When no stance passes, the fitted stride and step height are halved (twice at most); when
 //!   still none passes, the error names what binds at the stance that came closest: a joint at
@@ -50,10 +50,11 @@ const MEAN_WEIGHT: f64 = 0.1;
 /// (2026-12-05) lowered seven robots' stances and their falls 24 → 11 (rough-ground.md,
 /// *Steady stances*).
 pub const STEADY_TILT: f64 = 35.0 * std::f64::consts::PI / 180.0;
-/// A splayed stance steady to this is taken when no splay gives one steady to [`STEADY_TILT`]:
-/// MushroomRL's steadiest splayed stance with its links clear is steady to 34.2° (at 45°), and
-/// unsplayed to 0°.
-const SPLAYED_STEADY_TILT: f64 = 30.0 * std::f64::consts::PI / 180.0;
+/// A stance steady to this is taken when none is steady to [`STEADY_TILT`], with the legs as they
+/// point or splayed: a robot whose steadiest stance is steady to 30–35° would otherwise fall
+/// back to the stance with the most room however unsteady (MushroomRL's steadiest splayed
+/// stance with its links clear is steady to 34.2°, at 45°; with the most room, unsplayed, 0°).
+const STEADY_FALLBACK_TILT: f64 = 30.0 * std::f64::consts::PI / 180.0;
 pub const STEADY_ROOM: f64 = 15.0 * std::f64::consts::PI / 180.0;
 /// Grid cells per free length in the coarse search, and cycle instants sampled per candidate.
 const GRID: usize = 16;
@@ -194,14 +195,14 @@ impl Fitted {
             self.static_tilt.to_degrees(),
             if self.static_tilt >= STEADY_TILT {
                 String::new()
-            } else if g.splay != 0.0
-                && o.splay == Origin::Fitted
-                && self.static_tilt >= SPLAYED_STEADY_TILT
+            } else if (o.stance_height == Origin::Fitted || o.reach == Origin::Fitted)
+                && self.static_tilt >= STEADY_FALLBACK_TILT
             {
                 format!(
-                    " (steady splayed: no splay gave the {:.0}° of a steady stance, this one the {:.0}° asked of a splayed one)",
-                    STEADY_TILT.to_degrees(),
-                    SPLAYED_STEADY_TILT.to_degrees()
+                    " (the {:.0}° asked when no stance with {:.0}° of joint room is steady to the {:.0}° of a steady one)",
+                    STEADY_FALLBACK_TILT.to_degrees(),
+                    STEADY_ROOM.to_degrees(),
+                    STEADY_TILT.to_degrees()
                 )
             } else if self.origins.stance_height == Origin::Fitted
                 || self.origins.reach == Origin::Fitted
@@ -252,6 +253,11 @@ pub struct FitError(pub String);
 /// (see the module's doc), then checked as a whole. Given lengths are kept, and an error says
 /// why they do not fit (the miss).
 pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
+    fit_to(model, spec, [STEADY_TILT, STEADY_FALLBACK_TILT])
+}
+
+/// [`fit`] with the bars of a steady stance, `[bar, fallback]` (rad).
+fn fit_to(model: &RobotModel, spec: &GaitSpec, bars: [f64; 2]) -> Result<Fitted, FitError> {
     let hints = &model.gait_hints;
     let pick = |file: Option<f64>, robot: Option<f64>| match (file, robot) {
         (Some(v), _) => (Some(v), Origin::GaitFile),
@@ -314,7 +320,16 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
             }
             .run(stance_height, reach)
         };
-        let (best, near) = search(splays[0], STEADY_TILT);
+        // the steadiest bar any stance reaches: a stance steady to the fallback only when none
+        // is steady to the bar
+        let (best, near) = search(splays[0], bars[0]);
+        let best = match best {
+            Some(found) if !found.steady => search(splays[0], bars[1])
+                .0
+                .filter(|b| b.steady)
+                .or(Some(found)),
+            best => best,
+        };
         if let Some(found) = best {
             // far from steady with the legs as they point: the least splay that is steady, else
             // the least steady to the splayed bar
@@ -324,7 +339,7 @@ pub fn fit(model: &RobotModel, spec: &GaitSpec) -> Result<Fitted, FitError> {
             };
             let steady = (!found.steady && splay.is_none() && tilt() < SPLAY_BELOW)
                 .then(|| {
-                    [STEADY_TILT, SPLAYED_STEADY_TILT].iter().find_map(|&bar| {
+                    bars.iter().find_map(|&bar| {
                         splays[1..].iter().find_map(|&splay| {
                             let (best, _) = search(splay, bar);
                             best.filter(|b| b.steady).map(|b| (b, splay))
@@ -550,7 +565,7 @@ struct Search<'a> {
     /// (m): 0, or [`SPLAYED_LINK_MARGIN`] for a splayed stance.
     link_margin: f64,
     /// The tilt a steady stance keeps its plumb line inside the support on (rad):
-    /// [`STEADY_TILT`], or [`SPLAYED_STEADY_TILT`] for a splay's second try.
+    /// [`STEADY_TILT`], or [`STEADY_FALLBACK_TILT`] for a second try.
     steady_tilt: f64,
 }
 
@@ -770,6 +785,34 @@ mod tests {
     }
 
     /// Each length comes from the gait file, else the robot file, else the fit.
+    /// Where no stance reaches the bar of a steady stance, the fit takes the fallback's, not
+    /// the stance with the most room: hex18's legs with no stance of their own (the most room
+    /// is steady to 56°), asked for 89° (no stance is) and then 60°, stand as asked for 60°
+    /// alone, steadier than with the most room.
+    #[test]
+    fn a_bar_no_stance_reaches_falls_back_to_the_next() {
+        let model = RobotModel {
+            gait_hints: GaitHints::default(),
+            ..crate::robot::hex18_for_tests()
+        };
+        let degrees = |d: f64| d.to_radians();
+        let at = |bars: [f64; 2]| {
+            let fitted = fit_to(&model, &tripod(), bars).unwrap();
+            (
+                fitted.gait.stance_height,
+                fitted.gait.reach,
+                fitted.static_tilt,
+            )
+        };
+        let steady = at([degrees(60.0), degrees(60.0)]);
+        let fallen_back = at([degrees(89.0), degrees(60.0)]);
+        let most_room = at([degrees(89.0), degrees(89.0)]);
+        println!("60°: {steady:?}; 89° then 60°: {fallen_back:?}; most room: {most_room:?}");
+        assert_eq!(fallen_back, steady);
+        assert!(steady.2 >= degrees(60.0), "{steady:?}");
+        assert!(most_room.2 < steady.2, "{most_room:?} against {steady:?}");
+    }
+
     #[test]
     fn given_lengths_win_over_the_robot_file_and_the_fit() {
         let model = crate::robot::hex18_for_tests(); // robot file: 0.10, 0.15, 0.03, 0.06
