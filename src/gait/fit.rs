@@ -304,7 +304,7 @@ fn fit_to(model: &RobotModel, spec: &GaitSpec, bars: [f64; 2]) -> Result<Fitted,
         None => &SPLAYS,
     };
     for &scale in scales {
-        let search = |splay: f64, steady_tilt: f64| {
+        let search = |splay: f64| {
             Search {
                 model,
                 leg,
@@ -316,35 +316,31 @@ fn fit_to(model: &RobotModel, spec: &GaitSpec, bars: [f64; 2]) -> Result<Fitted,
                 } else {
                     SPLAYED_LINK_MARGIN
                 },
-                steady_tilt,
+                bars,
             }
             .run(stance_height, reach)
         };
-        // the steadiest bar any stance reaches: a stance steady to the fallback only when none
-        // is steady to the bar
-        let (best, near) = search(splays[0], bars[0]);
-        let best = match best {
-            Some(found) if !found.steady => search(splays[0], bars[1])
-                .0
-                .filter(|b| b.steady)
-                .or(Some(found)),
-            best => best,
-        };
+        let (best, near) = search(splays[0]);
         if let Some(found) = best {
             // far from steady with the legs as they point: the least splay that is steady, else
-            // the least steady to the splayed bar
+            // the least steady to the fallback
             let tilt = || {
                 GaitController::for_cycle(model, gait(scale, found.height, found.reach, splays[0]))
                     .map_or(0.0, |c| c.static_tilt(model))
             };
-            let steady = (!found.steady && splay.is_none() && tilt() < SPLAY_BELOW)
+            let steady = (found.steadiness == 0 && splay.is_none() && tilt() < SPLAY_BELOW)
                 .then(|| {
-                    bars.iter().find_map(|&bar| {
-                        splays[1..].iter().find_map(|&splay| {
-                            let (best, _) = search(splay, bar);
-                            best.filter(|b| b.steady).map(|b| (b, splay))
-                        })
-                    })
+                    let mut fallback = None;
+                    for &splay in &splays[1..] {
+                        match search(splay).0 {
+                            Some(b) if b.steadiness == 2 => return Some((b, splay)),
+                            Some(b) if b.steadiness == 1 => {
+                                fallback = fallback.or(Some((b, splay)));
+                            }
+                            _ => {}
+                        }
+                    }
+                    fallback
                 })
                 .flatten();
             let (chosen, splay) = steady.unwrap_or((found, splays[0]));
@@ -456,8 +452,9 @@ struct Assessment {
     step_height: f64,
     /// The score to maximise, or what is wrong with the stance.
     outcome: Result<f64, Problem>,
-    /// Whether the stance is steady ([`STEADY_TILT`], [`STEADY_ROOM`]); false when it fails.
-    steady: bool,
+    /// How steady the stance is ([`Search::bars`], with [`STEADY_ROOM`]): 2 to the bar, 1 to
+    /// the fallback only, 0 to neither or when it fails.
+    steadiness: u8,
     /// How far from fitting (0 when it fits): the miss over the leg length, the torque excess
     /// as a share of the effort, the clearance shortfall over the leg length.
     penalty: f64,
@@ -550,7 +547,8 @@ impl Assessment {
 struct Found {
     height: f64,
     reach: f64,
-    steady: bool,
+    /// As [`Assessment`]'s.
+    steadiness: u8,
 }
 
 /// The grid search over the free stance lengths.
@@ -564,9 +562,10 @@ struct Search<'a> {
     /// How far every link other than a foot must stay above the level ground over the cycle
     /// (m): 0, or [`SPLAYED_LINK_MARGIN`] for a splayed stance.
     link_margin: f64,
-    /// The tilt a steady stance keeps its plumb line inside the support on (rad):
-    /// [`STEADY_TILT`], or [`STEADY_FALLBACK_TILT`] for a second try.
-    steady_tilt: f64,
+    /// The tilts a steady stance keeps its plumb line inside the support on (rad): the bar,
+    /// [`STEADY_TILT`], and the fallback taken when no stance reaches it,
+    /// [`STEADY_FALLBACK_TILT`].
+    bars: [f64; 2],
 }
 
 impl Search<'_> {
@@ -577,7 +576,7 @@ impl Search<'_> {
             reach: r,
             step_height: gait.step_height,
             outcome,
-            steady: false,
+            steadiness: 0,
             penalty,
         };
         let controller = match GaitController::for_cycle(self.model, gait.clone()) {
@@ -627,14 +626,19 @@ impl Search<'_> {
             return judged(Err(Problem::Links(c)), -c / self.leg);
         }
         let mean = margins.per_joint.iter().sum::<f64>() / margins.per_joint.len().max(1) as f64;
+        let steadiness = if margins.worst.1 >= STEADY_ROOM {
+            let tilt = controller.static_tilt(self.model);
+            self.bars.iter().filter(|&&bar| tilt >= bar).count() as u8
+        } else {
+            0
+        };
         Assessment {
-            steady: margins.worst.1 >= STEADY_ROOM
-                && controller.static_tilt(self.model) >= self.steady_tilt,
+            steadiness,
             ..judged(Ok(margins.worst.1 + MEAN_WEIGHT * mean), 0.0)
         }
     }
 
-    /// The best (stance height, reach) with the given ones held, whether it is steady, and the
+    /// The best (stance height, reach) with the given ones held, how steady it is, and the
     /// failure closest to fitting of each kind (reach, torque, the body's clearance, the other
     /// links').
     fn run(&self, h: Option<f64>, r: Option<f64>) -> (Option<Found>, Vec<Assessment>) {
@@ -657,11 +661,12 @@ impl Search<'_> {
                     .collect()
             }
         };
-        // the best stance, and the best steady one: the steady one is taken when there is one
-        let mut best: [Option<Assessment>; 2] = [None, None];
+        // the best stance, the best steady to the fallback, and the best steady to the bar: the
+        // steadiest found is taken
+        let mut best: [Option<Assessment>; 3] = [None, None, None];
         let mut closest: [Option<Assessment>; 4] = [None, None, None, None];
         let consider = |a: Assessment,
-                        best: &mut [Option<Assessment>; 2],
+                        best: &mut [Option<Assessment>; 3],
                         closest: &mut [Option<Assessment>; 4]| {
             match a.outcome {
                 Ok(score) => {
@@ -669,8 +674,10 @@ impl Search<'_> {
                         b.as_ref()
                             .is_none_or(|b| b.outcome.as_ref().is_ok_and(|&s| score > s))
                     };
-                    if a.steady && better(&best[1]) {
-                        best[1] = Some(a.clone());
+                    for steadiest in &mut best[1..=a.steadiness as usize] {
+                        if better(steadiest) {
+                            *steadiest = Some(a.clone());
+                        }
                     }
                     if better(&best[0]) {
                         best[0] = Some(a);
@@ -695,7 +702,7 @@ impl Search<'_> {
             }
         }
         // refine twice: a 5 × 5 grid at half the spacing around the best
-        let chosen = |best: &[Option<Assessment>; 2]| best[1].clone().or_else(|| best[0].clone());
+        let chosen = |best: &[Option<Assessment>; 3]| best.iter().rev().flatten().next().cloned();
         for _ in 0..2 {
             let Some(centre) = chosen(&best) else { break };
             h_step /= 2.0;
@@ -721,7 +728,7 @@ impl Search<'_> {
             chosen(&best).map(|b| Found {
                 height: b.stance_height,
                 reach: b.reach,
-                steady: b.steady,
+                steadiness: b.steadiness,
             }),
             closest.into_iter().flatten().collect(),
         )
@@ -764,7 +771,7 @@ mod tests {
             body_depth: body_depth(&model),
             feet_down: 3,
             link_margin: 0.0,
-            steady_tilt: STEADY_TILT,
+            bars: [STEADY_TILT, STEADY_FALLBACK_TILT],
             gait: &|h, r| Gait {
                 stance_height: h,
                 reach: r,
