@@ -406,6 +406,36 @@ fn a_yielded_leg_takes_its_load_back_without_a_kick() {
     assert!(foot.max(link) < 0.005, "{foot} m, links {link} m");
 }
 
+/// `hexsim run` of the scenario `text`, written to `dir` as `name`.toml, with its walk flags
+/// allowed, whatever its exit: its summary and its metrics.
+fn run_scenario(dir: &std::path::Path, name: &str, text: &str) -> (String, serde_json::Value) {
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let json = dir.join(format!("{name}.json"));
+    let out = hexsim()
+        .arg("run")
+        .arg(&file)
+        .args(["--no-record", "--allow-flags", "--metrics"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    let metrics = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (stdout, metrics)
+}
+
+/// bullet set down on a plane of `angle_deg`, heading `heading_deg` from +x, at x = `x`, walking
+/// 4 s: a scenario's text.
+fn bullet_on_a_slope(angle_deg: f64, heading_deg: f64, x: f64, stop_at_fall: bool) -> String {
+    format!(
+        "robot = {:?}\ngait = {:?}\nduration = 4.0\nstop_at_fall = {stop_at_fall}\n\
+         [terrain.source]\nkind = \"slope\"\nangle_deg = {angle_deg:?}\nsize = [10.0, 10.0]\n\
+         [start]\nattitude = \"ground\"\nx = {x:?}\ny = 0.0\nheading_deg = {heading_deg:?}\n",
+        project_file("tests/data/third_party/bullet_syropod/robot/bullet.urdf"),
+        project_file("gaits/tripod.toml")
+    )
+}
+
 /// A walk whose scenario stops at its fall (`stop_at_fall`, as the ladder's families do) ends on
 /// the step its body first tilts past 45° from upright: complete (its result decided, not cut
 /// short), the metrics' `fell_at` its last moment and its body's largest tilt just past 45°,
@@ -415,30 +445,8 @@ fn a_yielded_leg_takes_its_load_back_without_a_kick() {
 fn a_walk_that_stops_at_its_fall_ends_on_the_step_it_fell() {
     let dir = scratch("fall");
     let walk = |stop: bool| {
-        let file = dir.join(format!("fall_{stop}.toml"));
-        std::fs::write(
-            &file,
-            format!(
-                "robot = {:?}\ngait = {:?}\nduration = 4.0\nstop_at_fall = {stop}\n\
-                 [terrain.source]\nkind = \"slope\"\nangle_deg = 20.0\nsize = [10.0, 10.0]\n\
-                 [start]\nattitude = \"ground\"\nx = -1.0\ny = 0.0\n",
-                project_file("tests/data/third_party/bullet_syropod/robot/bullet.urdf"),
-                project_file("gaits/tripod.toml")
-            ),
-        )
-        .unwrap();
-        let json = dir.join(format!("fall_{stop}.json"));
-        let out = hexsim()
-            .arg("run")
-            .arg(&file)
-            .args(["--no-record", "--allow-flags", "--metrics"])
-            .arg(&json)
-            .output()
-            .unwrap();
-        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-        let metrics: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-        (stdout, metrics)
+        let scenario = bullet_on_a_slope(20.0, 0.0, -1.0, stop);
+        run_scenario(&dir, &format!("fall_{stop}"), &scenario)
     };
     let (stdout, stopped) = walk(true);
     let fell_at = stopped["fell_at"].as_f64().expect("bullet falls up 20°");
@@ -485,29 +493,8 @@ fn a_walk_that_stops_at_its_fall_ends_on_the_step_it_fell() {
 #[test]
 fn a_robot_that_falls_while_it_settles_is_reported_falling_before_its_walk() {
     let dir = scratch("settle-fall");
-    let file = dir.join("settle.toml");
-    std::fs::write(
-        &file,
-        format!(
-            "robot = {:?}\ngait = {:?}\nduration = 4.0\nstop_at_fall = true\n\
-             [terrain.source]\nkind = \"slope\"\nangle_deg = 25.0\nsize = [10.0, 10.0]\n\
-             [start]\nattitude = \"ground\"\nx = 1.0\ny = 0.0\nheading_deg = 180.0\n",
-            project_file("tests/data/third_party/bullet_syropod/robot/bullet.urdf"),
-            project_file("gaits/tripod.toml")
-        ),
-    )
-    .unwrap();
-    let json = dir.join("settle.json");
-    let out = hexsim()
-        .arg("run")
-        .arg(&file)
-        .args(["--no-record", "--allow-flags", "--metrics"])
-        .arg(&json)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    let metrics: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let (stdout, metrics) =
+        run_scenario(&dir, "settle", &bullet_on_a_slope(25.0, 180.0, 1.0, true));
     let fell_at = metrics["fell_at"].as_f64().expect("bullet falls on 25°");
     // the settling lasts 1 s: the fall within it
     assert!((-1.0..0.0).contains(&fell_at), "{metrics}");

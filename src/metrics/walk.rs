@@ -347,6 +347,13 @@ impl HexapodMetrics {
             ..Default::default()
         }
     }
+
+    /// The body's tilt from upright, roll and pitch (rad) into their largest so far.
+    fn note_attitude(&mut self, tilt: f64, roll: f64, pitch: f64) {
+        self.max_body_tilt_deg = self.max_body_tilt_deg.max(tilt.to_degrees());
+        self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
+        self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
+    }
 }
 
 impl HexapodMetrics {
@@ -476,14 +483,14 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             if body_tilt > FALL_TILT && self.fell_at.is_none() {
                 self.fell_at = Some(walker.gait_time());
                 let (roll, pitch, _) = r.roll_pitch_yaw();
-                self.max_body_tilt_deg = self.max_body_tilt_deg.max(body_tilt.to_degrees());
-                self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
-                self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
+                self.note_attitude(body_tilt, roll, pitch);
             }
             return Ok(());
         }
-        let a = &mut self.acc;
         let (roll, pitch, yaw) = r.roll_pitch_yaw();
+        let body_tilt = tilt(&r.body.matrix3);
+        self.note_attitude(body_tilt, roll, pitch);
+        let a = &mut self.acc;
         let position = r.body.translation;
         if a.walk_steps == 0 {
             a.start = Some(position);
@@ -512,13 +519,9 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             self.command_progress += (position - last).truncate().dot(step);
         }
         a.last_position = Some(position);
-        let body_tilt = tilt(&r.body.matrix3);
         if body_tilt > FALL_TILT && self.fell_at.is_none() {
             self.fell_at = Some(a.walk_steps as f64 * dt);
         }
-        self.max_body_tilt_deg = self.max_body_tilt_deg.max(body_tilt.to_degrees());
-        self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
-        self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
         a.roll2 += roll * roll;
         a.pitch2 += pitch * pitch;
         self.body_height_min = Some(
