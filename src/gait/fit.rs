@@ -69,8 +69,8 @@ const SPLAYS: [f64; 4] = [
     45.0 * std::f64::consts::PI / 180.0,
 ];
 /// A stance steady to this tilt or more keeps the legs' own direction, steady or not. Measured
-/// on the ladders (rough-ground.md, *Splayed stances*): hexapod_description (17.5° → 30.3° at
-/// 15°) and MushroomRL (0° → 34.2° at 45°) fell far less splayed; WORMS (26.1° → 31.9° at 15°)
+/// on the ladders when the splay came, at a bar of 30° (2026-12-04; rough-ground-log.md,
+/// *Splayed stances*): hexapod_description (17.5° → 30.3° at 15°) and MushroomRL (0° → 34.2° at 45°) fell far less splayed; WORMS (26.1° → 31.9° at 15°)
 /// diverged in 3 perceptive runs, its front feet starting past the families' first drop.
 const SPLAY_BELOW: f64 = 20.0 * std::f64::consts::PI / 180.0;
 /// How far the links other than the feet of a splayed stance must stay above the level ground

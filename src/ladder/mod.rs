@@ -246,7 +246,7 @@ pub fn load(files: &[PathBuf], robot: Option<&Path>) -> Result<Ladder, ScenarioE
             let mut table = variant.table;
             if !perceptive && !table.contains_key("reactive_gait") {
                 // blind, the feet find risers and drops only by touch: the rigid schedule stalls
-                // hex18 at a 4 cm riser where the reactive gait climbs 8 cm. It is not the
+                // hex18 at a 4 cm riser where the reactive gait climbs 10 cm. It is not the
                 // default walk's gait: on the natural terrain it leaves hex18's distance as it
                 // is, but moves some third-party robots' by up to 3.3 % and leaves worms'
                 // targets out of reach (docs/rough-ground.md). Perceptive runs plan from the
