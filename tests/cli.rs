@@ -858,8 +858,8 @@ fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
 }
 
 /// A walk judged against its command (issue 40): hex18 on a 0.08 s tripod cannot keep up with
-/// its gait and skates (measured: the worst foot slid 4.6 m while the body went 0.9 m in 4 s,
-/// hex18's own tripod 0.9 % of its distance); the run says it skated, the metrics flag it (`walk_flags`, `slip_share`),
+/// its gait and skates (measured: the worst foot slid 4.3 m on the ground while the body went
+/// 3.5 m in 4 s, hex18's own tripod 0.9 % of its distance); the run says it skated, the metrics flag it (`walk_flags`, `slip_share`),
 /// and it exits 1 unless `--allow-flags`. In a batch the same walk fails without any
 /// expectation (`walk_as_commanded`, set for every walk), and passes where its file accepts it
 /// (`walk_as_commanded = false`); a scenario bounding `slip_share_max` fails on that bound too.
@@ -909,6 +909,29 @@ fn a_walk_on_skating_feet_is_flagged_and_fails() {
         m["slip_share"]
     );
     assert!(m["walk_flags"][0].as_str().unwrap().starts_with("skated"));
+    // the share is the worst foot's slip on the ground: its swings' scuffs (some, at this pace)
+    // left out
+    let per_foot = |key: &str| -> Vec<f64> {
+        m[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    let (slip, scuff) = (per_foot("foot_slip"), per_foot("foot_scuff"));
+    assert!(scuff.iter().any(|&s| s > 0.0), "{scuff:?}");
+    let on_ground = slip
+        .iter()
+        .zip(&scuff)
+        .map(|(s, c)| s - c)
+        .fold(0.0, f64::max);
+    let share = on_ground / m["distance"].as_f64().unwrap();
+    assert!(
+        (m["slip_share"].as_f64().unwrap() - share).abs() < 1e-12,
+        "{} against {share}",
+        m["slip_share"]
+    );
     let (code, output, _) = judged(&fast, "allowed", &["--allow-flags"]);
     assert_eq!(code, Some(0), "{output}");
     assert!(

@@ -323,9 +323,10 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         each.join(" ")
     };
     out!(
-        "  foot slip in contact (mm, lf lm lr rf rm rr): {}; of it under load: {}",
+        "  foot slip in contact (mm, lf lm lr rf rm rr): {}; of it under load: {}; swings' scuffs: {}",
         mm(&m.foot_slip),
-        mm(&m.foot_slip_loaded)
+        mm(&m.foot_slip_loaded),
+        mm(&m.foot_scuff)
     );
     if m.time_off_terrain > 0.0 {
         out!(

@@ -17,9 +17,10 @@ pub use table::*;
 /// stepping off from standing sways back and forth by a millimetre or so.
 pub const BACKWARDS_NOISE: f64 = 0.01;
 
-/// A walk whose worst foot slid more than this share of the distance the body travelled skated
-/// rather than walked (issue 40's bar: a robot at 10 times hex18's scale "walked" 13.5 m with
-/// each foot sliding 0.6–1.3 m; hex18's walks slide at most 2 %).
+/// A walk whose worst foot slid more than this share of the distance the body travelled, on the
+/// ground (its slip less its [`HexapodMetrics::foot_scuff`]), skated rather than walked (issue
+/// 40's bar: a robot at 10 times hex18's scale "walked" 13.5 m with each foot sliding 0.6–1.3 m;
+/// hex18's walks slide at most 2 %).
 pub const SKATE_SHARE: f64 = 0.10;
 /// A walk commanded straight ahead that drifted sideways more than this share of its forward
 /// travel went somewhere else.
@@ -68,6 +69,11 @@ pub struct HexapodMetrics {
     /// Per foot: the share of [`Self::foot_slip`] slid while the foot bore load (Fn > 0), see
     /// [`slid`]; bounded by `max_foot_slip_loaded_mm`.
     pub foot_slip_loaded: [f64; 6],
+    /// Per foot: the share of [`Self::foot_slip`] slid while the gait had the foot in the air
+    /// (swinging, not yet touched down): a swing brushing a stone's wall or dragging over a box's
+    /// top, which moves the foot at the swing's speed across what it touches. A scuff, not a
+    /// stance foot losing its grip: skating ([`SKATE_SHARE`]) is judged on the rest.
+    pub foot_scuff: [f64; 6],
     /// Per foot: fraction of the walk on the ground.
     pub stance_fraction: [f64; 6],
     pub peak_normal_force: [f64; 6],
@@ -91,8 +97,9 @@ pub struct HexapodMetrics {
     pub cost_of_transport: Option<f64>,
     /// Steps in which some leg's target was out of reach and was clamped.
     pub clamped_ik_steps: u64,
-    /// The worst foot's slip over the distance the body travelled (None when it did not travel
-    /// 1 cm): above [`SKATE_SHARE`] the robot skated.
+    /// The worst foot's slip on the ground ([`Self::foot_slip`] less [`Self::foot_scuff`]) over
+    /// the distance the body travelled (None when it did not travel 1 cm): above [`SKATE_SHARE`]
+    /// the robot skated.
     pub slip_share: Option<f64>,
     /// What makes the walk not the walk commanded, each said in a sentence: its feet skated
     /// ([`SKATE_SHARE`]), it went backwards against the command, drifted sideways
@@ -360,14 +367,17 @@ impl HexapodMetrics {
     /// Judges the walk against its commands ([`Self::slip_share`], [`Self::walk_flags`]).
     fn judge(&mut self) {
         let a = &self.acc;
-        let worst = self.foot_slip.iter().copied().fold(0.0, f64::max);
+        // a swing's scuffs are no skating: the slip on the ground is judged
+        let worst = (0..6)
+            .map(|k| self.foot_slip[k] - self.foot_scuff[k])
+            .fold(0.0, f64::max);
         self.slip_share = (self.distance >= 0.01).then(|| worst / self.distance);
         let mut flags = Vec::new();
         // skating is judged against the distance commanded: marking time (or turning on the
         // spot) travels none, and its feet's slip is no share of it
         if let Some(share) = self.slip_share.filter(|&s| a.moving && s > SKATE_SHARE) {
             flags.push(format!(
-                "skated: its worst foot slid {worst:.3} m in contact, {:.1} % of the {:.3} m the body travelled (more than {:.0} %)",
+                "skated: its worst foot slid {worst:.3} m on the ground (its swings' scuffs left out), {:.1} % of the {:.3} m the body travelled (more than {:.0} %)",
                 share * 100.0,
                 self.distance,
                 SKATE_SHARE * 100.0
@@ -537,6 +547,9 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
                 let (whole, loaded) = slid(c, dt);
                 self.foot_slip[k] += whole;
                 self.foot_slip_loaded[k] += loaded;
+                if s.gait.as_ref().is_some_and(|g| !g.grounded[k]) {
+                    self.foot_scuff[k] += whole;
+                }
                 self.peak_normal_force[k] = self.peak_normal_force[k].max(c.normal_force);
                 self.max_penetration = self.max_penetration.max(c.penetration);
             }

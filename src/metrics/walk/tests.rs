@@ -52,3 +52,32 @@ fn marking_time_is_not_skating() {
         "{flags:?}"
     );
 }
+
+/// A swing brushing the ground is a scuff, not skating: the share is judged on the slip left
+/// when the swings' scuffs are taken out (hex18 blind over 6 cm obstacles: 10.1 % of its
+/// distance in contact, 3.5 % on the ground).
+#[test]
+fn a_swings_scuffs_are_not_skating() {
+    let judged = |scuff: f64| {
+        let mut m = HexapodMetrics::new(1e-3, 2.5, Vec::new(), None);
+        m.foot_slip = [0.3, 0.1, 0.1, 0.1, 0.1, 0.1];
+        m.foot_scuff = [scuff, 0.0, 0.0, 0.0, 0.0, 0.0];
+        m.distance = 2.0;
+        m.forward_distance = 2.0;
+        m.command_progress = 2.0;
+        m.acc.moving = true;
+        m.judge();
+        (m.slip_share.unwrap(), m.walk_flags)
+    };
+    let (share, flags) = judged(0.0);
+    assert!(
+        (share - 0.15).abs() < 1e-12 && flags.len() == 1,
+        "{share} {flags:?}"
+    );
+    let (share, flags) = judged(0.2);
+    // the worst foot on the ground is now another one, at 0.1 m
+    assert!(
+        (share - 0.05).abs() < 1e-12 && flags.is_empty(),
+        "{share} {flags:?}"
+    );
+}
