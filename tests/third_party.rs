@@ -877,7 +877,8 @@ fn the_fitted_stance_is_steady_where_a_steady_one_exists() {
 /// against a 0.101 m stride (steady to 0.0°, and it fell in 73 of its 104 ladder runs). The fit
 /// then turns the front and rear feet towards the body's ends (`Gait::splay`), taking the least
 /// of 15°, 30°, 45° with a steady stance whose links other than the feet stay 5 mm off the
-/// level ground over the whole cycle; it walks straight on flat ground on its feet alone.
+/// level ground over the whole cycle (30°, its knees up: steady to 40.1°); it walks straight on
+/// flat ground on its feet alone.
 #[test]
 fn a_robot_on_short_tripods_splays_its_front_and_rear_feet() {
     let robot = "tests/data/third_party/mushroom_hexapod/hexapod.urdf";
@@ -892,7 +893,7 @@ fn a_robot_on_short_tripods_splays_its_front_and_rear_feet() {
         rest[..rest.find(unit).unwrap()].trim().parse().unwrap()
     };
     assert!(
-        report.contains("front and rear feet splayed 45° towards the body's ends (fitted)"),
+        report.contains("front and rear feet splayed 30° towards the body's ends (fitted)"),
         "{report}"
     );
     assert!(
@@ -910,4 +911,46 @@ fn a_robot_on_short_tripods_splays_its_front_and_rear_feet() {
     let m = walk(robot, "terrains/flat.toml", "splayed");
     assert_eq!(m["max_link_penetration"], 0.0, "{m}");
     assert!(m["forward_distance"].as_f64().unwrap() > 1.5, "{m}");
+}
+
+/// A leg stands with its knee up, whichever way its URDF turns its joints: MushroomRL's left
+/// legs bend the other way from its right ones, and the first standing guess that reached stood
+/// the left legs knee down (femur −84°, tibia 85°) and the right ones knee up (−9°, 63°). Of the
+/// answers that reach, the one whose joints stand highest is taken: mirrored legs stand mirrored.
+#[test]
+fn mirrored_legs_stand_mirrored_with_their_knees_up() {
+    let out = hexsim()
+        .args([
+            "robot",
+            "tests/data/third_party/mushroom_hexapod/hexapod.urdf",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let report = String::from_utf8_lossy(&out.stdout).into_owned();
+    // "    lf  -25° +0.000 N·m (0 %), 30° -0.842 N·m (1 %), -61° -0.543 N·m (1 %)"
+    let standing = |leg: &str| -> Vec<f64> {
+        let start = report
+            .find("standing on six feet")
+            .expect("the standing pose");
+        let line = report[start..]
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{leg} ")))
+            .unwrap_or_else(|| panic!("{leg} in {report}"));
+        line.split(',')
+            .map(|joint| {
+                let angle = joint.trim().trim_start_matches(leg).trim();
+                angle[..angle.find('°').unwrap()].trim().parse().unwrap()
+            })
+            .collect()
+    };
+    for (left, right) in [("lf", "rf"), ("lm", "rm"), ("lr", "rr")] {
+        let (l, r) = (standing(left), standing(right));
+        for (a, b) in l.iter().zip(&r) {
+            assert!(
+                (a + b).abs() <= 1.0,
+                "{left} {l:?} against {right} {r:?}\n{report}"
+            );
+        }
+    }
 }

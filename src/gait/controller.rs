@@ -176,6 +176,10 @@ const STANDING_GUESSES: [[f64; 3]; 5] = [
     [0.0, 0.3, 1.2],
 ];
 
+/// Of two standing answers that reach, the one whose joints stand higher by more than this (m)
+/// is the knee up; nearer, the two are one pose found twice, and the earlier guess is kept.
+const KNEE_TOLERANCE: f64 = 1e-6;
+
 /// For a robot whose legs have joints held still: how to drive them (they may reach what the
 /// three driven joints cannot).
 fn held_hint(model: &RobotModel) -> &'static str {
@@ -237,16 +241,27 @@ impl GaitController {
                 hip.y + reach * yaw.sin(),
                 hips - spec.stance_height + leg.foot.radius,
             );
-            // a bent-knee guess, femur up and tibia down, so the solver finds the usual stance;
-            // URDFs bend their knees either way, so the mirrored and straight guesses next
+            // every guess solved: of the answers that reach, the one whose knee stands highest
+            // (an insect's stance, femur up and tibia down), else the closest. URDFs turn their
+            // joints either way, so no one guess is the knee up on every robot: the first that
+            // reached stood pcrnet's legs and one side of twwawy's and MushroomRL's knee down
             let mut guess = chain.solve(neutral[k], chain.from_three(STANDING_GUESSES[0]));
+            let mut height = chain.joints_height(guess.angles);
             for &other in &STANDING_GUESSES[1..] {
-                if guess.error <= REACH_TOLERANCE {
-                    break; // the first guess that reaches is kept (hex18: the first)
-                }
                 let other = chain.solve(neutral[k], chain.from_three(other));
-                if other.error < guess.error {
-                    guess = other;
+                let reach = (
+                    other.error <= REACH_TOLERANCE,
+                    guess.error <= REACH_TOLERANCE,
+                );
+                let other_height = chain.joints_height(other.angles);
+                let better = match reach {
+                    (true, true) => other_height > height + KNEE_TOLERANCE,
+                    (true, false) => true,
+                    (false, true) => false,
+                    (false, false) => other.error < guess.error,
+                };
+                if better {
+                    (guess, height) = (other, other_height);
                 }
             }
             if guess.error > REACH_TOLERANCE {

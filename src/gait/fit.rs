@@ -52,8 +52,9 @@ const MEAN_WEIGHT: f64 = 0.1;
 pub const STEADY_TILT: f64 = 35.0 * std::f64::consts::PI / 180.0;
 /// A stance steady to this is taken when none is steady to [`STEADY_TILT`], with the legs as they
 /// point or splayed: a robot whose steadiest stance is steady to 30–35° would otherwise fall
-/// back to the stance with the most room however unsteady (MushroomRL's steadiest splayed
-/// stance with its links clear is steady to 34.2°, at 45°; with the most room, unsplayed, 0°).
+/// back to the stance with the most room however unsteady (MushroomRL's, with its left legs
+/// knee down before 2026-12-05: its steadiest splayed stance with its links clear was steady to
+/// 34.2°, at 45°; with the most room, unsplayed, 0°).
 const STEADY_FALLBACK_TILT: f64 = 30.0 * std::f64::consts::PI / 180.0;
 pub const STEADY_ROOM: f64 = 15.0 * std::f64::consts::PI / 180.0;
 /// Grid cells per free length in the coarse search, and cycle instants sampled per candidate.

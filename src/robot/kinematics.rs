@@ -276,6 +276,15 @@ impl LegChain {
         q
     }
 
+    /// How high the leg's joints after its first stand at `q` (the mean of their heights, body
+    /// frame): of two poses that put the foot in one place, the one with its knee up stands
+    /// higher than the one with its knee down, whichever way the URDF turns its joints.
+    pub fn joints_height(&self, q: impl AsRef<[f64]>) -> f64 {
+        let (joints, _, _) = self.frames(&self.angles(q.as_ref()));
+        let above: f64 = joints[1..self.n].iter().map(|(p, _)| p.z).sum();
+        above / (self.n - 1) as f64
+    }
+
     /// Foot centre in the body frame for joint angles `q`.
     pub fn foot_position(&self, q: impl AsRef<[f64]>) -> DVec3 {
         let q = self.angles(q.as_ref());
