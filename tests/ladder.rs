@@ -5,13 +5,10 @@ mod common;
 use common::*;
 
 /// `ladder/<name>.toml` as one scenario: its text before `[sweep]` (each swept value at the
-/// family's own, its first level), the gait's path made absolute, `header` put first.
+/// family's own, its first level; its gait the built-in tripod, by name), `header` put first.
 fn one_level(name: &str, header: &str) -> String {
     let family = std::fs::read_to_string(project_file(&format!("ladder/{name}.toml"))).unwrap();
-    format!("{header}{}", &family[..family.find("[sweep]").unwrap()]).replace(
-        "../gaits/tripod.toml",
-        &project_file("gaits/tripod.toml").display().to_string(),
-    )
+    format!("{header}{}", &family[..family.find("[sweep]").unwrap()])
 }
 
 /// `hexsim run` of [`one_level`]`(family, header)` with each `(from, to)` of `edits` replaced,
@@ -108,6 +105,44 @@ fn a_ladder_reports_the_highest_level_crossed_and_what_stopped_the_robot() {
     assert!(out_dir.join("results.jsonl").is_file());
 }
 
+/// The ladder's families are built in: from a folder with no `ladder/` (a user's, after `cargo
+/// install`), `hexsim ladder rough` runs the built-in family, its gait the built-in tripod, and a
+/// name that is neither a file nor a family is refused, naming the families there are. Before,
+/// the families were read from `./ladder` only, and anywhere else the ladder stopped with "no
+/// such scenario file or folder".
+#[test]
+fn the_ladder_families_are_built_in() {
+    let dir = scratch("ladder-built-in");
+    let out = hexsim()
+        .current_dir(&dir)
+        .args(["ladder", "rough", "-o", "out", "-q"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/ladder.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["families"][0]["family"], "rough");
+    assert_eq!(json["runs"].as_array().unwrap().len(), 10, "{json}");
+    let records = std::fs::read_to_string(dir.join("out/results.jsonl")).unwrap();
+    assert!(
+        records.contains("\"gaits/tripod.toml (built in)\""),
+        "{records}"
+    );
+    let out = hexsim()
+        .current_dir(&dir)
+        .args(["ladder", "stair", "-o", "out2", "-q"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("stair: no such scenario file or folder, nor a built-in family (gaps, "),
+        "{stderr}"
+    );
+}
+
 /// A family that sweeps two difficulties at once is refused, naming the file.
 #[test]
 fn a_family_of_two_difficulties_is_refused() {
@@ -182,12 +217,7 @@ fn a_tall_robot_leans_into_a_30_degree_slope_and_walks_up_it() {
     let dir = scratch("ladder-lean");
     let family = dir.join("slope_up.toml");
     let ladder = std::fs::read_to_string(project_file("ladder/slope_up.toml")).unwrap();
-    let ladder = ladder
-        .replace(
-            "../gaits/tripod.toml",
-            &project_file("gaits/tripod.toml").display().to_string(),
-        )
-        .replace("[5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]", "[30.0]");
+    let ladder = ladder.replace("[5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0]", "[30.0]");
     std::fs::write(&family, ladder).unwrap();
     let robot =
         project_file("tests/data/third_party/hexaross/hexapod_description/urdf/hexapod.urdf");

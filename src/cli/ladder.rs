@@ -11,7 +11,10 @@ use super::warn_about;
 
 #[derive(Args)]
 pub struct LadderArgs {
-    /// Ladder families: sweep scenario files or folders of them (see docs/rough-ground.md).
+    /// Ladder families: sweep scenario files or folders of them (see docs/rough-ground.md), or
+    /// the name of a built-in family (gaps, obstacles, pyramid, rough, slope_down, slope_up,
+    /// stairs_down, stairs_up, stones). Default: the folder ladder/ if there is one here, else
+    /// every built-in family.
     #[arg(default_value = "ladder")]
     families: Vec<String>,
     /// The robot to walk (a URDF); default: each family's own (hex18). Its runs last as long as
@@ -35,12 +38,12 @@ pub struct LadderArgs {
 /// error, 130 interrupted.
 pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
     use hexsim::batch::{self, Progress};
-    let files = batch::scenario_files(&args.families)?;
+    let sources = hexsim::ladder::Source::resolve(&args.families)?;
     let hexsim::ladder::Ladder {
         families,
         rungs,
         scenarios,
-    } = hexsim::ladder::load(&files, args.robot.as_deref()).map_err(anyhow::Error::new)?;
+    } = hexsim::ladder::load(&sources, args.robot.as_deref()).map_err(anyhow::Error::new)?;
     warn_about(&scenarios, false)?;
     let jobs = args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)

@@ -21,6 +21,7 @@
 pub mod chart;
 
 use crate::batch::results::{Record, Status};
+use crate::scenario::builtin::{self, Builtin};
 use crate::scenario::{self, Scenario, ScenarioError, sweep};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -188,20 +189,83 @@ pub struct Ladder {
     pub scenarios: Vec<Scenario>,
 }
 
-/// Reads the ladder's families from `files` and expands them into runs, for `robot` if given
+/// A ladder family's file: one on disk, or one of the binary's (`ladder/`'s, run from any
+/// folder).
+#[derive(Debug, Clone)]
+pub enum Source {
+    File(PathBuf),
+    Builtin(Builtin),
+}
+
+impl Source {
+    /// The families `inputs` name: files and folders of them as `hexsim batch` reads them; a
+    /// bare name that is neither (`stairs_up`) the built-in family of that name; `ladder`, where
+    /// there is no such folder, every built-in family.
+    pub fn resolve(inputs: &[String]) -> anyhow::Result<Vec<Source>> {
+        let mut sources = Vec::new();
+        for input in inputs {
+            let path = Path::new(input);
+            if input == "ladder" && !path.exists() {
+                sources.extend(builtin::LADDER.iter().map(|(_, b)| Source::Builtin(*b)));
+            } else if let Some(b) = builtin::named(builtin::LADDER, path, path) {
+                sources.push(Source::Builtin(b));
+            } else {
+                let files =
+                    crate::batch::scenario_files(std::slice::from_ref(input)).map_err(|e| {
+                        if path.components().count() == 1 && path.extension().is_none() {
+                            anyhow::anyhow!(
+                                "{e}, nor a built-in family ({})",
+                                builtin::names(builtin::LADDER)
+                            )
+                        } else {
+                            e
+                        }
+                    })?;
+                sources.extend(files.into_iter().map(Source::File));
+            }
+        }
+        Ok(sources)
+    }
+
+    /// Its path (a built-in family's as in the repository), and its table.
+    fn read(&self) -> Result<(PathBuf, toml::Table), String> {
+        match self {
+            Source::File(file) => {
+                scenario::read_table(file, Path::new(file.file_name().unwrap_or_default()))
+            }
+            Source::Builtin(b) => {
+                let table = b.text.parse().map_err(|e: toml::de::Error| {
+                    format!(
+                        "scenario {} (built in): {}",
+                        b.path,
+                        e.to_string().trim_end()
+                    )
+                })?;
+                Ok((PathBuf::from(b.path), table))
+            }
+        }
+    }
+
+    fn path(&self) -> PathBuf {
+        match self {
+            Source::File(file) => file.clone(),
+            Source::Builtin(b) => PathBuf::from(b.path),
+        }
+    }
+}
+
+/// Reads the ladder's families from `sources` and expands them into runs, for `robot` if given
 /// (the files' own robot otherwise).
-pub fn load(files: &[PathBuf], robot: Option<&Path>) -> Result<Ladder, ScenarioError> {
+pub fn load(sources: &[Source], robot: Option<&Path>) -> Result<Ladder, ScenarioError> {
     let mut families = Vec::new();
     let mut rungs = Vec::new();
     let mut scenarios = Vec::new();
-    for file in files {
+    for source in sources {
         let fail = |message: String| ScenarioError {
-            file: file.clone(),
+            file: source.path(),
             message,
         };
-        let (path, mut table) =
-            scenario::read_table(file, Path::new(file.file_name().unwrap_or_default()))
-                .map_err(fail)?;
+        let (path, mut table) = source.read().map_err(fail)?;
         if let Some(robot) = robot {
             let absolute = std::path::absolute(robot)
                 .map_err(|e| fail(format!("robot {}: {e}", robot.display())))?;

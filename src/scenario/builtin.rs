@@ -82,6 +82,20 @@ pub const TERRAINS: &[(&str, Builtin)] = &[
     builtin!("terrains", "steps_down"),
 ];
 
+/// The terrain ladder's families (`ladder/`), by name: `hexsim ladder` runs them from any
+/// folder, and `hexsim ladder stairs_up` one of them.
+pub const LADDER: &[(&str, Builtin)] = &[
+    builtin!("ladder", "gaps"),
+    builtin!("ladder", "obstacles"),
+    builtin!("ladder", "pyramid"),
+    builtin!("ladder", "rough"),
+    builtin!("ladder", "slope_down"),
+    builtin!("ladder", "slope_up"),
+    builtin!("ladder", "stairs_down"),
+    builtin!("ladder", "stairs_up"),
+    builtin!("ladder", "stones"),
+];
+
 /// The built-in file a scenario's `gait = "NAME"` or `terrain = "NAME"` names, when `file` is a
 /// bare name (no folder, no extension) and `path` (where it resolves) is not a file: a file the
 /// user has of that name always wins.
