@@ -829,8 +829,8 @@ fn impulse_joints_walk_light_legs_as_the_multibody_does() {
 /// joint room standing tall on legs hanging under its hips (stance height 0.224 m, reach
 /// 0.053 m), where its walk keeps its centre of mass over the support on tilts up to 24.5° only,
 /// and it fell in 15 of its 104 ladder runs; the fit now takes the stance with the most room
-/// among those steady to 35° with 15° of joint room, lower and wider (35.6°; at a bar of 30°
-/// until 2026-12-05, 30.3°). The CSIRO Bullet stands
+/// among those steady to 35° with 15° of joint room, lower and wider (35.4°, its knees up; at
+/// a bar of 30° until 2026-12-05, 30.3°). The CSIRO Bullet stands
 /// 0.42 m tall on servos of 8.4 N·m that cannot hold it lower: no stance is steady, the report
 /// says so, and its stance is the one with the most room, as before.
 #[test]
