@@ -346,7 +346,7 @@ fn robot_inspection_shows_legs_direction_masses_and_standing_torques() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout
-            .contains("walking direction +y (chosen: the legs do not split three a side about x)"),
+            .contains("walking direction +y (chosen: the legs do not split three a side about x; -y splits them as well: a robot file's `forward = \"-y\"` walks that way)"),
         "{stdout}"
     );
     let out = hexsim()

@@ -395,7 +395,7 @@ fn the_robot_command_shows_the_walking_direction_and_merged_links() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");
     for expected in [
-        "walking direction +y (chosen: the legs do not split three a side about x)",
+        "walking direction +y (chosen: the legs do not split three a side about x; -y splits them as well: a robot file's `forward = \"-y\"` walks that way)",
         "18 URDF links fixed to others, merged: ",
         "endcap_0 into foot_0",
     ] {

@@ -330,7 +330,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     );
     if m.time_off_terrain > 0.0 {
         out!(
-            "  warning: the body was beyond the terrain's grid for {:.2} s, on the flat apron its edges extend to",
+            "  warning: the body was beyond the terrain's grid for {:.2} s, walking on the flat apron that extends the grid's edges: those seconds are no walk on that terrain",
             m.time_off_terrain
         );
     }

@@ -200,10 +200,10 @@ impl Fitted {
                 && self.static_tilt >= STEADY_FALLBACK_TILT
             {
                 format!(
-                    " (the {:.0}° asked when no stance with {:.0}° of joint room is steady to the {:.0}° of a steady one)",
-                    STEADY_FALLBACK_TILT.to_degrees(),
+                    " (short of the {:.0}° of a steady stance: none with {:.0}° of joint room reaches it, so the fit took one steady to {:.0}°)",
+                    STEADY_TILT.to_degrees(),
                     STEADY_ROOM.to_degrees(),
-                    STEADY_TILT.to_degrees()
+                    STEADY_FALLBACK_TILT.to_degrees()
                 )
             } else if self.origins.stance_height == Origin::Fitted
                 || self.origins.reach == Origin::Fitted

@@ -96,7 +96,10 @@ fn points(pieces: &[Placed], base: &Path, unread: &mut Vec<String>) -> Vec<DVec3
             urdf_rs::Geometry::Sphere { radius } => sphere(*radius, DVec3::ZERO),
             urdf_rs::Geometry::Mesh { filename, scale } => {
                 mesh::scaled_vertices(filename, scale.as_ref(), base).unwrap_or_else(|why| {
-                    unread.push(why);
+                    // a leg's collision and visual often name one mesh: said once
+                    if !unread.contains(&why) {
+                        unread.push(why);
+                    }
                     Vec::new()
                 })
             }

@@ -52,6 +52,31 @@ impl Forward {
                 "chosen: the legs do not split three a side about x, and their names say where the front is"
             }
         };
-        format!("{name} ({from})")
+        match self.from {
+            // the legs split as well about the reverse: which end is the front, only the user
+            // knows (the Cornell hexapod's README says -y where +y was chosen)
+            ForwardFrom::Legs => {
+                let reverse = Forward {
+                    yaw: if self.yaw > 0.0 {
+                        self.yaw - std::f64::consts::PI
+                    } else {
+                        self.yaw + std::f64::consts::PI
+                    },
+                    from: ForwardFrom::RobotFile,
+                };
+                // as a robot file writes it: an axis's name, or the angle in degrees
+                let described = reverse.describe();
+                let reverse = match described.find(" (") {
+                    Some(end) if ["+x", "+y", "-x", "-y"].contains(&&described[..end]) => {
+                        described[..end].to_string()
+                    }
+                    _ => format!("{:.1}", reverse.yaw.to_degrees()),
+                };
+                format!(
+                    "{name} ({from}; {reverse} splits them as well: a robot file's `forward = \"{reverse}\"` walks that way)"
+                )
+            }
+            _ => format!("{name} ({from})"),
+        }
     }
 }

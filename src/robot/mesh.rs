@@ -71,12 +71,12 @@ pub fn scaled_vertices(
             )),
         },
         Err(tried) => {
-            let first = tried
-                .first()
-                .map_or(filename.to_string(), |p| p.display().to_string());
-            Err(format!(
-                "mesh {filename} not found ({first} does not exist)"
-            ))
+            let tried: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
+            Err(match tried.as_slice() {
+                [] => format!("mesh {filename} not found"),
+                [only] => format!("mesh {filename} not found ({only} does not exist)"),
+                all => format!("mesh {filename} not found (tried {})", all.join(", ")),
+            })
         }
     }
 }

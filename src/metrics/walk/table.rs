@@ -307,7 +307,7 @@ pub const TABLE: &[Metric<HexapodMetrics>] = &[
     Metric {
         name: "time_off_terrain",
         unit: "s",
-        what: "time the body spent beyond the terrain's grid, on the flat apron its edges extend to",
+        what: "time the body spent beyond the terrain's grid, walking on the flat apron that extends the grid's edges",
         noise: Some(0.0),
         better: Better::Lower,
         bounds: &[Bound::max("max_time_off_terrain_s")],
