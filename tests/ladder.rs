@@ -113,13 +113,20 @@ fn a_ladder_reports_the_highest_level_crossed_and_what_stopped_the_robot() {
 #[test]
 fn the_ladder_families_are_built_in() {
     let dir = scratch("ladder-built-in");
-    let out = hexsim()
-        .current_dir(&dir)
-        .args(["ladder", "rough", "-o", "out", "-q"])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    // `hexsim ladder FAMILY -o OUT -q` in the empty folder: its exit code and standard error
+    let ladder = |family: &str, out: &str| {
+        let run = hexsim()
+            .current_dir(&dir)
+            .args(["ladder", family, "-o", out, "-q"])
+            .output()
+            .unwrap();
+        (
+            run.status.code(),
+            String::from_utf8_lossy(&run.stderr).into_owned(),
+        )
+    };
+    let (code, stderr) = ladder("rough", "out");
+    assert_eq!(code, Some(0), "{stderr}");
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("out/ladder.json")).unwrap())
             .unwrap();
@@ -130,13 +137,8 @@ fn the_ladder_families_are_built_in() {
         records.contains("\"gaits/tripod.toml (built in)\""),
         "{records}"
     );
-    let out = hexsim()
-        .current_dir(&dir)
-        .args(["ladder", "stair", "-o", "out2", "-q"])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    let (code, stderr) = ladder("stair", "out2");
+    assert_eq!(code, Some(2), "{stderr}");
     assert!(
         stderr.contains("stair: no such scenario file or folder, nor a built-in family (gaps, "),
         "{stderr}"

@@ -363,15 +363,7 @@ fn a_perceptive_foothold_off_an_edge_is_within_reach() {
 /// stance (0.10 m high, 0.15 m out: missed by 11 mm before the fit).
 #[test]
 fn the_robot_command_shows_the_fitted_stance() {
-    let out = hexsim()
-        .args([
-            "robot",
-            "tests/data/third_party/mushroom_hexapod/hexapod.urdf",
-        ])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{stdout}");
+    let stdout = robot_report("tests/data/third_party/mushroom_hexapod/hexapod.urdf");
     assert!(stdout.contains("19 links, 18 joints, 6 legs"), "{stdout}");
     for expected in [
         "stance height ",
@@ -388,12 +380,7 @@ fn the_robot_command_shows_the_fitted_stance() {
 /// `hexsim robot` on Kraby says which way it walks and why, and which URDF links it merged.
 #[test]
 fn the_robot_command_shows_the_walking_direction_and_merged_links() {
-    let out = hexsim()
-        .args(["robot", "tests/data/third_party/kraby/hexapod.urdf"])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{stdout}");
+    let stdout = robot_report("tests/data/third_party/kraby/hexapod.urdf");
     for expected in [
         "walking direction +y (chosen: the legs do not split three a side about x; -y splits them as well: a robot file's `forward = \"-y\"` walks that way)",
         "18 URDF links fixed to others, merged: ",
@@ -835,31 +822,18 @@ fn impulse_joints_walk_light_legs_as_the_multibody_does() {
 /// says so, and its stance is the one with the most room, as before.
 #[test]
 fn the_fitted_stance_is_steady_where_a_steady_one_exists() {
-    let report = |robot: &str| {
-        let out = hexsim().args(["robot", robot]).output().unwrap();
-        assert!(out.status.success(), "{robot}");
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
-    let degrees_after = |text: &str, marker: &str| -> f64 {
-        let at = text
-            .find(marker)
-            .unwrap_or_else(|| panic!("{marker:?} in {text}"));
-        let rest = &text[at + marker.len()..];
-        let end = rest.find('°').unwrap();
-        rest[..end].trim().parse().unwrap()
-    };
-    let nikita = report(
+    let nikita = robot_report(
         "tests/data/third_party/nikita_six_legged/six_legged_robot_description/urdf/six_legged_robot.urdf",
     );
-    let tilt = degrees_after(&nikita, "over the support on tilts up to");
-    let room = degrees_after(&nikita, "least joint room over a cycle");
+    let tilt = number_after(&nikita, "over the support on tilts up to", '°');
+    let room = number_after(&nikita, "least joint room over a cycle", '°');
     assert!(tilt >= 35.0 && room >= 15.0, "{nikita}");
     assert!(
         !nikita.contains("less than the 35° of a steady stance"),
         "{nikita}"
     );
-    let bullet = report("tests/data/third_party/bullet_syropod/robot/bullet.urdf");
-    let tilt = degrees_after(&bullet, "over the support on tilts up to");
+    let bullet = robot_report("tests/data/third_party/bullet_syropod/robot/bullet.urdf");
+    let tilt = number_after(&bullet, "over the support on tilts up to", '°');
     assert!(tilt < 35.0, "{bullet}");
     assert!(
         bullet.contains("less than the 35° of a steady stance: the fit found none"),
@@ -882,16 +856,8 @@ fn the_fitted_stance_is_steady_where_a_steady_one_exists() {
 #[test]
 fn a_robot_on_short_tripods_splays_its_front_and_rear_feet() {
     let robot = "tests/data/third_party/mushroom_hexapod/hexapod.urdf";
-    let out = hexsim().args(["robot", robot]).output().unwrap();
-    assert!(out.status.success());
-    let report = String::from_utf8_lossy(&out.stdout).into_owned();
-    let number_after = |marker: &str, unit: char| -> f64 {
-        let at = report
-            .find(marker)
-            .unwrap_or_else(|| panic!("{marker:?} in {report}"));
-        let rest = &report[at + marker.len()..];
-        rest[..rest.find(unit).unwrap()].trim().parse().unwrap()
-    };
+    let report = robot_report(robot);
+    let number_after = |marker: &str, unit: char| number_after(&report, marker, unit);
     assert!(
         report.contains("front and rear feet splayed 30° towards the body's ends (fitted)"),
         "{report}"
@@ -919,15 +885,7 @@ fn a_robot_on_short_tripods_splays_its_front_and_rear_feet() {
 /// answers that reach, the one whose joints stand highest is taken: mirrored legs stand mirrored.
 #[test]
 fn mirrored_legs_stand_mirrored_with_their_knees_up() {
-    let out = hexsim()
-        .args([
-            "robot",
-            "tests/data/third_party/mushroom_hexapod/hexapod.urdf",
-        ])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
-    let report = String::from_utf8_lossy(&out.stdout).into_owned();
+    let report = robot_report("tests/data/third_party/mushroom_hexapod/hexapod.urdf");
     // "    lf  -25° +0.000 N·m (0 %), 30° -0.842 N·m (1 %), -61° -0.543 N·m (1 %)"
     let standing = |leg: &str| -> Vec<f64> {
         let start = report
@@ -953,4 +911,21 @@ fn mirrored_legs_stand_mirrored_with_their_knees_up() {
             );
         }
     }
+}
+
+/// `hexsim robot ROBOT`'s report, the command succeeding.
+fn robot_report(robot: &str) -> String {
+    let out = hexsim().args(["robot", robot]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{robot}: {stdout}");
+    stdout
+}
+
+/// The number in `text` between `marker` and the next `unit` ("tilts up to 40.1°").
+fn number_after(text: &str, marker: &str, unit: char) -> f64 {
+    let at = text
+        .find(marker)
+        .unwrap_or_else(|| panic!("{marker:?} in {text}"));
+    let rest = &text[at + marker.len()..];
+    rest[..rest.find(unit).unwrap()].trim().parse().unwrap()
 }

@@ -33,17 +33,10 @@ impl Forward {
 
     /// "+x", "+y", "-x", "-y", or the angle in degrees.
     pub fn describe(&self) -> String {
-        let deg = self.yaw.to_degrees();
-        let name = [
-            (0.0, "+x"),
-            (90.0, "+y"),
-            (180.0, "-x"),
-            (-180.0, "-x"),
-            (-90.0, "-y"),
-        ]
-        .iter()
-        .find(|(a, _)| (deg - a).abs() < 1e-9)
-        .map_or(format!("{deg:.1}° from +x"), |(_, n)| n.to_string());
+        let name = axis_name(self.yaw).map_or(
+            format!("{:.1}° from +x", self.yaw.to_degrees()),
+            String::from,
+        );
         let from = match self.from {
             ForwardFrom::Urdf => "the URDF's",
             ForwardFrom::RobotFile => "set in the robot file",
@@ -52,31 +45,36 @@ impl Forward {
                 "chosen: the legs do not split three a side about x, and their names say where the front is"
             }
         };
-        match self.from {
-            // the legs split as well about the reverse: which end is the front, only the user
-            // knows (the Cornell hexapod's README says -y where +y was chosen)
-            ForwardFrom::Legs => {
-                let reverse = Forward {
-                    yaw: if self.yaw > 0.0 {
-                        self.yaw - std::f64::consts::PI
-                    } else {
-                        self.yaw + std::f64::consts::PI
-                    },
-                    from: ForwardFrom::RobotFile,
-                };
-                // as a robot file writes it: an axis's name, or the angle in degrees
-                let described = reverse.describe();
-                let reverse = match described.find(" (") {
-                    Some(end) if ["+x", "+y", "-x", "-y"].contains(&&described[..end]) => {
-                        described[..end].to_string()
-                    }
-                    _ => format!("{:.1}", reverse.yaw.to_degrees()),
-                };
-                format!(
-                    "{name} ({from}; {reverse} splits them as well: a robot file's `forward = \"{reverse}\"` walks that way)"
-                )
-            }
-            _ => format!("{name} ({from})"),
+        if self.from != ForwardFrom::Legs {
+            return format!("{name} ({from})");
         }
+        // the legs split as well about the reverse: which end is the front, only the user knows
+        // (the Cornell hexapod's README says -y where +y was chosen); named as a robot file
+        // writes it, an axis or the angle in degrees
+        let reverse = if self.yaw > 0.0 {
+            self.yaw - std::f64::consts::PI
+        } else {
+            self.yaw + std::f64::consts::PI
+        };
+        let reverse =
+            axis_name(reverse).map_or(format!("{:.1}", reverse.to_degrees()), String::from);
+        format!(
+            "{name} ({from}; {reverse} splits them as well: a robot file's `forward = \"{reverse}\"` walks that way)"
+        )
     }
+}
+
+/// The axis a walking direction of `yaw` (rad about z) points along, if it points along one.
+fn axis_name(yaw: f64) -> Option<&'static str> {
+    let deg = yaw.to_degrees();
+    [
+        (0.0, "+x"),
+        (90.0, "+y"),
+        (180.0, "-x"),
+        (-180.0, "-x"),
+        (-90.0, "-y"),
+    ]
+    .iter()
+    .find(|(a, _)| (deg - a).abs() < 1e-9)
+    .map(|&(_, n)| n)
 }
