@@ -525,6 +525,12 @@ impl Simulation {
     fn warnings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         PyList::new(py, &self.current().warnings)
     }
+
+    /// What hexsim chose that the scenario left out (a smaller step for light legs).
+    #[getter]
+    fn notes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        PyList::new(py, &self.current().notes)
+    }
 }
 
 /// Steps several simulations at once, each on a thread of its own (up to `threads`, default:

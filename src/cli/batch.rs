@@ -43,7 +43,8 @@ pub struct BatchArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
-    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors.
+    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors;
+    /// notes (a smaller step hexsim chose) are not warnings.
     #[arg(long)]
     strict: bool,
 }

@@ -113,22 +113,37 @@ impl Cli {
     }
 }
 
-/// Prints the scenarios' warnings (a missing visual mesh, a gait with too few feet down), each
-/// once; with `strict` they are errors.
+/// Prints the scenarios' notes (a step hexsim chose) and warnings (a missing visual mesh, a gait
+/// with too few feet down), each once; with `strict` the warnings are errors, the notes not: a
+/// note says what hexsim chose, nothing doubtful in the input.
 pub(crate) fn warn_about<'a>(
     scenarios: impl IntoIterator<Item = &'a Scenario>,
     strict: bool,
 ) -> Result<()> {
-    // each warning once, with the scenarios it concerns (all of them, or up to a few by name)
     let scenarios: Vec<&Scenario> = scenarios.into_iter().collect();
-    let mut warnings: std::collections::BTreeMap<&String, Vec<&str>> = Default::default();
-    for s in &scenarios {
-        for w in &s.warnings {
-            warnings.entry(w).or_default().push(s.name.as_str());
+    say_once(&scenarios, "note", |s| &s.notes);
+    let level = if strict { "error" } else { "warning" };
+    let warnings = say_once(&scenarios, level, |s| &s.warnings);
+    if strict && warnings > 0 {
+        anyhow::bail!(
+            "{} warning{} treated as errors (--strict); nothing was run",
+            warnings,
+            if warnings == 1 { "" } else { "s" }
+        );
+    }
+    Ok(())
+}
+
+/// Prints each of the scenarios' messages that `of` picks once, at `level`, with the scenarios
+/// it concerns (all of them, or up to a few by name); returns how many there were.
+fn say_once(scenarios: &[&Scenario], level: &str, of: impl Fn(&Scenario) -> &Vec<String>) -> usize {
+    let mut said: std::collections::BTreeMap<&String, Vec<&str>> = Default::default();
+    for s in scenarios {
+        for m in of(s) {
+            said.entry(m).or_default().push(s.name.as_str());
         }
     }
-    for (warning, names) in &warnings {
-        let level = if strict { "error" } else { "warning" };
+    for (message, names) in &said {
         let whose = if scenarios.len() == 1 {
             String::new()
         } else if names.len() == scenarios.len() {
@@ -138,16 +153,9 @@ pub(crate) fn warn_about<'a>(
         } else {
             format!(" ({}, {} and {} more)", names[0], names[1], names.len() - 2)
         };
-        eprintln!("{level}: {warning}{whose}");
+        eprintln!("{level}: {message}{whose}");
     }
-    if strict && !warnings.is_empty() {
-        anyhow::bail!(
-            "{} warning{} treated as errors (--strict); nothing was run",
-            warnings.len(),
-            if warnings.len() == 1 { "" } else { "s" }
-        );
-    }
-    Ok(())
+    said.len()
 }
 
 /// A progress bar on a terminal, nothing otherwise.

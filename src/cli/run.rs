@@ -158,7 +158,8 @@ pub struct RunArgs {
     /// Run even if dt is above the contact spring's stability limit.
     #[arg(long)]
     allow_unstable_dt: bool,
-    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors.
+    /// Treat warnings (a missing visual mesh, a gait leaving fewer than three feet down) as errors;
+    /// notes (a smaller step hexsim chose) are not warnings.
     #[arg(long)]
     strict: bool,
 }

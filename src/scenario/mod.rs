@@ -62,6 +62,9 @@ pub struct Scenario {
     pub seed: Option<u32>,
     /// What is doubtful but allowed (a missing visual mesh, a gait that lifts too many feet).
     pub warnings: Vec<String>,
+    /// What hexsim chose that the scenario left out, worth saying (a smaller step for a robot
+    /// with light legs): said, never refused (`--strict` refuses warnings only).
+    pub notes: Vec<String>,
     terrain: TerrainSource,
     /// Every setting typed, with its default applied: what `run` runs.
     contact: ContactModel,

@@ -39,14 +39,21 @@ impl Scenario {
         let mut inputs = Inputs::default();
         let terrain = resolve_terrain(&spec, &name, origin, &mut inputs).map_err(fail)?;
         let seed = terrain.spec.seed();
-        let mut warnings = Vec::new();
+        let (mut warnings, mut notes) = (Vec::new(), Vec::new());
         let setup = match spec.kind {
             Kind::Ball => Setup::Ball(resolve_ball(&spec, &contact).map_err(fail)?),
             Kind::Walk => {
                 let walls = impulse_against_walls(&spec, &terrain).map_err(fail)?;
                 Setup::Walk(Box::new(
-                    resolve_walk(&spec, &mut contact, base, walls, &mut inputs, &mut warnings)
-                        .map_err(fail)?,
+                    resolve_walk(
+                        &spec,
+                        &mut contact,
+                        base,
+                        walls,
+                        &mut inputs,
+                        (&mut warnings, &mut notes),
+                    )
+                    .map_err(fail)?,
                 ))
             }
         };
@@ -76,6 +83,7 @@ impl Scenario {
             spec,
             seed,
             warnings,
+            notes,
             terrain,
             contact,
             log_rate,
@@ -362,7 +370,7 @@ fn resolve_walk(
     base: &Path,
     walls: bool,
     inputs: &mut Inputs,
-    warnings: &mut Vec<String>,
+    (warnings, notes): (&mut Vec<String>, &mut Vec<String>),
 ) -> Result<WalkSetup, String> {
     if spec.ball.is_some() {
         return Err("ball: applies to ball scenarios; set kind = \"ball\"".into());
@@ -442,6 +450,7 @@ fn resolve_walk(
         servo.stiffness.is_some(),
         contact_step,
         warnings,
+        notes,
     )?;
     let commands = resolve_commands(spec, &gait.gait)?;
     if let Some(start) = spec.start
@@ -597,12 +606,13 @@ fn resolve_commands(spec: &ScenarioSpec, gait: &Gait) -> Result<CommandSchedule,
 mod tests {
     use std::path::Path;
 
-    /// The step a walk scenario resolves to, and its warnings.
+    /// The step a walk scenario resolves to, and its warnings and notes.
     fn step_of(text: &str) -> (f64, Vec<String>) {
         let table: toml::Table = text.parse().unwrap();
         let scenario =
             super::super::from_table(table, "t".into(), Path::new("/nonexistent/t.toml")).unwrap();
-        (scenario.spec.dt(), scenario.warnings)
+        let said = [scenario.warnings, scenario.notes].concat();
+        (scenario.spec.dt(), said)
     }
 
     const STAIRS: &str = r#"

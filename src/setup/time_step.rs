@@ -248,7 +248,8 @@ fn touchdown_step(
 /// it ([`SERVO_STEP_LIMIT`]; both articulations damp their servos implicitly), and warned when
 /// it is larger than the contact spring or the landing feet allow (`contact`), naming the bound
 /// and the step hexsim would choose — else the default, or 1 ms / n with the least n all of
-/// them allow (said in a warning). `stiffness_given`: the servo's, for the message.
+/// them allow (said in a note: hexsim's own choice, nothing doubtful in the input, so `--strict`
+/// does not refuse it). `stiffness_given`: the servo's, for the message.
 #[allow(clippy::too_many_arguments)]
 pub fn choose(
     requested: Requested,
@@ -258,6 +259,7 @@ pub fn choose(
     stiffness_given: bool,
     contact: ContactStep,
     warnings: &mut Vec<String>,
+    notes: &mut Vec<String>,
 ) -> Result<f64, String> {
     let inertias = crate::robot::servo::outboard_inertias(robot, pose);
     let Some((joint, inertia)) = robot
@@ -321,7 +323,7 @@ pub fn choose(
             Ok(dt)
         }
         None if chosen < DEFAULT_DT => {
-            warnings.push(format!(
+            notes.push(format!(
                 "dt: {:.3} ms, not the default 1 ms: {why} (set dt to choose another)",
                 chosen * 1e3
             ));
@@ -397,15 +399,16 @@ mod tests {
         }
     }
 
-    fn choose_for(
-        w: &Walk,
-        requested: Requested,
-        warnings: &mut Vec<String>,
-    ) -> Result<f64, String> {
+    /// The step chosen for `w`, its warnings and notes said in `said` (a step given past a
+    /// bound is warned, a step chosen is noted).
+    fn choose_for(w: &Walk, requested: Requested, said: &mut Vec<String>) -> Result<f64, String> {
         let contact = contact_step(requested, &w.robot, &w.contact, &w.gait, 3, false)?;
-        choose(
-            requested, &w.robot, &w.pose, w.gains, false, contact, warnings,
-        )
+        let mut notes = Vec::new();
+        let dt = choose(
+            requested, &w.robot, &w.pose, w.gains, false, contact, said, &mut notes,
+        );
+        said.extend(notes);
+        dt
     }
 
     const LEFT_OUT: Requested = Requested {
