@@ -777,6 +777,42 @@ fn a_ten_times_larger_hexapod_walks_like_its_model() {
     assert_eq!(large["walk_flags"], serde_json::json!([]));
 }
 
+/// A robot whose lengths and masses disagree is warned about: olli-io's hexapod with its lengths
+/// ten times as long and its masses as they were (0.0029 kg per cubic metre of its span, against
+/// its own 2.9) — the mark of joint origins given in the world frame or of lengths in another
+/// unit; `--strict` refuses it. The same robot scaled as a whole (masses × 10³) is not.
+#[test]
+fn a_robot_too_light_for_its_size_is_warned() {
+    let model = "tests/data/third_party/olli_hexa/hexa_description/urdf/hexapod.urdf";
+    let text = std::fs::read_to_string(common::project_file(model)).unwrap();
+    let mut long = text.clone();
+    for name in ["xyz", "size", "radius", "length"] {
+        long = scale_attribute(&long, name, 10.0);
+    }
+    let whole = scale_attribute(&long, "value", 1e3);
+    let dir = scratch("too_light");
+    let (long_file, whole_file) = (dir.join("olli_long.urdf"), dir.join("olli_whole.urdf"));
+    std::fs::write(&long_file, long).unwrap();
+    std::fs::write(&whole_file, whole).unwrap();
+    let warned = "per cubic metre of its span";
+    let report = robot_report(long_file.to_str().unwrap());
+    assert!(
+        report.contains("the robot weighs 2.200 kg and spans 9.07")
+            && report.contains(warned)
+            && report.contains("exploded CAD export"),
+        "{report}"
+    );
+    let out = hexsim()
+        .args(["robot", long_file.to_str().unwrap(), "--strict"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    for fine in [model, whole_file.to_str().unwrap()] {
+        let report = robot_report(fine);
+        assert!(!report.contains(warned), "{report}");
+    }
+}
+
 /// Impulse joints walk light legs as the multibody does, at the step hexsim chooses for them:
 /// the servo's damper is solved implicitly with the joints. While it was explicit, ant_bot's
 /// servos rang from 7 ms into the drop at its 0.5 ms (`servo_ringing`) and its walk diverged

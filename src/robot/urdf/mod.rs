@@ -248,6 +248,7 @@ fn build_holding(
     };
     check_size(&model)?;
     inertials::warn_implausible_inertias(&mut model)?;
+    inertials::warn_implausible_density(&mut model);
     unstated.fill(&mut model);
     Ok(model)
 }
