@@ -132,6 +132,8 @@ fn the_ladder_families_are_built_in() {
             .unwrap();
     assert_eq!(json["families"][0]["family"], "rough");
     assert_eq!(json["runs"].as_array().unwrap().len(), 10, "{json}");
+    // every link of hex18 touches: nothing to caveat
+    assert_eq!(json["caveats"], serde_json::json!([]), "{json}");
     let records = std::fs::read_to_string(dir.join("out/results.jsonl")).unwrap();
     assert!(
         records.contains("\"gaits/tripod.toml (built in)\""),
@@ -143,6 +145,43 @@ fn the_ladder_families_are_built_in() {
         stderr.contains("stair: no such scenario file or folder, nor a built-in family (gaps, "),
         "{stderr}"
     );
+}
+
+/// A robot some of whose links have no collision geometry (elkapod: only its feet touch) gets a
+/// caveat under its ladder's table and in its JSON: its levels are those of a robot whose body
+/// and legs pass through the terrain.
+#[test]
+fn a_ladder_says_which_links_do_not_touch() {
+    let dir = scratch("ladder-caveat");
+    let family = dir.join("flat.toml");
+    std::fs::write(
+        &family,
+        "duration = 1.0\n[terrain.source]\nkind = \"slope\"\nangle_deg = 0.0\nsize = [4.0, 4.0]\n[expect]\nforward_min = 0.02\n[sweep]\n\"terrain.source.angle_deg\" = [0.0, 1.0]\n",
+    )
+    .unwrap();
+    let elkapod = common::project_file(
+        "tests/data/third_party/elkapod/elkapod_description/urdf/elkapod.urdf",
+    );
+    let out = hexsim()
+        .arg("ladder")
+        .arg(&family)
+        .arg("--robot")
+        .arg(&elkapod)
+        .arg("-o")
+        .arg(dir.join("out"))
+        .arg("-q")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let caveat = "Caveat: 13 of elkapod's 19 links have no collision geometry hexsim could read";
+    assert!(stdout.contains(caveat), "{stdout}");
+    let table = std::fs::read_to_string(dir.join("out/ladder.md")).unwrap();
+    assert!(table.contains(caveat), "{table}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/ladder.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["caveats"].as_array().unwrap().len(), 1, "{json}");
 }
 
 /// A family that sweeps two difficulties at once is refused, naming the file.

@@ -76,7 +76,8 @@ pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
         },
     };
     let outcome = batch::run(&scenarios, &options)?;
-    let result = hexsim::ladder::summarise(&robot, &families, &rungs, &outcome.records);
+    let mut result = hexsim::ladder::summarise(&robot, &families, &rungs, &outcome.records);
+    result.caveats = hexsim::ladder::caveats(&scenarios);
     let table = result.table(&families);
     out!("\n{table}");
     use hexsim::ladder::Outcome;

@@ -198,6 +198,7 @@ mod tests {
                 run(0.02, true, Outcome::Crossed, 1e-3),
                 run(0.04, true, Outcome::Scrambled, 6e-3),
             ],
+            caveats: Vec::new(),
         };
         let svg = svg(&result);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));

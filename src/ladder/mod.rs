@@ -180,6 +180,8 @@ pub struct LadderResult {
     pub robot: String,
     pub families: Vec<FamilySummary>,
     pub runs: Vec<RungResult>,
+    /// What the levels do not show, said under the table ([`caveats`]).
+    pub caveats: Vec<String>,
 }
 
 /// The ladder's families, its runs, and their scenarios (name-sorted, as a batch runs them).
@@ -481,7 +483,40 @@ pub fn summarise(
         robot: robot.to_string(),
         families,
         runs,
+        caveats: Vec::new(),
     }
+}
+
+/// What a ladder's levels do not show about its robots: links that touch nothing
+/// ([`crate::robot::RobotModel::links_without_contact`]) pass through the terrain, so the levels are those of
+/// a robot touching with its other links alone, and a body or shin on a riser goes unfelt.
+pub fn caveats(scenarios: &[Scenario]) -> Vec<String> {
+    let mut robots: Vec<&crate::robot::RobotModel> = Vec::new();
+    for robot in scenarios.iter().filter_map(Scenario::robot) {
+        if !robots.iter().any(|r| r.source == robot.source) {
+            robots.push(robot);
+        }
+    }
+    robots
+        .into_iter()
+        .filter_map(|robot| {
+            let untouching = robot.links_without_contact();
+            let first = untouching.first()?;
+            let more = match untouching.len() - 1 {
+                0 => String::new(),
+                n => format!(" and {n} more"),
+            };
+            Some(format!(
+                "{} of {}'s {} links have no collision geometry hexsim could read ({first}{more}): \
+                 they pass through the terrain, so these levels are of a robot that touches it \
+                 with its other {} links only",
+                untouching.len(),
+                robot.name,
+                robot.links.len(),
+                robot.links.len() - untouching.len()
+            ))
+        })
+        .collect()
 }
 
 impl LadderResult {
@@ -536,6 +571,9 @@ impl LadderResult {
                     summary.perceptive_as_commanded_stopped_by
                 ),
             ));
+        }
+        for caveat in &self.caveats {
+            out.push_str(&format!("\nCaveat: {caveat}.\n"));
         }
         out
     }

@@ -212,6 +212,17 @@ impl RobotModel {
         self.links.iter().map(|l| l.mass).sum()
     }
 
+    /// The links that touch nothing: neither a foot nor collision geometry hexsim could read
+    /// (none in the URDF, or its meshes missing). They pass through the terrain: a belly let
+    /// down on the ground or a shin against a riser is not felt there.
+    pub fn links_without_contact(&self) -> Vec<&str> {
+        self.links
+            .iter()
+            .filter(|l| l.foot.is_none() && l.contacts.is_empty())
+            .map(|l| l.name.as_str())
+            .collect()
+    }
+
     /// Joint angles per model joint from each leg's (in `legs` order).
     pub fn pose_from_legs(&self, angles: &[impl AsRef<[f64]>]) -> Vec<f64> {
         let mut pose = vec![0.0; self.joints.len()];
