@@ -488,12 +488,15 @@ pub fn summarise(
 }
 
 /// What a ladder's levels do not show about its robots: links that touch nothing
-/// ([`crate::robot::RobotModel::links_without_contact`]) pass through the terrain, so the levels are those of
-/// a robot touching with its other links alone, and a body or shin on a riser goes unfelt.
+/// ([`crate::robot::RobotModel::links_without_contact`]) pass through the terrain, so the levels
+/// are those of a robot touching with its other links alone, a body or shin on a riser unfelt.
 pub fn caveats(scenarios: &[Scenario]) -> Vec<String> {
     let mut robots: Vec<&crate::robot::RobotModel> = Vec::new();
     for robot in scenarios.iter().filter_map(Scenario::robot) {
-        if !robots.iter().any(|r| r.source == robot.source) {
+        if !robots
+            .iter()
+            .any(|r| (&r.name, &r.source) == (&robot.name, &robot.source))
+        {
             robots.push(robot);
         }
     }
