@@ -74,6 +74,14 @@ def test_reset_starts_again_and_its_seed_is_the_terrains():
     np.testing.assert_array_equal(sim.state()["joint_angles"], first["joint_angles"])
 
 
+def test_a_step_hexsim_chose_is_a_note_not_a_warning(root):
+    kraby = root / "tests/data/third_party/kraby/hexapod.urdf"
+    sim = hexsim.Simulation(robot=str(kraby), duration=0.01)
+    assert sim.dt == 0.00025
+    assert any(n.startswith("dt: 0.250 ms, not the default 1 ms") for n in sim.notes), sim.notes
+    assert not any(w.startswith("dt:") for w in sim.warnings), sim.warnings
+
+
 def test_state_shapes_and_units():
     sim = hexsim.Simulation(duration=1.0)
     sim.step(sim.remaining)
