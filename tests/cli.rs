@@ -719,6 +719,8 @@ fn a_walk_off_the_terrain_grid_is_flagged() {
     // 0.3 m at about 0.12 m/s: off the grid after about 2.5 s of the 6
     assert!(off > 2.0 && off < 4.5, "{off} s off the terrain");
     assert!(stdout.contains("beyond the terrain's grid"), "{stdout}");
+    // the paper's terrain is 4 m long: the warning names its continuation
+    assert!(stdout.contains("`--terrain natural_long`"), "{stdout}");
     let (on, stdout) = walk("-1.0", "inside");
     assert_eq!(on, 0.0);
     assert!(!stdout.contains("beyond the terrain's grid"), "{stdout}");

@@ -330,8 +330,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         mm(&m.foot_scuff)
     );
     if m.time_off_terrain > 0.0 {
+        // the default terrain is 4 m long: a robot 1–2 m across walks off it in a few seconds
+        let longer = if terrain_name.starts_with(hexsim::scenario::builtin::NATURAL.path) {
+            " (`--terrain natural_long`: the same terrain continued to 12 m along +x)"
+        } else {
+            ""
+        };
         out!(
-            "  warning: the body was beyond the terrain's grid for {:.2} s, walking on the flat apron that extends the grid's edges: those seconds are no walk on that terrain",
+            "  warning: the body was beyond the terrain's grid for {:.2} s, walking on the flat apron that extends the grid's edges: those seconds are no walk on that terrain{longer}",
             m.time_off_terrain
         );
     }
