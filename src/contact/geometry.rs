@@ -133,7 +133,7 @@ pub fn faces_from_below(
         }
         return touching.faces(below);
     }
-    if terrain.ceiling_near(center.x, center.y, radius) <= center.z - radius {
+    if terrain.ceiling_at_most(center.x, center.y, radius, center.z - radius) {
         return Faces::single(below);
     }
     Faces::single(
@@ -223,7 +223,7 @@ fn among_walls(
     orientation: Orientation,
     below: SphereGeometry,
 ) -> Faces {
-    if terrain.ceiling_near(center.x, center.y, radius) <= center.z - radius {
+    if terrain.ceiling_at_most(center.x, center.y, radius, center.z - radius) {
         return Faces::single(below);
     }
     let buried = center.z < terrain.height(center.x, center.y);
@@ -317,7 +317,7 @@ fn crease_starts(
     // the sphere's lower surface at REACH·r from its centre's vertical
     let sphere = center.z - radius * (1.0 - REACH * REACH).sqrt();
     // nothing around rises that high (the cells' bounds): no probe can fire
-    if terrain.ceiling_near(center.x, center.y, REACH * radius) <= sphere {
+    if terrain.ceiling_at_most(center.x, center.y, REACH * radius, sphere) {
         return [None; 8];
     }
     // nor, on a smooth grid, can the ground curve up into the sphere this close to the contact:

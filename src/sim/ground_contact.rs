@@ -343,7 +343,7 @@ impl GroundContacts {
     fn near_ground(&mut self, id: usize, center: DVec3, r: f64, terrain: &HeightGrid) -> bool {
         if center.z - r > self.ceiling
             || (self.last_search[id].is_none()
-                && center.z - r > terrain.ceiling_near(center.x, center.y, r))
+                && terrain.ceiling_below(center.x, center.y, r, center.z - r))
         {
             self.slots[id * MAX_FACES..(id + 1) * MAX_FACES].fill(Slot::default());
             self.last_search[id] = None;

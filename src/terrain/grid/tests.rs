@@ -31,6 +31,30 @@ proptest::proptest! {
     }
 }
 
+proptest::proptest! {
+    /// The tests against the ceiling give what comparing with it gives, at levels around it
+    /// and exactly on it: random grids, points and radii.
+    #[test]
+    fn the_tests_against_the_ceiling_are_comparisons_with_it(
+        heights in proptest::collection::vec(-1.0f64..1.0, 30),
+        bicubic in proptest::bool::ANY,
+        x in -0.5f64..2.5,
+        y in -0.5f64..1.5,
+        r in 0.0f64..0.3,
+        shift in -0.5f64..0.5,
+    ) {
+        let interpolation = if bicubic { Interpolation::Bicubic } else { Interpolation::Bilinear };
+        let grid = HeightGrid::new(5, 6, [0.0, 2.0], [0.0, 1.0], heights)
+            .unwrap()
+            .with_interpolation(interpolation);
+        let ceiling = grid.ceiling_near(x, y, r);
+        for level in [ceiling, ceiling + shift, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            proptest::prop_assert_eq!(grid.ceiling_below(x, y, r, level), level > ceiling);
+            proptest::prop_assert_eq!(grid.ceiling_at_most(x, y, r, level), ceiling <= level);
+        }
+    }
+}
+
 #[test]
 fn the_ceiling_covers_catmull_rom_overshoot() {
     // a ridge 0, 1, 1, 0 both ways: Catmull–Rom peaks at 1.125² between the ones, above every
