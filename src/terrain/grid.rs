@@ -547,9 +547,24 @@ impl HeightGrid {
             })
     }
 
-    /// Interpolated height at (x, y).
+    /// Interpolated height at (x, y): [`Self::surface`]'s, bit for bit, without its slopes on a
+    /// smooth grid (the sample's body height reads it every step).
     pub fn height(&self, x: f64, y: f64) -> f64 {
-        self.surface(x, y).height
+        if self.cliffs.is_some() || self.interpolation != Interpolation::Bicubic {
+            return self.surface(x, y).height;
+        }
+        let (j, tx, _) = locate(x, self.x0, self.dx, self.nx);
+        let (i, ty, _) = locate(y, self.y0, self.dy, self.ny);
+        let (wx, wy) = (catmull_rom(tx).0, catmull_rom(ty).0);
+        self.with_patch(i, j, |z| {
+            let mut h = 0.0;
+            for a in 0..4 {
+                let r = z[a];
+                let along = wx[0] * r[0] + wx[1] * r[1] + wx[2] * r[2] + wx[3] * r[3];
+                h += wy[a] * along;
+            }
+            h
+        })
     }
 
     /// The height table's value at (x, y), bilinear between the samples whatever the grid's
@@ -592,35 +607,19 @@ impl HeightGrid {
                 }
             }
             Interpolation::Bicubic => {
-                // the 4×4 samples around the cell; ghosts only at the grid's edge (the contact
-                // search evaluates this a dozen times a step, nearly always inside)
-                let inside = i >= 1 && i + 2 < self.ny && j >= 1 && j + 2 < self.nx;
-                let ghosts: [[f64; 4]; 4];
-                // read in place inside the grid (a copy of the 16 cost as much as their sums)
-                let z: [&[f64; 4]; 4] = if inside {
-                    std::array::from_fn(|a| {
-                        let start = (i + a - 1) * self.nx + j - 1;
-                        self.heights[start..start + 4]
-                            .try_into()
-                            .expect("four samples")
-                    })
-                } else {
-                    ghosts = std::array::from_fn(|a| {
-                        let r = i as isize + a as isize - 1;
-                        std::array::from_fn(|b| self.ghost_sample(r, j as isize + b as isize - 1))
-                    });
-                    std::array::from_fn(|a| &ghosts[a])
-                };
                 // each row blended along x first (its height and x slope), then the rows along
                 // y: 44 products instead of the 96 of weighting each sample by both at once
-                for a in 0..4 {
-                    let r = z[a];
-                    let along = wx[0] * r[0] + wx[1] * r[1] + wx[2] * r[2] + wx[3] * r[3];
-                    let slope = dwx[0] * r[0] + dwx[1] * r[1] + dwx[2] * r[2] + dwx[3] * r[3];
-                    h += wy[a] * along;
-                    hx += wy[a] * slope;
-                    hy += dwy[a] * along;
-                }
+                (h, hx, hy) = self.with_patch(i, j, |z| {
+                    for a in 0..4 {
+                        let r = z[a];
+                        let along = wx[0] * r[0] + wx[1] * r[1] + wx[2] * r[2] + wx[3] * r[3];
+                        let slope = dwx[0] * r[0] + dwx[1] * r[1] + dwx[2] * r[2] + dwx[3] * r[3];
+                        h += wy[a] * along;
+                        hx += wy[a] * slope;
+                        hy += dwy[a] * along;
+                    }
+                    (h, hx, hy)
+                });
             }
         }
         SurfacePoint {
@@ -628,6 +627,31 @@ impl HeightGrid {
             slope_x: if inside_x { hx / self.dx } else { 0.0 },
             slope_y: if inside_y { hy / self.dy } else { 0.0 },
         }
+    }
+
+    /// `blend` of the 4×4 samples around cell (i, j) (rows by y, each by x), a Catmull–Rom
+    /// patch's: ghosts only at the grid's edge (the contact search evaluates a patch a dozen
+    /// times a step, nearly always inside).
+    #[inline(always)]
+    fn with_patch<R>(&self, i: usize, j: usize, blend: impl FnOnce([&[f64; 4]; 4]) -> R) -> R {
+        let inside = i >= 1 && i + 2 < self.ny && j >= 1 && j + 2 < self.nx;
+        let ghosts: [[f64; 4]; 4];
+        // read in place inside the grid (a copy of the 16 cost as much as their sums)
+        let z: [&[f64; 4]; 4] = if inside {
+            std::array::from_fn(|a| {
+                let start = (i + a - 1) * self.nx + j - 1;
+                self.heights[start..start + 4]
+                    .try_into()
+                    .expect("four samples")
+            })
+        } else {
+            ghosts = std::array::from_fn(|a| {
+                let r = i as isize + a as isize - 1;
+                std::array::from_fn(|b| self.ghost_sample(r, j as isize + b as isize - 1))
+            });
+            std::array::from_fn(|a| &ghosts[a])
+        };
+        blend(z)
     }
 
     /// The surface in cell (i, j) at (tx, ty) if the cell is near a cliff (`cliff.rs`): bilinear,
@@ -708,6 +732,7 @@ fn locate(x: f64, origin: f64, spacing: f64, n: usize) -> (usize, f64, bool) {
 }
 
 /// Catmull–Rom weights for samples at −1, 0, 1, 2 and their derivatives with respect to t.
+#[inline]
 fn catmull_rom(t: f64) -> ([f64; 4], [f64; 4]) {
     let t2 = t * t;
     let t3 = t2 * t;
