@@ -281,12 +281,7 @@ impl GroundContacts {
             let Some(c) = self.forces[i] else { continue };
             let point = &self.points[i];
             let torque = (c.point - point.com).cross(c.force);
-            engine.bodies.add_force_and_torque(
-                point.body,
-                c.force.as_vec3(),
-                torque.as_vec3(),
-                true,
-            );
+            engine.add_force_and_torque(point.body, c.force.as_vec3(), torque.as_vec3(), true);
             let sphere = id / MAX_FACES;
             let foot = match sphere {
                 0..6 => Some(sphere),

@@ -185,6 +185,9 @@ impl Hexapod {
             pgs,
             settings.articulation.stabilization_iterations(),
         );
+        if settings.articulation == Articulation::Multibody {
+            engine.track_forces();
+        }
         // body height: each foot and every link's contact sphere above the ground under it
         let link_poses = model.link_poses(pose);
         let heading = match placement.attitude {
@@ -437,11 +440,9 @@ impl Hexapod {
     /// vectors (joint angles, rates, targets, torques, link contacts) are reused, not
     /// allocated, and the sample is not copied: the step loop hands each step the last one's.
     pub fn step_into(&mut self, sample: &mut HexapodSample) {
-        for &h in &self.bodies {
-            // not `bodies[h]`: a body indexed mutably is marked modified, and rapier then redoes
-            // its island, mass and (impulse joints) joint layout work in the step
-            self.engine.bodies.reset_forces_and_torques(h);
-        }
+        // not `bodies[h]`: a body indexed mutably is marked modified, and rapier then redoes its
+        // island, mass and (impulse joints) joint layout work in the step
+        self.engine.reset_forces(&self.bodies);
         self.joints
             .drive(&mut self.engine, &self.targets, &self.angles, &self.rates);
         let frames = std::mem::take(&mut self.frames);

@@ -221,9 +221,8 @@ fn apply_joint_torque(
     torque: f64,
 ) {
     let t = (axis * torque).as_vec3();
-    let set = &mut engine.bodies;
-    set.add_force_and_torque(bodies[joint.child], Vec3::ZERO, t, false);
-    set.add_force_and_torque(bodies[joint.parent], Vec3::ZERO, -t, false);
+    engine.add_force_and_torque(bodies[joint.child], Vec3::ZERO, t, false);
+    engine.add_force_and_torque(bodies[joint.parent], Vec3::ZERO, -t, false);
 }
 
 /// A limit constraint is enabled within this margin (rad) beyond one step's travel of the limit.
