@@ -38,10 +38,10 @@ type Row = [Vec4; CHUNKS];
 /// A group of contact axes: their Jacobian and its solve.
 #[derive(Clone)]
 struct Group<const D: usize> {
-    /// Aᵀ: per degree of freedom, each contact axis' Jacobian entry.
+    /// Aᵀ: per degree of freedom, each contact axis' Jacobian entry; after
+    /// [`Mobility::compute`], Y = U⁻¹·Aᵀ, solved in place (Aᵀ is not read again: each step sets
+    /// it anew, and a copy to solve in was 200 instructions of a step).
     jacobian: [Row; D],
-    /// Y = U⁻¹·Aᵀ, solved in place.
-    solved: [Row; D],
     /// D⁻¹·Y.
     scaled: [Row; D],
 }
@@ -50,7 +50,6 @@ impl<const D: usize> Default for Group<D> {
     fn default() -> Self {
         Group {
             jacobian: [[Vec4::ZERO; CHUNKS]; D],
-            solved: [[Vec4::ZERO; CHUNKS]; D],
             scaled: [[Vec4::ZERO; CHUNKS]; D],
         }
     }
@@ -97,7 +96,7 @@ impl<const D: usize> Mobility<D> {
 
     /// Sets contact axis `axis`'s Jacobian entry for degree of freedom `dof` (room made by
     /// [`Mobility::reserve`]). Every entry of the axes [`Mobility::compute`] is asked for must be
-    /// set (entries are kept between steps).
+    /// set (it solves in place: what is left is not Aᵀ).
     #[cfg(test)]
     fn set(&mut self, dof: usize, axis: usize, value: f32) {
         let (group, lane) = (axis / GROUP_AXES, axis % GROUP_AXES);
@@ -149,9 +148,7 @@ impl<const D: usize> Mobility<D> {
         let needed = needed_rows::<CHUNKS, D>(&self.groups[..groups], axes, factors.parents());
         for g in 0..groups {
             let valid = lanes(axes - g * GROUP_AXES);
-            let group = &mut self.groups[g];
-            group.solved = group.jacobian;
-            solve::<CHUNKS, D>(group, factors, &needed, &valid);
+            solve::<CHUNKS, D>(&mut self.groups[g], factors, &needed, &valid);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
@@ -159,7 +156,7 @@ impl<const D: usize> Mobility<D> {
         for g in 0..groups {
             let rows = g * GROUP_AXES..axes.min((g + 1) * GROUP_AXES);
             for d in (0..D).filter(|&d| needed[d]) {
-                let y_row = self.groups[g].solved[d];
+                let y_row = self.groups[g].jacobian[d];
                 for a in rows.clone() {
                     let lane = a - g * GROUP_AXES;
                     let coefficient = y_row[lane / LANE].as_ref()[lane % LANE];
@@ -183,7 +180,6 @@ impl<const D: usize> Mobility<D> {
     fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
         let needed = needed_rows::<C, D>(&self.groups[..1], axes, factors.parents());
         let group = &mut self.groups[0];
-        group.solved = group.jacobian;
         solve::<C, D>(group, factors, &needed, &lanes(axes));
         // W = Yᵀ·(D⁻¹·Y), row a = Σ_d Y[d][a]·(D⁻¹·Y)[d] (Y is sparse: a foot moves with the
         // root and its leg, and a row without entries, not needed, adds nothing)
@@ -192,7 +188,7 @@ impl<const D: usize> Mobility<D> {
             *row = [Vec4::ZERO; CHUNKS];
         }
         // (Y's row read as one run of lanes: no lane index computed per entry)
-        let rows = group.solved.iter().zip(group.scaled.iter()).zip(needed);
+        let rows = group.jacobian.iter().zip(group.scaled.iter()).zip(needed);
         for ((y_row, z_row), _) in rows.filter(|(_, needed)| *needed) {
             let coefficients: [[f32; LANE]; C] = std::array::from_fn(|c| y_row[c].to_array());
             for (w_row, &coefficient) in product.iter_mut().zip(coefficients.as_flattened()) {
@@ -300,7 +296,7 @@ fn needed_rows<const C: usize, const D: usize>(
     needed
 }
 
-/// Y = U⁻¹·Aᵀ in place in `group.solved` (holding Aᵀ) from the tree factors (column-major,
+/// Y = U⁻¹·Aᵀ in place in `group.jacobian` (holding Aᵀ) from the tree factors (column-major,
 /// entries only between a degree of freedom and its ancestors), and D⁻¹·Y into `group.scaled`;
 /// `C` chunks of lanes. Only the rows `needed` ([`needed_rows`]) are scaled; the others are left
 /// as they are, and the product never reads them.
@@ -316,7 +312,7 @@ fn solve<const C: usize, const D: usize>(
 ) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
-    let (y, scaled) = (&mut group.solved, &mut group.scaled);
+    let (y, scaled) = (&mut group.jacobian, &mut group.scaled);
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
     for k in (0..D).rev() {
         let yk = y[k];
