@@ -233,7 +233,7 @@ impl GroundContacts {
         }
         self.velocities.clear();
         self.velocities.resize(n, DVec3::ZERO);
-        self.mobility.clear();
+        // every block written by `contact_mobility`: not cleared first
         self.mobility.resize(n * n, DMat3::ZERO);
         joints.contact_mobility(
             engine,
