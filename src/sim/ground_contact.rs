@@ -144,9 +144,10 @@ impl GroundContacts {
     }
 
     /// Finds the feet and link spheres touching `terrain`, solves their forces under `contact`,
-    /// applies them to the links, and returns each leg's foot force (None: in the air) and the
-    /// other links' contacts into `link_contacts`. `frames` are the world poses of every model
-    /// link; `bodies` the rapier body per model link.
+    /// applies them to the links, and writes each leg's foot force (None: in the air) into `feet`
+    /// (in place: a copy of the six was 150 instructions) and the other links' contacts into
+    /// `link_contacts`. `frames` are the world poses of every model link; `bodies` the rapier
+    /// body per model link.
     #[allow(clippy::too_many_arguments)]
     pub fn apply(
         &mut self,
@@ -158,7 +159,8 @@ impl GroundContacts {
         contact: &ContactModel,
         frames: &[DAffine3],
         link_contacts: &mut Vec<LinkContact>,
-    ) -> [Option<ContactForce>; 6] {
+        feet: &mut [Option<ContactForce>; 6],
+    ) {
         self.ids.clear();
         self.points.clear();
         self.inputs.clear();
@@ -273,12 +275,12 @@ impl GroundContacts {
                 &mut self.forces,
             );
         }
-        let mut feet: [Option<ContactForce>; 6] = [None; 6];
+        *feet = [None; 6];
         link_contacts.clear();
         for i in 0..n {
             let id = self.ids[i];
             self.slots[id].state = self.scratch_states[i];
-            let Some(c) = self.forces[i] else { continue };
+            let Some(c) = &self.forces[i] else { continue };
             let point = &self.points[i];
             let torque = (c.point - point.com).cross(c.force);
             engine.add_force_and_torque(point.body, c.force.as_vec3(), torque.as_vec3(), true);
@@ -291,18 +293,17 @@ impl GroundContacts {
                 // a foot pressing into several faces, or with its sole, reports them as one
                 // contact
                 match &mut feet[foot] {
-                    Some(foot) => foot.merge(&c),
-                    none => *none = Some(c),
+                    Some(foot) => foot.merge(c),
+                    none => *none = Some(*c),
                 }
             } else {
                 link_contacts.push(LinkContact {
                     link: point.link,
                     radius: self.spheres[sphere - 6].radius,
-                    force: c,
+                    force: *c,
                 });
             }
         }
-        feet
     }
 
     /// Adds sphere `sphere` of link `link` (posed by `frame`) to this step's contacts, one per

@@ -446,7 +446,8 @@ impl Hexapod {
         self.joints
             .drive(&mut self.engine, &self.targets, &self.angles, &self.rates);
         let frames = std::mem::take(&mut self.frames);
-        let contacts = self.ground.apply(
+        // the feet's forces written over the last step's in place (nothing reads those again)
+        self.ground.apply(
             &mut self.engine,
             self.joints.as_mut(),
             &self.model,
@@ -455,6 +456,7 @@ impl Hexapod {
             &self.contact,
             &frames,
             &mut self.last_link_contacts,
+            &mut self.last_contacts,
         );
         self.frames = frames;
         let started = std::time::Instant::now();
@@ -466,7 +468,6 @@ impl Hexapod {
         if self.step.is_multiple_of(DRIFT_EVERY) {
             self.drift = self.joint_drift();
         }
-        self.last_contacts = contacts;
         let time = self.time();
         self.ringing
             .update(time, self.engine.dt(), &self.rates, &self.last_contacts);
