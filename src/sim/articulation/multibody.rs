@@ -354,6 +354,9 @@ fn contact_mobility_in<const D: usize>(
         let r = glam::Vec3A::new(arm.x as f32, arm.y as f32, arm.z as f32);
         let axes = [c.frame.tangent_x, c.frame.tangent_y, c.frame.normal]
             .map(|a| glam::Vec3A::from(a.as_vec3()));
+        // the axes as rows: this times a column gives the three axes' dot products in its
+        // lanes, each the same products summed in the same order as `dot`'s ((x + y) + z)
+        let along = glam::Mat3A::from_cols(axes[0], axes[1], axes[2]).transpose();
         let mut velocity = glam::Vec3A::ZERO;
         let mut rows = scratch.contact(i);
         for &dof in path {
@@ -362,7 +365,7 @@ fn contact_mobility_in<const D: usize>(
             let angular = glam::Vec3A::from_slice(&column[3..]);
             let point = linear - r.cross(angular);
             velocity += point * q_dot[dof];
-            rows.set(dof, axes.map(|axis| axis.dot(point)));
+            rows.set(dof, (along * point).to_array());
         }
         velocities[i] = glam::Vec3::from(velocity).as_dvec3();
     }
