@@ -63,6 +63,12 @@ pub struct Mobility<const D: usize = DOFS> {
     product: Vec<Row>,
     /// Groups in use by the last [`Mobility::compute`].
     in_use: usize,
+    /// The degrees of freedom whose Jacobian entries were set since [`Mobility::begin`]: the
+    /// contacts' paths from the root, each with its ancestors.
+    set_rows: [bool; D],
+    /// Tests: the rows read found by their entries ([`needed_rows`]), as before the rows set.
+    #[cfg(test)]
+    by_entries: bool,
 }
 
 impl<const D: usize> Default for Mobility<D> {
@@ -71,6 +77,9 @@ impl<const D: usize> Default for Mobility<D> {
             groups: vec![Group::default()],
             product: vec![[Vec4::ZERO; CHUNKS]; GROUP_AXES],
             in_use: 1,
+            set_rows: [false; D],
+            #[cfg(test)]
+            by_entries: false,
         }
     }
 }
@@ -92,6 +101,7 @@ impl<const D: usize> Mobility<D> {
         for group in &mut self.groups[..groups] {
             group.jacobian = [[Vec4::ZERO; CHUNKS]; D];
         }
+        self.set_rows = [false; D];
     }
 
     /// Sets contact axis `axis`'s Jacobian entry for degree of freedom `dof` (room made by
@@ -101,10 +111,13 @@ impl<const D: usize> Mobility<D> {
     fn set(&mut self, dof: usize, axis: usize, value: f32) {
         let (group, lane) = (axis / GROUP_AXES, axis % GROUP_AXES);
         self.groups[group].jacobian[dof][lane / LANE].as_mut()[lane % LANE] = value;
+        self.set_rows[dof] = true;
     }
 
     /// The Jacobian entries of contact `i`'s three axes (t₁, t₂, n are axes 3i, 3i + 1, 3i + 2;
-    /// room made by [`Mobility::begin`]): one lookup of its group for all its entries.
+    /// room made by [`Mobility::begin`]): one lookup of its group for all its entries. Set every
+    /// degree of freedom on the contact's path from the root (each with its ancestors), those
+    /// whose entries are zero too: [`Mobility::compute`] solves and multiplies on those rows.
     #[inline]
     pub fn contact(&mut self, i: usize) -> ContactAxes<'_, D> {
         let first = 3 * i;
@@ -114,6 +127,7 @@ impl<const D: usize> Mobility<D> {
         });
         ContactAxes {
             jacobian: &mut self.groups[first / GROUP_AXES].jacobian,
+            set_rows: &mut self.set_rows,
             lanes,
         }
     }
@@ -178,7 +192,24 @@ impl<const D: usize> Mobility<D> {
 
     /// [`Mobility::compute`] for one group of axes, `C` chunks of them.
     fn one_group<const C: usize>(&mut self, factors: &TreeLu, axes: usize) {
-        let needed = needed_rows::<C, D>(&self.groups[..1], axes, factors.parents());
+        // the rows set, not those [`needed_rows`] finds by their entries: a superset (a row with
+        // an entry was set, and so were its ancestors, on the same path), whose extra rows are
+        // zero in every lane of this step's axes, and stay so (a zero row adds to no ancestor
+        // in the solve), so the product, which skips zero coefficients, reads nothing of them
+        // and W is the same bit for bit; without a scan of every row's lanes
+        let needed = self.set_rows;
+        #[cfg(test)]
+        let needed = if self.by_entries {
+            needed_rows::<C, D>(&self.groups[..1], axes, factors.parents())
+        } else {
+            needed
+        };
+        debug_assert!(
+            (0..D).all(|k| !needed[k]
+                || factors.parents()[k] == NO_PARENT
+                || needed[factors.parents()[k]]),
+            "the rows set are closed under their ancestors"
+        );
         let group = &mut self.groups[0];
         solve::<C, D>(group, factors, &needed, &lanes(axes));
         // W = Yᵀ·(D⁻¹·Y), row a = Σ_d Y[d][a]·(D⁻¹·Y)[d] (Y is sparse: a foot moves with the
@@ -229,6 +260,7 @@ impl<const D: usize> Mobility<D> {
 /// One contact's three axes in its group's Jacobian ([`Mobility::contact`]).
 pub struct ContactAxes<'a, const D: usize> {
     jacobian: &'a mut [Row; D],
+    set_rows: &'a mut [bool; D],
     /// Each axis' chunk and lane in a row, found once for all the contact's entries.
     lanes: [(usize, usize); 3],
 }
@@ -241,6 +273,7 @@ impl<const D: usize> ContactAxes<'_, D> {
         for (&(chunk, lane), value) in self.lanes.iter().zip(values) {
             row[chunk].as_mut()[lane] = value;
         }
+        self.set_rows[dof] = true;
     }
 }
 
@@ -462,6 +495,57 @@ mod tests {
                     error <= 1e-4 * expected.amax(),
                     "W[{r}][{c}] off by {error}"
                 );
+            }
+        }
+    }
+
+    /// The rows set (the contacts' paths) read instead of those found by their entries: W bit
+    /// for bit the same, with path rows whose entries are zero (a foot's last joint that does
+    /// not move it along any axis), and a step with fewer contacts after one with more.
+    #[test]
+    fn the_rows_set_give_the_same_w_as_the_rows_with_entries() {
+        let parents = parents();
+        let m = mass(&parents);
+        let mut factors = TreeLu::default();
+        factors.factorize(&m, &parents);
+        let mut by_paths = Mobility::<DOFS>::default();
+        let mut by_entries = Mobility::<DOFS> {
+            by_entries: true,
+            ..Default::default()
+        };
+        for (step, legs) in [[0, 2, 4, 5], [1, 3, 5, 0], [2, 4, 0, 0]]
+            .iter()
+            .enumerate()
+        {
+            let n = if step == 2 { 2 } else { 4 };
+            for mobility in [&mut by_paths, &mut by_entries] {
+                mobility.begin(3 * n);
+                for (i, &leg) in legs[..n].iter().enumerate() {
+                    let mut axes = mobility.contact(i);
+                    let path = (0..6).chain(6 + 3 * leg..9 + 3 * leg);
+                    for dof in path {
+                        let value = |a: usize| {
+                            let x = ((dof * 7 + a * 5 + i * 3 + step) % 13) as f32 / 13.0 - 0.4;
+                            // the leaf's row zero on the first contact, an entry zero here and there
+                            if (i == 0 && dof == 8 + 3 * leg) || x.abs() < 0.05 {
+                                0.0
+                            } else {
+                                x
+                            }
+                        };
+                        axes.set(dof, [value(0), value(1), value(2)]);
+                    }
+                }
+                assert!(mobility.compute(&factors, 3 * n));
+            }
+            for a in 0..3 * n {
+                for b in 0..3 * n {
+                    assert_eq!(
+                        by_paths.w(a, b).to_bits(),
+                        by_entries.w(a, b).to_bits(),
+                        "step {step}: W[{a}][{b}]"
+                    );
+                }
             }
         }
     }
