@@ -162,7 +162,7 @@ impl<const D: usize> Mobility<D> {
         let needed = needed_rows::<CHUNKS, D>(&self.groups[..groups], axes, factors.parents());
         for g in 0..groups {
             let valid = lanes(axes - g * GROUP_AXES);
-            solve::<CHUNKS, D>(&mut self.groups[g], factors, &needed, &valid);
+            solve::<CHUNKS, D>(&mut self.groups[g], factors, &needed, &valid, None);
         }
         for row in &mut self.product[..axes * groups] {
             *row = [Vec4::ZERO; CHUNKS];
@@ -211,7 +211,11 @@ impl<const D: usize> Mobility<D> {
             "the rows set are closed under their ancestors"
         );
         let group = &mut self.groups[0];
-        solve::<C, D>(group, factors, &needed, &lanes(axes));
+        #[cfg(test)]
+        let rows_set = (!self.by_entries).then_some(&self.set_rows);
+        #[cfg(not(test))]
+        let rows_set = Some(&self.set_rows);
+        solve::<C, D>(group, factors, &needed, &lanes(axes), rows_set);
         // W = Yᵀ·(D⁻¹·Y), row a = Σ_d Y[d][a]·(D⁻¹·Y)[d] (Y is sparse: a foot moves with the
         // root and its leg, and a row without entries, not needed, adds nothing)
         let product = &mut self.product[..axes];
@@ -342,6 +346,7 @@ fn solve<const C: usize, const D: usize>(
     factors: &TreeLu,
     needed: &[bool; D],
     valid: &Lanes,
+    rows_set: Option<&[bool; D]>,
 ) {
     let parents = factors.parents();
     let a = factors.factors().as_slice();
@@ -349,7 +354,16 @@ fn solve<const C: usize, const D: usize>(
     // U·Y = Aᵀ (unit upper): from the leaves up, a solved row updates its ancestors'
     for k in (0..D).rev() {
         let yk = y[k];
-        if !has_entry::<C>(&yk, valid) {
+        // the rows set, where known ([`Mobility::contact`]: the rows unset are zero in every
+        // lane), else the rows with an entry in this step's lanes; a row set and zero in them
+        // all subtracts zeros, which change no bit of a non-zero entry, and the product reads
+        // none of the zero ones (it skips zero coefficients, and adds a zero term to a sum that
+        // starts at +0 and so is never −0)
+        let solved = match rows_set {
+            Some(set) => set[k],
+            None => has_entry::<C>(&yk, valid),
+        };
+        if !solved {
             continue;
         }
         let mut i = parents[k];
