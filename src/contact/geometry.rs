@@ -113,30 +113,59 @@ pub fn faces_from_below(
     below: SphereGeometry,
     last: &mut Option<(f64, f64)>,
 ) -> Faces {
+    let mut faces = Faces::single(below);
+    faces_from_below_into(
+        terrain,
+        center,
+        radius,
+        orientation,
+        below,
+        last,
+        &mut faces,
+    );
+    faces
+}
+
+/// [`faces_from_below`] written over `out` (any faces), for a loop over the feet: a single face
+/// (nearly always) is written alone, not a whole [`Faces`] built and copied out (420 bytes, for
+/// each foot on the ground every step).
+pub fn faces_from_below_into(
+    terrain: &HeightGrid,
+    center: DVec3,
+    radius: f64,
+    orientation: Orientation,
+    below: SphereGeometry,
+    last: &mut Option<(f64, f64)>,
+    out: &mut Faces,
+) {
     let cliffs = terrain.has_cliffs();
     *last = (!cliffs && below.penetration > 0.0)
         .then_some((below.point.x - center.x, below.point.y - center.y));
     if cliffs {
-        return among_walls(terrain, center, radius, orientation, below);
+        *out = among_walls(terrain, center, radius, orientation, below);
+        return;
     }
     if below.penetration > 0.0 {
         // a second face of a crease the sphere sits in, found from the side it rises on (none
         // to look for, nearly always: the one face, as `Touching::faces` gives a single one)
         let starts = crease_starts(terrain, center, radius, &below);
         if starts.iter().all(Option::is_none) {
-            return Faces::single(below);
+            out.set_single(below);
+            return;
         }
         let mut touching = Touching::default();
         touching.add(below);
         for start in starts.into_iter().flatten() {
             touching.add(closest_from(terrain, center, radius, orientation, start));
         }
-        return touching.faces(below);
+        *out = touching.faces(below);
+        return;
     }
     if terrain.ceiling_at_most(center.x, center.y, radius, center.z - radius) {
-        return Faces::single(below);
+        out.set_single(below);
+        return;
     }
-    Faces::single(
+    out.set_single(
         [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
             .map(|(u, v)| (center.x + u * radius, center.y + v * radius))
             .into_iter()
@@ -148,18 +177,32 @@ pub fn faces_from_below(
                     deepest
                 }
             }),
-    )
+    );
 }
 
 /// The most faces a sphere is taken to press into at once in a concave corner (a pit's floor and
 /// two walls, a box's side and the ground: three at most on a grid's walls and treads; one spare).
 pub const MAX_FACES: usize = 4;
 
-/// The faces a sphere presses into ([`sphere_faces`]): at least one, the nearest first.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The faces a sphere presses into ([`sphere_faces`]): at least one, the nearest first. The
+/// slots past them hold anything (an earlier sphere's faces, [`Faces::set_single`]): never
+/// read, nor compared or shown.
+#[derive(Clone, Copy)]
 pub struct Faces {
     faces: [SphereGeometry; MAX_FACES],
     len: usize,
+}
+
+impl PartialEq for Faces {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl std::fmt::Debug for Faces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.as_slice()).finish()
+    }
 }
 
 impl Faces {
@@ -169,6 +212,12 @@ impl Faces {
             faces: [g; MAX_FACES],
             len: 1,
         }
+    }
+
+    /// Made [`Faces::single`] of `g` in place: its first slot and its length written alone.
+    fn set_single(&mut self, g: SphereGeometry) {
+        self.faces[0] = g;
+        self.len = 1;
     }
 
     /// The faces, the nearest first (clear of the ground: that one alone, with a depth ≤ 0).

@@ -21,8 +21,8 @@ mod rolling;
 
 pub use friction::{FrictionLaw, FrictionOutcome};
 pub use geometry::{
-    Faces, MAX_FACES, SphereGeometry, closest_from_each, faces_from_below, search_start,
-    sphere_faces, sphere_geometry,
+    Faces, MAX_FACES, SphereGeometry, closest_from_each, faces_from_below, faces_from_below_into,
+    search_start, sphere_faces, sphere_geometry,
 };
 pub use joint::respond_jointly;
 pub use normal::{NormalLaw, REFERENCE_DAMPING, REFERENCE_STIFFNESS, exact_decay_factor};

@@ -23,8 +23,8 @@ use super::articulation::{ContactPoint, Joints};
 use super::engine::Engine;
 use crate::contact::joint::{JointContact, JointSolver};
 use crate::contact::{
-    ContactForce, ContactModel, ContactState, MAX_FACES, SphereGeometry, Variant,
-    closest_from_each, faces_from_below, search_start,
+    ContactForce, ContactModel, ContactState, Faces, MAX_FACES, SphereGeometry, Variant,
+    closest_from_each, faces_from_below_into, search_start,
 };
 use crate::robot::{ContactSphere, RobotModel, contact_set};
 use crate::terrain::HeightGrid;
@@ -187,11 +187,14 @@ impl GroundContacts {
         }
         let spheres: [_; 6] = std::array::from_fn(|m| near[m].1);
         let below = closest_from_each(terrain, contact.orientation, &spheres[..n_near]);
+        // each foot's faces written over the last foot's (made whole for the first)
+        let mut faces: Option<Faces> = None;
         for (&(k, (center, r, _)), below) in near[..n_near].iter().zip(below) {
             let below = below.expect("one answer a sphere");
             let orientation = contact.orientation;
             let last = &mut self.last_search[k];
-            let faces = faces_from_below(terrain, center, r, orientation, below, last);
+            let faces = faces.get_or_insert_with(|| Faces::single(below));
+            faces_from_below_into(terrain, center, r, orientation, below, last, faces);
             let leg = &model.legs[k];
             let frame = &frames[leg.foot_link];
             self.add_faces(k, leg.foot_link, faces.as_slice(), frame, bodies, model);
