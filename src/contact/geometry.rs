@@ -214,6 +214,23 @@ impl Faces {
         }
     }
 
+    /// No faces yet, to be written over ([`faces_from_below_into`]): a buffer, not a result.
+    pub const EMPTY: Faces = {
+        const ZERO: SphereGeometry = SphereGeometry {
+            penetration: 0.0,
+            point: DVec3::ZERO,
+            frame: GroundFrame {
+                tangent_x: DVec3::ZERO,
+                tangent_y: DVec3::ZERO,
+                normal: DVec3::ZERO,
+            },
+        };
+        Faces {
+            faces: [ZERO; MAX_FACES],
+            len: 0,
+        }
+    };
+
     /// Made [`Faces::single`] of `g` in place: its first slot and its length written alone.
     fn set_single(&mut self, g: SphereGeometry) {
         self.faces[0] = g;

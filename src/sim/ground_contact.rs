@@ -187,14 +187,13 @@ impl GroundContacts {
         }
         let spheres: [_; 6] = std::array::from_fn(|m| near[m].1);
         let below = closest_from_each(terrain, contact.orientation, &spheres[..n_near]);
-        // each foot's faces written over the last foot's (made whole for the first)
-        let mut faces: Option<Faces> = None;
+        // each foot's faces written over the last foot's
+        let mut faces = Faces::EMPTY;
         for (&(k, (center, r, _)), below) in near[..n_near].iter().zip(below) {
             let below = below.expect("one answer a sphere");
             let orientation = contact.orientation;
             let last = &mut self.last_search[k];
-            let faces = faces.get_or_insert_with(|| Faces::single(below));
-            faces_from_below_into(terrain, center, r, orientation, below, last, faces);
+            faces_from_below_into(terrain, center, r, orientation, below, last, &mut faces);
             let leg = &model.legs[k];
             let frame = &frames[leg.foot_link];
             self.add_faces(k, leg.foot_link, faces.as_slice(), frame, bodies, model);
