@@ -1188,15 +1188,16 @@ impl GaitController {
         lifts: &[f64; 6],
         fresh: bool,
     ) -> ([DVec3; 6], [IkSolution; 6]) {
-        let mut feet = *planned;
-        let mut grounded = [DVec3::ZERO; 6];
-        let mut rolled = [DVec3::ZERO; 6];
-        if self.rolling {
-            grounded = std::array::from_fn(|k| planned[k] - DVec3::Z * lifts[k]);
-            rolled = self.rolling_offsets(&grounded);
+        // (the arrays built as they are filled, not zeroed first)
+        let (mut feet, grounded, rolled) = if self.rolling {
+            let grounded: [DVec3; 6] = std::array::from_fn(|k| planned[k] - DVec3::Z * lifts[k]);
+            let rolled = self.rolling_offsets(&grounded);
+            let feet = std::array::from_fn(|k| planned[k] + rolled[k]);
+            (feet, grounded, rolled)
+        } else {
             // (not planned + 0 without rolling: a −0 coordinate would become +0)
-            feet = std::array::from_fn(|k| planned[k] + rolled[k]);
-        }
+            (*planned, [DVec3::ZERO; 6], [DVec3::ZERO; 6])
+        };
         let mut solutions =
             kinematics::solve_warm_each(&self.chains, &feet, &self.last, &mut self.warm_last);
         for k in 0..6 {
