@@ -335,6 +335,14 @@ pub fn tilt(body: &glam::DMat3) -> f64 {
         .acos()
 }
 
+/// Whether `tilt(body) > FALL_TILT`, the same answer, the arc cosine taken only near the
+/// threshold: a cosine above 0.7072 (cos 45° is 0.70711) is a tilt 1.4·10⁻⁴ rad short of it,
+/// far beyond libm's rounding, and the arc cosine decreases (the watchdog tests every step).
+pub fn fallen(body: &glam::DMat3) -> bool {
+    let cosine = (body.z_axis.z / body.z_axis.length()).clamp(-1.0, 1.0);
+    cosine <= 0.7072 && cosine.acos() > FALL_TILT
+}
+
 /// How close to a limit a joint counts as at it (1°).
 pub const NEAR_LIMIT: f64 = std::f64::consts::PI / 180.0;
 

@@ -6,7 +6,7 @@ use super::step_loop::{Looping, Stepper};
 use super::watchdog::Watchdog;
 use crate::contact::ContactModel;
 use crate::gait::{CommandSchedule, Fitted, GaitController, VelocityCommand};
-use crate::metrics::walk::{FALL_TILT, tilt};
+use crate::metrics::walk::fallen;
 use crate::metrics::{GroundMetrics, HexapodMetrics, StanceMetrics};
 use crate::record::hexapod::WalkScene;
 use crate::record::{self, Observer, decimation};
@@ -35,8 +35,9 @@ pub struct WalkRun {
     pub settle_time: f64,
     /// How the walker drives its legs, as the scenario's fields of the same names say.
     pub switches: WalkSwitches,
-    /// End the walk when the robot falls (its body past [`FALL_TILT`] from upright, as the
-    /// metrics' `fell_at` reads it): the run is complete there, its result decided.
+    /// End the walk when the robot falls (its body past
+    /// [`FALL_TILT`](crate::metrics::walk::FALL_TILT) from upright, as the metrics' `fell_at`
+    /// reads it): the run is complete there, its result decided.
     pub stop_at_fall: bool,
     /// Seconds walked.
     pub duration: f64,
@@ -125,7 +126,7 @@ impl Stepper for Walking {
     fn ended(&self, sample: &WalkSample) -> bool {
         // the metrics' test of a fall, on the same samples (settling's too: a robot set down
         // where it cannot stand falls before its walk)
-        self.stop_at_fall && tilt(&sample.robot.body.matrix3) > FALL_TILT
+        self.stop_at_fall && fallen(&sample.robot.body.matrix3)
     }
 }
 

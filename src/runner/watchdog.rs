@@ -2,7 +2,7 @@
 //! runaway speed) stops the run with when, where and the likely cause.
 
 use crate::contact::NormalLaw;
-use crate::metrics::walk::{FALL_TILT, tilt};
+use crate::metrics::walk::fallen;
 use crate::robot::RobotModel;
 use crate::sim::{BallSample, HexapodSample};
 use std::cell::Cell;
@@ -43,8 +43,9 @@ pub struct Watchdog {
     weight: f64,
     /// The ball's total energy at the start (J).
     start_energy: Option<f64>,
-    /// When the body first tilted past [`FALL_TILT`] (simulation time, s): a foot driven
-    /// through the ground after it is a tumbling robot's impact, not the time step's doing.
+    /// When the body first tilted past [`FALL_TILT`](crate::metrics::walk::FALL_TILT)
+    /// (simulation time, s): a foot driven through the ground after it is a tumbling robot's
+    /// impact, not the time step's doing.
     fell_at: Cell<Option<f64>>,
     /// Gravity's acceleration (m/s²), and the body's highest point so far (m): the speed its
     /// drop from there explains is not runaway.
@@ -116,7 +117,7 @@ impl Watchdog {
 
     /// Why a state is not physical, if it is not: what, and which body.
     pub fn check_walk(&self, s: &HexapodSample) -> Option<String> {
-        if self.fell_at.get().is_none() && tilt(&s.body.matrix3) > FALL_TILT {
+        if self.fell_at.get().is_none() && fallen(&s.body.matrix3) {
             self.fell_at.set(Some(s.time));
         }
         // the sample keeps the first joint that rang

@@ -81,3 +81,27 @@ fn a_swings_scuffs_are_not_skating() {
         "{share} {flags:?}"
     );
 }
+
+/// The fall test without the arc cosine answers as the tilt compared with the threshold does:
+/// upright, tilted either side of 45° by a hair and far, upside down, and degenerate.
+#[test]
+fn the_fall_test_is_the_tilt_against_the_threshold() {
+    let mut cases = vec![
+        glam::DMat3::IDENTITY,
+        glam::DMat3::from_diagonal(DVec3::splat(-1.0)),
+    ];
+    for k in 0..2000 {
+        let angle = FALL_TILT + (k as f64 - 1000.0) * 1e-6 + if k % 7 == 0 { 1e-17 } else { 0.0 };
+        cases.push(glam::DMat3::from_rotation_x(angle));
+        cases.push(glam::DMat3::from_rotation_y(k as f64 * 0.0031) * 1.7);
+    }
+    cases.push(glam::DMat3::from_cols(DVec3::X, DVec3::Y, DVec3::ZERO));
+    cases.push(glam::DMat3::from_cols(
+        DVec3::X,
+        DVec3::Y,
+        DVec3::splat(f64::NAN),
+    ));
+    for body in &cases {
+        assert_eq!(fallen(body), tilt(body) > FALL_TILT, "{body:?}");
+    }
+}
