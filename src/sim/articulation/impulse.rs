@@ -26,12 +26,12 @@
 //! walk 2.550 and 2.689 m (the multibody: 2.572, 2.693 m).
 
 use super::{
-    Articulation, ContactPoint, Joints, ServoGains, affine_of, apply_joint_torque, joint_frames,
-    limit_can_bind, revolute_joint,
+    Articulation, ContactPoint, Joints, ServoGains, affine_of, joint_frames, limit_can_bind,
+    revolute_joint,
 };
 use crate::robot::RobotModel;
 use crate::sim::engine::Engine;
-use glam::{DAffine3, DMat3, DQuat, DVec3};
+use glam::{DAffine3, DMat3, DQuat, DVec3, Vec3};
 use rapier3d::prelude::{
     GenericJoint, ImpulseJointHandle, JointAxesMask, JointAxis, MotorModel, RigidBodyHandle,
 };
@@ -65,6 +65,11 @@ pub struct ImpulseRobot {
     saturated: Vec<bool>,
     /// The servos' damper, k·dt + d (N·m·s/rad), solved implicitly by rapier's joint motor.
     damping: f64,
+    /// Per model link, the servos' torques on it this step, summed in the order rapier summed
+    /// them when each was given apart (see [`Joints::drive`]).
+    link_torques: Vec<Vec3>,
+    /// The links a joint drives (a joint's parent or child), in order.
+    driven_links: Vec<usize>,
 }
 
 /// rapier's index of a revolute's free axis (x) among a joint's motors.
@@ -121,6 +126,9 @@ impl ImpulseRobot {
             frames.push(joint_frames);
         }
         let n = joints.len();
+        let driven_links = (0..model.links.len())
+            .filter(|&k| model.joints.iter().any(|j| j.parent == k || j.child == k))
+            .collect();
         let rotation = |f: &DAffine3| DQuat::from_mat3(&f.matrix3).normalize();
         ImpulseRobot {
             model: model.clone(),
@@ -140,6 +148,8 @@ impl ImpulseRobot {
             springs: vec![0.0; n],
             saturated: vec![false; n],
             damping,
+            link_torques: vec![Vec3::ZERO; model.links.len()],
+            driven_links,
         }
     }
 
@@ -264,8 +274,15 @@ impl Joints for ImpulseRobot {
 
     /// Applies each servo's torque for the coming step, and switches each limit constraint on
     /// where it can bind.
+    ///
+    /// A servo's torque pair is summed into its two links' torques here and each link is given
+    /// its sum once, not each joint's pair apart (36 calls into rapier a step on hex18, not 19):
+    /// the same sums bit for bit. Its forces were cleared just before, so rapier's sum starts at
+    /// +0 as this one does, adds each link's torques in the same (joint) order, and skips only
+    /// zero vectors, which leave any sum started at +0 unchanged.
     fn drive(&mut self, engine: &mut Engine, targets: &[f64], angles: &[f64], rates: &[f64]) {
         let dt = engine.dt();
+        self.link_torques.fill(Vec3::ZERO);
         for (j, joint) in self.model.joints.iter().enumerate() {
             let (q, qd) = (angles[j], rates[j]);
             // the whole law with this step's end velocity estimated by the current one, as the
@@ -278,7 +295,10 @@ impl Joints for ImpulseRobot {
                 self.gains.stiffness * (targets[j] - q)
             };
             self.springs[j] = spring;
-            apply_joint_torque(engine, &self.bodies, joint, self.axes[j], spring);
+            // as `apply_joint_torque` gives it: the child's, then the parent's
+            let t = (self.axes[j] * spring).as_vec3();
+            self.link_torques[joint.child] += t;
+            self.link_torques[joint.parent] += -t;
             let near_limit = limit_can_bind(joint, q, qd, dt);
             if near_limit == self.limited[j] && saturated == self.saturated[j] {
                 continue;
@@ -304,6 +324,9 @@ impl Joints for ImpulseRobot {
                     set_damper(data, self.damping, joint.effort);
                 }
             }
+        }
+        for &k in &self.driven_links {
+            engine.add_force_and_torque(self.bodies[k], Vec3::ZERO, self.link_torques[k], false);
         }
     }
 
