@@ -176,14 +176,26 @@ impl Joints for ImpulseRobot {
     fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
         use std::f64::consts::PI;
         let bodies = &self.bodies;
+        // each body looked up and its rotation widened once where a joint's parent is the last
+        // joint's child (down a leg) or the root
+        let root = &engine.bodies[bodies[0]];
+        let root_rotation = root.position().rotation.as_dquat();
+        let mut last = (0, root, root_rotation);
         for (j, joint) in self.model.joints.iter().enumerate() {
-            let (parent, child) = (
-                &engine.bodies[bodies[joint.parent]],
-                &engine.bodies[bodies[joint.child]],
-            );
+            let (parent, parent_rotation) = if joint.parent == last.0 {
+                (last.1, last.2)
+            } else if joint.parent == 0 {
+                (root, root_rotation)
+            } else {
+                let parent = &engine.bodies[bodies[joint.parent]];
+                (parent, parent.position().rotation.as_dquat())
+            };
+            let child = &engine.bodies[bodies[joint.child]];
+            let child_rotation = child.position().rotation.as_dquat();
+            last = (joint.child, child, child_rotation);
             let (r1, r2) = self.rotations[j];
-            let parent_frame = parent.position().rotation.as_dquat() * r1;
-            let child_frame = child.position().rotation.as_dquat() * r2;
+            let parent_frame = parent_rotation * r1;
+            let child_frame = child_rotation * r2;
             let relative = parent_frame.inverse() * child_frame;
             // the twist about x of the relative rotation (its swing is drift)
             let q = 2.0 * relative.x.atan2(relative.w);
