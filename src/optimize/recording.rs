@@ -109,7 +109,7 @@ pub fn write(
                 }
                 Domain::Range { .. } => (x - low) / (high - low),
             };
-            recording.scalars(&format!("plots/parameters/{}", entity(&p.name)), &[share])?;
+            recording.scalars(format!("plots/parameters/{}", entity(&p.name)), &[share])?;
         }
     }
     recording.finish()

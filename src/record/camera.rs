@@ -24,7 +24,7 @@ pub fn pinhole(frustum_depth: f32) -> rerun::Pinhole {
 /// Logs the camera's pose at the current time (the `Pinhole` itself is logged once, static).
 pub fn log_pose(
     stream: &rerun::RecordingStream,
-    entity: &str,
+    entity: impl Into<rerun::EntityPath>,
     pose: &CameraPose,
 ) -> anyhow::Result<()> {
     stream.log(entity, &transform(pose))?;

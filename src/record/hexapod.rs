@@ -37,6 +37,51 @@ pub struct HexapodRecorder {
     path_end: Option<[f32; 3]>,
     /// The footfall lanes' last logged states.
     footfall: [Option<&'static str>; 6],
+    /// The entities a sample logs to, parsed once (a path given as text is parsed at every log).
+    entities: Entities,
+}
+
+/// The entities of [`HexapodRecorder::observe_with`]'s logs.
+struct Entities {
+    body_path: rerun::EntityPath,
+    camera: rerun::EntityPath,
+    foot_forces: rerun::EntityPath,
+    link_forces: rerun::EntityPath,
+    height: rerun::EntityPath,
+    attitude: rerun::EntityPath,
+    forward_speed: rerun::EntityPath,
+    normal_force: rerun::EntityPath,
+    slip_speed: rerun::EntityPath,
+    /// Per leg: its footfall lane, its stance trail, its joints' angle and torque plots.
+    legs: Vec<[rerun::EntityPath; 4]>,
+}
+
+impl Entities {
+    fn new(model: &RobotModel) -> Self {
+        Entities {
+            body_path: "world/body_path".into(),
+            camera: "world/camera".into(),
+            foot_forces: "world/foot_forces".into(),
+            link_forces: "world/link_forces".into(),
+            height: "plots/body/height_above_ground".into(),
+            attitude: "plots/body/attitude_deg".into(),
+            forward_speed: "plots/body/forward_speed".into(),
+            normal_force: "plots/feet/normal_force".into(),
+            slip_speed: "plots/feet/slip_speed".into(),
+            legs: model
+                .legs
+                .iter()
+                .map(|leg| {
+                    [
+                        format!("footfall/{}", leg.name).into(),
+                        format!("world/feet/{}/trail", leg.name).into(),
+                        format!("plots/joints/{}/angle", leg.name).into(),
+                        format!("plots/joints/{}/torque", leg.name).into(),
+                    ]
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Samples between points of the body's path (at the default 50 Hz: 10 points a second).
@@ -202,6 +247,7 @@ impl HexapodRecorder {
             camera: FollowCamera::new(robot_radius(model), true),
             path_end: None,
             footfall: [None; 6],
+            entities: Entities::new(model),
         })
     }
 
@@ -306,11 +352,15 @@ impl HexapodRecorder {
         let point = body.as_vec3().to_array();
         if sample.is_multiple_of(PATH_EVERY) {
             if let Some(end) = self.path_end {
-                rec.log("world/body_path", &rerun::LineStrips3D::new([[end, point]]))?;
+                rec.log(
+                    self.entities.body_path.clone(),
+                    &rerun::LineStrips3D::new([[end, point]]),
+                )?;
             }
             self.path_end = Some(point);
         }
-        for (k, leg) in model.legs.iter().enumerate() {
+        let entities = &self.entities;
+        for k in 0..model.legs.len() {
             let contact = s.robot.foot_contacts[k];
             // while settling every foot is scheduled down
             let scheduled = s.gait.as_ref().is_none_or(|g| g.phases[k].is_stance());
@@ -318,46 +368,46 @@ impl HexapodRecorder {
             // logged when it changes
             if self.footfall[k].replace(state) != Some(state) {
                 rec.log(
-                    format!("footfall/{}", leg.name),
+                    entities.legs[k][0].clone(),
                     &rerun::StateChange::new().with_state([state]),
                 )?;
             }
         }
-        r.scalars("plots/body/height_above_ground", &[s.robot.body_height])?;
+        r.scalars(entities.height.clone(), &[s.robot.body_height])?;
         r.scalars(
-            "plots/body/attitude_deg",
+            entities.attitude.clone(),
             &[roll.to_degrees(), pitch.to_degrees(), yaw.to_degrees()],
         )?;
         let forward = s.robot.body.matrix3.x_axis.dot(s.robot.body_velocity);
-        r.scalars("plots/body/forward_speed", &[forward])?;
+        r.scalars(entities.forward_speed.clone(), &[forward])?;
         let normal: Vec<f64> = s
             .robot
             .foot_contacts
             .iter()
             .map(|c| c.map_or(0.0, |c| c.normal_force))
             .collect();
-        r.scalars("plots/feet/normal_force", &normal)?;
+        r.scalars(entities.normal_force.clone(), &normal)?;
         let slip: Vec<f64> = s
             .robot
             .foot_contacts
             .iter()
             .map(|c| c.map_or(0.0, |c| c.slip.length()))
             .collect();
-        r.scalars("plots/feet/slip_speed", &slip)?;
-        for leg in &model.legs {
+        r.scalars(entities.slip_speed.clone(), &slip)?;
+        for (leg, entities) in model.legs.iter().zip(&entities.legs) {
             let mut values: Vec<f64> = leg
                 .joints
                 .iter()
                 .map(|&j| s.robot.joint_angles[j])
                 .collect();
             values.extend(leg.joints.iter().map(|&j| s.robot.joint_targets[j]));
-            r.scalars(&format!("plots/joints/{}/angle", leg.name), &values)?;
+            r.scalars(entities[2].clone(), &values)?;
             let torques: Vec<f64> = leg
                 .joints
                 .iter()
                 .map(|&j| s.robot.joint_torques[j])
                 .collect();
-            r.scalars(&format!("plots/joints/{}/torque", leg.name), &torques)?;
+            r.scalars(entities[3].clone(), &torques)?;
         }
         Ok(())
     }
@@ -379,7 +429,7 @@ impl HexapodRecorder {
         let view = self
             .camera
             .follow(centre_of_mass(model, link_frames), yaw, frame_dt);
-        camera::log_pose(rec, "world/camera", &view)?;
+        camera::log_pose(rec, self.entities.camera.clone(), &view)?;
         let force_scale = *self
             .force_scale
             .get_or_insert_with(|| force_scale(model, link_frames));
@@ -396,7 +446,7 @@ impl HexapodRecorder {
             })
             .unzip();
         rec.log(
-            "world/foot_forces",
+            self.entities.foot_forces.clone(),
             &rerun::Arrows3D::from_vectors(vectors).with_origins(origins),
         )?;
         let (origins, vectors): (Vec<[f32; 3]>, Vec<[f32; 3]>) = s
@@ -411,14 +461,14 @@ impl HexapodRecorder {
             })
             .unzip();
         rec.log(
-            "world/link_forces",
+            self.entities.link_forces.clone(),
             &rerun::Arrows3D::from_vectors(vectors).with_origins(origins),
         )?;
         // a dot per frame while a foot is down: a footprint, or a streak where it slips
-        for (leg, contact) in model.legs.iter().zip(&s.robot.foot_contacts) {
+        for (leg, contact) in self.entities.legs.iter().zip(&s.robot.foot_contacts) {
             if let Some(c) = contact {
                 rec.log(
-                    format!("world/feet/{}/trail", leg.name),
+                    leg[1].clone(),
                     &rerun::Points3D::new([c.point.as_vec3().to_array()]),
                 )?;
             }

@@ -8,8 +8,8 @@ use glam::{DAffine3, DQuat};
 
 /// The entities of a robot's links, with their shapes logged.
 pub struct LinkTree {
-    /// Per link, its entity path.
-    paths: Vec<String>,
+    /// Per link, its entity path, parsed once (a path given as text is parsed at every log).
+    entities: Vec<rerun::EntityPath>,
 }
 
 impl LinkTree {
@@ -33,7 +33,7 @@ impl LinkTree {
                 Some(j) => {
                     let joint = &model.joints[j];
                     let frame = format!("{}/{}", paths[joint.parent], joint.name);
-                    log_pose(rec, &frame, &joint.origin, true)?;
+                    log_pose(rec, frame.as_str(), &joint.origin, true)?;
                     format!("{frame}/{}", link.name)
                 }
             };
@@ -42,7 +42,8 @@ impl LinkTree {
             }
             paths.push(entity);
         }
-        Ok(LinkTree { paths })
+        let entities = paths.iter().map(|p| p.as_str().into()).collect();
+        Ok(LinkTree { entities })
     }
 
     /// Logs the links at their world poses `frames`: the root's pose and each joint's rotation
@@ -56,22 +57,22 @@ impl LinkTree {
         joints_drift: bool,
         is_static: bool,
     ) -> Result<()> {
-        for ((entity, link), frame) in self.paths.iter().zip(&model.links).zip(frames) {
+        for ((entity, link), frame) in self.entities.iter().zip(&model.links).zip(frames) {
             match link.parent_joint {
-                None => log_pose(rec, entity, frame, is_static)?,
+                None => log_pose(rec, entity.clone(), frame, is_static)?,
                 Some(j) => {
                     let joint = &model.joints[j];
                     let joint_frame = frames[joint.parent] * joint.origin;
                     let relative = joint_frame.inverse() * *frame;
                     if joints_drift {
-                        log_pose(rec, entity, &relative, is_static)?;
+                        log_pose(rec, entity.clone(), &relative, is_static)?;
                     } else {
                         // a rigid joint only turns: its link sits at the joint frame's origin
                         let turn = rerun::Transform3D::from_rotation(quaternion(&relative));
                         if is_static {
-                            rec.log_static(entity.as_str(), &turn)?;
+                            rec.log_static(entity.clone(), &turn)?;
                         } else {
-                            rec.log(entity.as_str(), &turn)?;
+                            rec.log(entity.clone(), &turn)?;
                         }
                     }
                 }
@@ -97,7 +98,7 @@ fn rgba(c: [f32; 4]) -> [u8; 4] {
 /// Logs `pose` (translation and rotation) at `entity`, static or at the current time.
 fn log_pose(
     rec: &rerun::RecordingStream,
-    entity: &str,
+    entity: impl Into<rerun::EntityPath>,
     pose: &DAffine3,
     is_static: bool,
 ) -> Result<()> {

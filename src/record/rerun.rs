@@ -159,7 +159,7 @@ impl Recording {
     }
 
     /// Logs one or more scalars at the current time.
-    pub fn scalars(&self, entity: &str, values: &[f64]) -> Result<()> {
+    pub fn scalars(&self, entity: impl Into<rerun::EntityPath>, values: &[f64]) -> Result<()> {
         self.stream
             .log(entity, &rerun::Scalars::new(values.iter().copied()))?;
         Ok(())
