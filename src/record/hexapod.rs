@@ -39,6 +39,8 @@ pub struct HexapodRecorder {
     footfall: [Option<&'static str>; 6],
     /// The entities a sample logs to, parsed once (a path given as text is parsed at every log).
     entities: Entities,
+    /// A leg's plotted values, written over for each.
+    values: Vec<f64>,
 }
 
 /// The entities of [`HexapodRecorder::observe_with`]'s logs.
@@ -248,6 +250,7 @@ impl HexapodRecorder {
             path_end: None,
             footfall: [None; 6],
             entities: Entities::new(model),
+            values: Vec::new(),
         })
     }
 
@@ -380,34 +383,26 @@ impl HexapodRecorder {
         )?;
         let forward = s.robot.body.matrix3.x_axis.dot(s.robot.body_velocity);
         r.scalars(entities.forward_speed.clone(), &[forward])?;
-        let normal: Vec<f64> = s
+        let normal = s
             .robot
             .foot_contacts
-            .iter()
-            .map(|c| c.map_or(0.0, |c| c.normal_force))
-            .collect();
+            .map(|c| c.map_or(0.0, |c| c.normal_force));
         r.scalars(entities.normal_force.clone(), &normal)?;
-        let slip: Vec<f64> = s
+        let slip = s
             .robot
             .foot_contacts
-            .iter()
-            .map(|c| c.map_or(0.0, |c| c.slip.length()))
-            .collect();
+            .map(|c| c.map_or(0.0, |c| c.slip.length()));
         r.scalars(entities.slip_speed.clone(), &slip)?;
+        // one buffer for every leg's plots, not two allocated a leg
+        let values = &mut self.values;
         for (leg, entities) in model.legs.iter().zip(&entities.legs) {
-            let mut values: Vec<f64> = leg
-                .joints
-                .iter()
-                .map(|&j| s.robot.joint_angles[j])
-                .collect();
+            values.clear();
+            values.extend(leg.joints.iter().map(|&j| s.robot.joint_angles[j]));
             values.extend(leg.joints.iter().map(|&j| s.robot.joint_targets[j]));
-            r.scalars(entities[2].clone(), &values)?;
-            let torques: Vec<f64> = leg
-                .joints
-                .iter()
-                .map(|&j| s.robot.joint_torques[j])
-                .collect();
-            r.scalars(entities[3].clone(), &torques)?;
+            r.scalars(entities[2].clone(), values)?;
+            values.clear();
+            values.extend(leg.joints.iter().map(|&j| s.robot.joint_torques[j]));
+            r.scalars(entities[3].clone(), values)?;
         }
         Ok(())
     }
