@@ -181,6 +181,9 @@ impl Joints for ImpulseRobot {
         let root = &engine.bodies[bodies[0]];
         let root_rotation = root.position().rotation.as_dquat();
         let mut last = (0, root, root_rotation);
+        // rapier keeps the joints in the order they were inserted, the model's: each is read from
+        // its place there, where its handle matches, rather than looked up by its handle
+        let mut in_order = engine.impulse_joints.iter();
         for (j, joint) in self.model.joints.iter().enumerate() {
             let (parent, parent_rotation) = if joint.parent == last.0 {
                 (last.1, last.2)
@@ -205,7 +208,11 @@ impl Joints for ImpulseRobot {
             self.axes[j] = axis;
             // the torque applied over the step just taken: the spring's, and the damper's impulse
             // (rapier's on the parent: the child takes it reversed)
-            let damper = match engine.impulse_joints.get(self.joints[j]) {
+            let rapier_joint = match in_order.next() {
+                Some((handle, joint)) if handle == self.joints[j] => Some(joint),
+                _ => engine.impulse_joints.get(self.joints[j]),
+            };
+            let damper = match rapier_joint {
                 Some(joint) if !self.saturated[j] => {
                     -f64::from(joint.data.motors[ANG_X].impulse) / engine.dt()
                 }
