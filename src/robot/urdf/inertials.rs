@@ -188,8 +188,8 @@ fn size(model: &RobotModel) -> f64 {
 /// The least mass per cubic metre of its size D a robot is taken to be built with (kg/m³): the
 /// 20 public hexapods of `tests/data/third_party` and hex18 have 1.2–25 (WORMS 1.6, arrg 1.2,
 /// phobos 25), ten times this. A robot of a tenth of that is a URDF whose lengths and masses
-/// disagree: found so, a robot of 0.23 kg spanning 5.6 m whose right femur joint stood on the body's
-/// left (0.0013), and a Fusion 360 export whose joint origins held the children's world
+/// disagree: found so, a robot of 0.23 kg spanning 5.6 m whose right femur joint stood on the
+/// body's left (0.0013), and a Fusion 360 export whose joint origins held the children's world
 /// positions, legs 3 m long on a 0.9 m body (0.011). Both walked, with no word.
 pub const LEAST_DENSITY: f64 = 0.1;
 
