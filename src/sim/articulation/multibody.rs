@@ -231,19 +231,24 @@ impl Joints for MultibodyRobot {
         let mut saturated_torques = [(0, DVec3::ZERO, 0.0); DOFS + 18];
         let mut n_saturated = 0;
         let mb = self.multibody_mut(&mut engine.multibody_joints);
-        for (j, joint) in model.joints.iter().enumerate() {
-            let (q, qd) = (angles[j], rates[j]);
-            self.start_angles[j] = q;
+        // (each joint's inputs and outputs zipped: no bounds check of seven vectors a joint)
+        let servos = (model.joints.iter().zip(targets).zip(angles).zip(rates))
+            .zip(self.start_angles.iter_mut().zip(&mut self.saturated))
+            .zip(&self.links);
+        for (j, (((((joint, &target), &q), &qd), (start, saturated_j)), &link)) in
+            servos.enumerate()
+        {
+            *start = q;
             // the implicit law's torque, with this step's end velocity estimated by the current one
-            let predicted = self.gains.torque(targets[j], q, qd, dt);
+            let predicted = self.gains.torque(target, q, qd, dt);
             let saturated =
                 (predicted.abs() > joint.effort).then(|| joint.effort.copysign(predicted));
-            self.saturated[j] = saturated;
+            *saturated_j = saturated;
             let near_limit = limit_can_bind(joint, q, qd, dt);
-            let link = mb.link_mut(self.links[j]).expect("a joint's link exists");
+            let link = mb.link_mut(link).expect("a joint's link exists");
             let rapier_joint = &mut link.joint;
             match saturated {
-                None => rapier_joint.set_spring(ANG_X, k as f32, targets[j] as f32),
+                None => rapier_joint.set_spring(ANG_X, k as f32, target as f32),
                 Some(_) => rapier_joint.set_spring(ANG_X, 0.0, 0.0),
             }
             if near_limit {
@@ -260,7 +265,11 @@ impl Joints for MultibodyRobot {
                 saturated_torques[n_saturated] = (j, (frame * glam::Vec3::X).as_dvec3(), torque);
                 n_saturated += 1;
             }
-            mb.damping_mut()[self.dofs[j]] = if saturated.is_some() { 0.0 } else { d as f32 };
+        }
+        // each servo's damper on its degree of freedom (a slice, not nalgebra's checked index)
+        let damping = mb.damping_mut().as_mut_slice();
+        for (&dof, saturated) in self.dofs.iter().zip(&self.saturated) {
+            damping[dof] = if saturated.is_some() { 0.0 } else { d as f32 };
         }
         for &(j, axis, torque) in &saturated_torques[..n_saturated] {
             apply_joint_torque(engine, &self.bodies, &model.joints[j], axis, torque);
