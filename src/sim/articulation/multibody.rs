@@ -182,10 +182,13 @@ impl Joints for MultibodyRobot {
     fn read_joints(&mut self, engine: &Engine, angles: &mut [f64], rates: &mut [f64]) {
         let mb = self.multibody(engine);
         let q_dot = mb.generalized_velocity();
-        for (j, (&link, &dof)) in self.links.iter().zip(&self.dofs).enumerate() {
+        let q_dot = q_dot.as_slice();
+        // (zipped: no bounds check of the outputs a joint)
+        let joints = self.links.iter().zip(&self.dofs);
+        for ((angle, rate), (&link, &dof)) in angles.iter_mut().zip(rates.iter_mut()).zip(joints) {
             let link = mb.link(link).expect("link exists");
-            angles[j] = link.joint().coords()[ANG_X] as f64;
-            rates[j] = q_dot[dof] as f64;
+            *angle = link.joint().coords()[ANG_X] as f64;
+            *rate = q_dot[dof] as f64;
         }
     }
 
@@ -279,12 +282,32 @@ impl Joints for MultibodyRobot {
     /// The torque the servo applied over the last step (N·m): the implicit spring-damper's
     /// k·(q* − qₙ) − (k·dt + d)·q̇ₙ₊₁, or the saturated effort.
     fn applied_torque(&self, joint: usize, target: f64, qd: f64) -> f64 {
-        if let Some(torque) = self.saturated[joint] {
-            return torque;
+        self.servo_torque(self.saturated[joint], self.start_angles[joint], target, qd)
+    }
+
+    /// [`Joints::applied_torques`], each joint's state zipped with its target and rate (no
+    /// bounds check a joint).
+    fn applied_torques(&self, targets: &[f64], rates: &[f64], out: &mut Vec<f64>) {
+        let servos = self.saturated.iter().zip(&self.start_angles);
+        out.extend(
+            servos
+                .zip(targets.iter().zip(rates))
+                .map(|((&saturated, &q), (&target, &qd))| {
+                    self.servo_torque(saturated, q, target, qd)
+                }),
+        );
+    }
+}
+
+impl MultibodyRobot {
+    /// A servo's torque over the last step: its `saturated` effort, or the implicit law from the
+    /// step's start angle `q`, with the step's end velocity `qd`, which rapier's spring saw.
+    #[inline]
+    fn servo_torque(&self, saturated: Option<f64>, q: f64, target: f64, qd: f64) -> f64 {
+        match saturated {
+            Some(torque) => torque,
+            None => self.gains.torque(target, q, qd, self.dt),
         }
-        // the implicit law with the step's end velocity, which rapier's spring saw
-        self.gains
-            .torque(target, self.start_angles[joint], qd, self.dt)
     }
 }
 
