@@ -597,6 +597,32 @@ mod tests {
         }
     }
 
+    /// A free contact slot holds the default state (what `ground_contact::free` takes, writing
+    /// only the slots taken): a leg lifted off the ground and set down again, over and over.
+    #[test]
+    fn free_contact_slots_hold_the_default_state() {
+        for articulation in [Articulation::Multibody, Articulation::Impulse] {
+            let mut hexapod = standing(articulation);
+            let start = hexapod.targets.clone();
+            let mut targets = start.clone();
+            let (femur, knee) = (
+                hexapod.model.legs[0].joints[1],
+                hexapod.model.legs[0].joints[2],
+            );
+            let mut touched = [false; 2];
+            for step in 0..1500 {
+                let swing = (step as f64 * 0.01).sin();
+                targets[femur] = start[femur] + 0.6 * swing;
+                targets[knee] = start[knee] - 0.6 * swing;
+                hexapod.set_targets(&targets);
+                let sample = hexapod.step();
+                touched[sample.foot_contacts[0].is_some() as usize] = true;
+                assert!(hexapod.ground.free_slots_are_default(), "step {step}");
+            }
+            assert_eq!(touched, [true; 2], "the foot lifted and touched down");
+        }
+    }
+
     /// Against a wall an impulse foot's damper moves at most 1.8 free foot links along the
     /// wall's normal (`DAMPER_FREE_MASSES`): pushed sideways a tibia turns on its joints, which
     /// pass nothing on within the step, and with the vertical's articulated mass there the
