@@ -281,6 +281,9 @@ struct Accumulators {
     link_names: Vec<String>,
     /// The sine and cosine of the heading at the walk's start.
     start_heading: (f64, f64),
+    /// The least cosine of the body's tilt noted ([`HexapodMetrics::note_attitude`]), not yet
+    /// read into [`HexapodMetrics::max_body_tilt_deg`].
+    least_upright: Option<f64>,
     /// The body's position at the last step (for [`HexapodMetrics::command_progress`]).
     last_position: Option<glam::DVec3>,
     /// Whether any step was commanded to move, to move sideways, or to turn.
@@ -330,16 +333,29 @@ pub const FALL_TILT: f64 = std::f64::consts::FRAC_PI_4;
 /// vertical (rad). Past [`FALL_TILT`] it has fallen (the metrics' `fell_at`, the watchdog's
 /// note of a fall).
 pub fn tilt(body: &glam::DMat3) -> f64 {
-    (body.z_axis.z / body.z_axis.length())
-        .clamp(-1.0, 1.0)
-        .acos()
+    tilt_of(upright(body))
+}
+
+/// The cosine of [`tilt`] (unclamped): the body's z axis along the vertical.
+fn upright(body: &glam::DMat3) -> f64 {
+    body.z_axis.z / body.z_axis.length()
+}
+
+/// [`tilt`] from its cosine [`upright`].
+fn tilt_of(upright: f64) -> f64 {
+    upright.clamp(-1.0, 1.0).acos()
 }
 
 /// Whether `tilt(body) > FALL_TILT`, the same answer, the arc cosine taken only near the
 /// threshold: a cosine above 0.7072 (cos 45° is 0.70711) is a tilt 1.4·10⁻⁴ rad short of it,
 /// far beyond libm's rounding, and the arc cosine decreases (the watchdog tests every step).
 pub fn fallen(body: &glam::DMat3) -> bool {
-    let cosine = (body.z_axis.z / body.z_axis.length()).clamp(-1.0, 1.0);
+    fallen_at(upright(body))
+}
+
+/// [`fallen`] from the tilt's cosine [`upright`].
+fn fallen_at(upright: f64) -> bool {
+    let cosine = upright.clamp(-1.0, 1.0);
     cosine <= 0.7072 && cosine.acos() > FALL_TILT
 }
 
@@ -363,9 +379,15 @@ impl HexapodMetrics {
         }
     }
 
-    /// The body's tilt from upright, roll and pitch (rad) into their largest so far.
-    fn note_attitude(&mut self, tilt: f64, roll: f64, pitch: f64) {
-        self.max_body_tilt_deg = self.max_body_tilt_deg.max(tilt.to_degrees());
+    /// The body's tilt from upright (by its cosine [`upright`]), roll and pitch (rad) into
+    /// their largest so far: the tilt's as the least cosine, its arc cosine taken by
+    /// [`HexapodMetrics::update`] (the arc cosine and the conversion to degrees never decrease
+    /// the larger of two tilts, so the largest tilt is the least cosine's, bit for bit: an arc
+    /// cosine a step less).
+    fn note_attitude(&mut self, upright: f64, roll: f64, pitch: f64) {
+        // (`min` keeps the cosine that is not NaN, as `max` kept the tilt)
+        let least = self.acc.least_upright.map_or(upright, |c| c.min(upright));
+        self.acc.least_upright = Some(least);
         self.max_roll_deg = self.max_roll_deg.max(roll.abs().to_degrees());
         self.max_pitch_deg = self.max_pitch_deg.max(pitch.abs().to_degrees());
     }
@@ -423,6 +445,10 @@ impl HexapodMetrics {
     /// stretch of steps and at the end, not every step ([`crate::runner::walk::WalkSession`]):
     /// the same figures, without a dozen divisions, square roots and a sine a step.
     pub fn update(&mut self) {
+        if let Some(upright) = self.acc.least_upright {
+            let tilt = tilt_of(upright).to_degrees();
+            self.max_body_tilt_deg = self.max_body_tilt_deg.max(tilt);
+        }
         let a = &self.acc;
         let (Some(start), Some(position)) = (a.start, a.last_position) else {
             return; // no step walked yet
@@ -497,17 +523,17 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             // not part of the walk, but a robot set down where it cannot stand (bullet, 0.41 m
             // tall, parallel to a 25° slope) falls before it walks: when (s before the walk,
             // negative) and how far, not a fall "at 0.00 s into the walk" and a tilt of 0
-            let body_tilt = tilt(&r.body.matrix3);
-            if body_tilt > FALL_TILT && self.fell_at.is_none() {
+            let upright = upright(&r.body.matrix3);
+            if fallen_at(upright) && self.fell_at.is_none() {
                 self.fell_at = Some(walker.gait_time());
                 let (roll, pitch, _) = r.roll_pitch_yaw();
-                self.note_attitude(body_tilt, roll, pitch);
+                self.note_attitude(upright, roll, pitch);
             }
             return Ok(());
         }
         let (roll, pitch, yaw) = r.roll_pitch_yaw();
-        let body_tilt = tilt(&r.body.matrix3);
-        self.note_attitude(body_tilt, roll, pitch);
+        let upright = upright(&r.body.matrix3);
+        self.note_attitude(upright, roll, pitch);
         let a = &mut self.acc;
         let position = r.body.translation;
         if a.walk_steps == 0 {
@@ -537,7 +563,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
             self.command_progress += (position - last).truncate().dot(step);
         }
         a.last_position = Some(position);
-        if body_tilt > FALL_TILT && self.fell_at.is_none() {
+        if self.fell_at.is_none() && fallen_at(upright) {
             self.fell_at = Some(a.walk_steps as f64 * dt);
         }
         a.roll2 += roll * roll;
