@@ -103,8 +103,12 @@ pub fn stance_loads_under(
 /// [`stance_loads_under`] with the legs posed by their IK answers ([`LegStatics`], their links'
 /// masses with them): the centre of mass is the root link's and the legs' links', which must be
 /// all of the model's ([`legs_hold_every_link`]).
+///
+/// `mass` is the model's total ([`RobotModel::total_mass`]): the walk's feed-forward reads it
+/// every step, and sums it once.
 pub fn stance_loads_of_legs(
     model: &RobotModel,
+    mass: f64,
     legs: &[LegStatics; 6],
     gravity: DVec3,
     stance: [bool; 6],
@@ -116,8 +120,6 @@ pub fn stance_loads_of_legs(
             weighted += com * mass;
         }
     }
-    // the mass summed once (the walk's feed-forward reads it every step)
-    let mass = model.total_mass();
     let com = weighted / mass;
     stance_loads_at(mass, com, &legs.map(|l| l.foot), gravity, stance)
 }
@@ -244,7 +246,8 @@ pub fn holding_torques_of_legs(
     torques: &mut [f64],
 ) {
     let up = -gravity.normalize_or(DVec3::NEG_Z);
-    torques.fill(0.0);
+    // every joint is on one of the legs (as `legs_hold_every_link` asks), so each torque is
+    // written below: not cleared first
     for ((leg, posed), &load) in model.legs.iter().zip(legs).zip(loads) {
         let ground_force = up * load;
         // each link's weight once, not once per joint inboard of it, in loops of the posed
@@ -331,7 +334,7 @@ mod tests {
         let gravity = DVec3::new(0.5, -0.3, -9.7);
         let stance = [true, false, true, false, true, true];
         let loads = stance_loads_under(&model, &poses, gravity, stance);
-        let posed = stance_loads_of_legs(&model, &legs, gravity, stance);
+        let posed = stance_loads_of_legs(&model, model.total_mass(), &legs, gravity, stance);
         for k in 0..6 {
             assert!(
                 (loads[k] - posed[k]).abs() < 1e-9,

@@ -61,6 +61,8 @@ pub struct Walker {
     /// Every link is on a leg of three joints ([`statics::legs_hold_every_link`]): the
     /// feed-forward poses the legs from the gait's IK answers.
     legs_hold_every_link: bool,
+    /// The model's total mass (kg), summed once: the feed-forward reads it every step.
+    total_mass: f64,
     /// The feed-forward's link poses (or legs posed by their IK answers) and holding torques,
     /// kept between steps (no allocation, nothing zeroed: each step writes what it reads).
     poses: Vec<glam::DAffine3>,
@@ -227,6 +229,7 @@ impl Walker {
             leg_of_link[leg.foot_link] = Some(k);
         }
         let legs_hold_every_link = statics::legs_hold_every_link(model);
+        let total_mass = model.total_mass();
         Walker {
             hexapod,
             controller,
@@ -249,6 +252,7 @@ impl Walker {
             leg_of_link,
             given_targets: None,
             legs_hold_every_link,
+            total_mass,
             poses: Vec::new(),
             joint_frames: Vec::new(),
             leg_statics: [LegStatics::default(); 6],
@@ -552,7 +556,8 @@ impl Walker {
             posed = self.controller.leg_statics(k, q, &mut legs[k]);
         }
         if posed {
-            let loads = statics::stance_loads_of_legs(model, legs, gravity, stance);
+            let mass = self.total_mass;
+            let loads = statics::stance_loads_of_legs(model, mass, legs, gravity, stance);
             statics::holding_torques_of_legs(model, legs, gravity, &loads, &mut self.torques);
         } else {
             model.link_and_joint_poses_into(
