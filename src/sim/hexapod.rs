@@ -115,9 +115,29 @@ pub struct HexapodSample {
 
 impl HexapodSample {
     /// Roll, pitch, yaw (rad) of the body, z-y-x convention.
+    ///
+    /// glam's `to_euler(EulerRot::ZYX)` (its rotation matrix `DMat3::from_quat`, then the angles
+    /// of any order read by index) written out for this order: the entries it reads, the same
+    /// products, sums and arc tangents, bit for bit (a unit test), without the rest of the matrix
+    /// (the walk's metrics read it every step).
     pub fn roll_pitch_yaw(&self) -> (f64, f64, f64) {
-        let (yaw, pitch, roll) = self.body_rotation.to_euler(glam::EulerRot::ZYX);
-        (roll, pitch, yaw)
+        let q = self.body_rotation;
+        let (x2, y2, z2) = (q.x + q.x, q.y + q.y, q.z + q.z);
+        let (xx, xy, xz) = (q.x * x2, q.x * y2, q.x * z2);
+        let (yy, yz, zz) = (q.y * y2, q.y * z2, q.z * z2);
+        let (wx, wy, wz) = (q.w * x2, q.w * y2, q.w * z2);
+        // the matrix's x axis, and its y and z axes' z entries
+        let (x_x, x_y, x_z) = (1.0 - (yy + zz), xy + wz, xz - wy);
+        let (y_z, z_z) = (yz + wx, 1.0 - (xx + yy));
+        let cy = (z_z * z_z + y_z * y_z).sqrt();
+        let pitch = (-x_z).atan2(cy);
+        if cy > 16.0 * f64::EPSILON {
+            (y_z.atan2(z_z), pitch, x_y.atan2(x_x))
+        } else {
+            // pitched a quarter turn: the yaw from the y axis, no roll
+            let (y_x, y_y) = (xy - wz, 1.0 - (xx + zz));
+            (0.0, pitch, (-y_x).atan2(y_y))
+        }
     }
 }
 
@@ -595,6 +615,46 @@ mod tests {
                 link_alone[k]
             );
         }
+    }
+
+    /// The body's roll, pitch and yaw are glam's z-y-x Euler angles of its rotation, bit for
+    /// bit, the quarter-turn pitches (where the yaw is read off the y axis) among them.
+    #[test]
+    fn roll_pitch_yaw_is_glams_zyx_euler_angles() {
+        let mut seed = 0x51_7cc1_b727_220a_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut rotations: Vec<DQuat> = (0..20_000)
+            .map(|_| DQuat::from_xyzw(next(), next(), next(), next()).normalize())
+            .collect();
+        for k in 0..2000 {
+            let (yaw, roll) = (3.0 * next(), 3.0 * next());
+            let pitch = std::f64::consts::FRAC_PI_2 * (1.0 - 1e-9 * k as f64) * next().signum();
+            rotations.push(DQuat::from_euler(glam::EulerRot::ZYX, yaw, pitch, roll));
+        }
+        rotations.extend([DQuat::IDENTITY, DQuat::from_xyzw(0.0, 1.0, 0.0, 0.0)]);
+        let mut quarter_turns = 0;
+        for q in rotations {
+            let m = DMat3::from_quat(q);
+            let cy = (m.z_axis.z * m.z_axis.z + m.y_axis.z * m.y_axis.z).sqrt();
+            quarter_turns += usize::from(cy <= 16.0 * f64::EPSILON);
+            let sample = HexapodSample {
+                body_rotation: q,
+                ..HexapodSample::default()
+            };
+            let (yaw, pitch, roll) = q.to_euler(glam::EulerRot::ZYX);
+            let bits = |(a, b, c): (f64, f64, f64)| [a.to_bits(), b.to_bits(), c.to_bits()];
+            assert_eq!(
+                bits(sample.roll_pitch_yaw()),
+                bits((roll, pitch, yaw)),
+                "{q:?}"
+            );
+        }
+        assert!(quarter_turns > 0, "no quarter-turn pitch tried");
     }
 
     /// A free contact slot holds the default state (what `ground_contact::free` takes, writing
