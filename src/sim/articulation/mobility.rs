@@ -253,6 +253,20 @@ impl<const D: usize> Mobility<D> {
         block
     }
 
+    /// W's rows of contact `i`'s three axes (t₁, t₂, n), each as one run of lanes, where one
+    /// group holds every axis (six contacts at most; None otherwise): [`Mobility::block`]`(i,
+    /// j)`'s column b is lane 3j + b of the three, read without a group and lane worked out a
+    /// entry.
+    #[inline]
+    pub fn rows_of(&self, i: usize) -> Option<[[f32; LANE * CHUNKS]; 3]> {
+        (self.in_use == 1).then(|| {
+            std::array::from_fn(|a| {
+                let lanes: [[f32; LANE]; CHUNKS] = self.product[3 * i + a].map(|v| v.to_array());
+                *lanes.as_flattened().as_array().expect("a row's lanes")
+            })
+        })
+    }
+
     /// W's entry for contact axes `a` and `b`.
     #[cfg(test)]
     fn w(&self, a: usize, b: usize) -> f32 {
@@ -559,6 +573,18 @@ mod tests {
                         by_entries.w(a, b).to_bits(),
                         "step {step}: W[{a}][{b}]"
                     );
+                }
+            }
+            // a contact's rows, as one run of lanes each, give its blocks
+            for i in 0..n {
+                let rows = by_paths.rows_of(i).expect("one group");
+                for j in 0..n {
+                    let block = by_paths.block(i, j);
+                    for (b, column) in block.iter().enumerate() {
+                        for (a, entry) in column.iter().enumerate() {
+                            assert_eq!(entry.to_bits(), rows[a][3 * j + b].to_bits());
+                        }
+                    }
                 }
             }
         }

@@ -410,10 +410,22 @@ fn contact_mobility_in<const D: usize>(
     );
     // W is symmetric (`mobility.rs`): each block above the diagonal is read, and mirrored below
     for i in 0..n {
+        // (a hexapod's feet: the contact's rows read once, each block's entries by lane)
+        let rows = scratch.rows_of(i);
         for j in i..n {
-            let [x, y, z] = scratch
-                .block(i, j)
-                .map(|c| glam::Vec3::from_array(c).as_dvec3());
+            let columns = match &rows {
+                Some(rows) => {
+                    let mut columns = [[0.0; 3]; 3];
+                    for (b, column) in columns.iter_mut().enumerate() {
+                        for (entry, row) in column.iter_mut().zip(rows) {
+                            *entry = row[3 * j + b];
+                        }
+                    }
+                    columns
+                }
+                None => scratch.block(i, j),
+            };
+            let [x, y, z] = columns.map(|c| glam::Vec3::from_array(c).as_dvec3());
             let block = DMat3::from_cols(x, y, z);
             mobility[i * n + j] = block;
             if j != i {
