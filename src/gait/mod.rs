@@ -26,7 +26,7 @@ pub use foothold::away_from_edges;
 pub use heading::HeadingHold;
 pub use lean::Lean;
 pub use margins::{CycleMargins, Unreached, cycle_margins};
-pub use reactive::{FootFeel, Reactive};
+pub use reactive::{FootFeel, Reactive, most_extra_lift};
 pub use schedule::{LegPhase, leg_phase, minimum_support};
 pub use spec::{Gait, GaitError, GaitSpec, SwingShape};
 

@@ -5,7 +5,7 @@ use super::hexapod::{Hexapod, HexapodSample};
 use crate::gait::reach::ReachTally;
 use crate::gait::{
     Compliance, FootFeel, GaitController, GaitTargets, GroundForces, HeadingHold, Reactive,
-    StanceTrack, VelocityCommand, away_from_edges,
+    StanceTrack, VelocityCommand, away_from_edges, most_extra_lift,
 };
 use crate::robot::kinematics::{LegAngles, LegStatics};
 use crate::robot::{RobotModel, statics};
@@ -650,7 +650,9 @@ impl Walker {
             if self.reactive != self.controller.is_reactive() {
                 let model = self.hexapod.model();
                 let share = model.total_mass() * STANDARD_GRAVITY / 6.0;
-                let reactive = Reactive::new(share, self.hexapod.dt());
+                let gait = self.controller.gait();
+                let most = most_extra_lift(gait.stance_height, gait.step_height);
+                let reactive = Reactive::new(share, most, self.hexapod.dt());
                 self.controller
                     .set_reactive(self.reactive.then_some(reactive));
             }
