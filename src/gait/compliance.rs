@@ -64,9 +64,12 @@ pub const SPEED_PER_WEIGHT: f64 = 0.1;
 pub const RELEASE_TIME: f64 = 0.1;
 /// How fast a leg yields per unit of excess load: each weight over the cap raises its yield
 /// fraction by this much per second (a leg pressing with 5 weights, 2 over, yields fully in
-/// 10 ms). At 10 a second a leg pressing the stepping stones' walls with 5 weights still sank a
-/// foot 5.7 mm before it had yielded a quarter of the way.
-pub const YIELD_RATE: f64 = 50.0;
+/// 2.5 ms, a quarter of the fitted ground's own time √(M/k) = 11.2 ms, as a servo's torque limit
+/// acts at once). At 10 a second a leg pressing the stepping stones' walls with 5 weights still
+/// sank a foot 5.7 mm before it had yielded a quarter of the way; at 50, yielding over 5–10 ms,
+/// MushroomRL's legs pressing stones' and treads' edges with 4–7 of its weights sank a coxa or a
+/// femur 5.06–5.32 mm.
+pub const YIELD_RATE: f64 = 200.0;
 /// How hard the legs may squeeze the ground between them, in robot weights: the part of their
 /// loads that cancels in their net force (Σ|Fᵢ| − |ΣFᵢ|). Past it every leg bearing load
 /// yields, as one leg past [`CAP`] does: legs that push against each other through the body (two feet pinching a
@@ -229,8 +232,8 @@ mod tests {
         let forces = [DVec3::ZERO; 6];
         let mut loads = [0.0; 6];
         loads[4] = 80.0;
-        c.feel(&GroundForces::of_legs(forces, loads), &NO_GAPS, 1e-3);
-        assert!((c.yielded(4) - 6.0 * YIELD_RATE * 1e-3).abs() < 1e-12);
+        c.feel(&GroundForces::of_legs(forces, loads), &NO_GAPS, 1e-4);
+        assert!((c.yielded(4) - 6.0 * YIELD_RATE * 1e-4).abs() < 1e-12);
         assert!((0..6).all(|k| k == 4 || c.yielded(k) == 0.0));
         assert_eq!(c.offset(4), DVec3::ZERO);
         // bounded at 1: the servos' springs hold nothing
