@@ -18,3 +18,5 @@ pub mod scenario;
 pub mod setup;
 pub mod sim;
 pub mod terrain;
+#[cfg(test)]
+mod test_rng;

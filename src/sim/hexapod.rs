@@ -621,13 +621,8 @@ mod tests {
     /// bit, the quarter-turn pitches (where the yaw is read off the y axis) among them.
     #[test]
     fn roll_pitch_yaw_is_glams_zyx_euler_angles() {
-        let mut seed = 0x51_7cc1_b727_220a_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut uniform = crate::test_rng::uniform(0x51_7cc1_b727_220a);
+        let mut next = || uniform() * 2.0 - 1.0;
         let mut rotations: Vec<DQuat> = (0..20_000)
             .map(|_| DQuat::from_xyzw(next(), next(), next(), next()).normalize())
             .collect();

@@ -112,13 +112,7 @@ fn the_fall_test_is_the_tilt_against_the_threshold() {
 /// (clamped), NaN left out by both.
 #[test]
 fn the_largest_tilt_is_the_least_cosines() {
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut next = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = crate::test_rng::uniform(0x9e37_79b9_7f4a_7c15);
     // cosines over the whole range, and neighbouring floats near ±1, −0.3 and cos 45°
     let mut cosines: Vec<f64> = (0..200_000)
         .map(|k| -1.2 + 2.4 * k as f64 / 200_000.0)
