@@ -12,9 +12,13 @@
 //!   differences on the same line are at most Δ / [`CLIFF_RATIO`]. A riser between treads two
 //!   samples deep or more is a cliff; a steep plane (its differences all equal) is not, nor a
 //!   one-sample post or a zigzag of coarse noise (a sampled sin(x·y) at one sample per radian),
-//!   which stay the interpolation's bumps. Beyond the grid's edge the
-//!   neighbouring difference is taken as Δ's own (the ghost samples' linear extrapolation), so an
-//!   edge on the grid's border is never a cliff.
+//!   which stay the interpolation's bumps. Beyond the grid's edge the neighbouring difference is
+//!   zero: the surface there is the level apron of the clamped coordinates
+//!   ([`super::HeightGrid::surface`]), so a riser on the border's last edge is a wall like any
+//!   other, not a Catmull–Rom ramp ringing 7.4 % of its height into the tread before it (a 6 cm
+//!   riser ending a grid of stairs down rose 4.4 mm above the tread 1.4 cm before its edge). A
+//!   steep plane reaching the border is still no cliff: the difference before its last edge is
+//!   its own.
 //! - **Surface.** A cell with a cliff on one of its four edges is split into quadrants, each the
 //!   tread of its own corner: the bilinear patch of the corners it reaches without crossing a
 //!   cliff, a corner cut off replaced by the tread continued (its own sample across a cliff edge,
@@ -72,11 +76,11 @@ impl Cliffs {
             .flat_map(|i| (0..nx - 1).map(move |j| (i, j)))
             .map(|(i, j)| {
                 let d = z(i, j + 1) - z(i, j);
-                let before = if j > 0 { z(i, j) - z(i, j - 1) } else { d };
+                let before = if j > 0 { z(i, j) - z(i, j - 1) } else { 0.0 };
                 let after = if j + 2 < nx {
                     z(i, j + 2) - z(i, j + 1)
                 } else {
-                    d
+                    0.0
                 };
                 is_cliff(before, d, after, dx)
             })
@@ -85,11 +89,11 @@ impl Cliffs {
             .flat_map(|i| (0..nx).map(move |j| (i, j)))
             .map(|(i, j)| {
                 let d = z(i + 1, j) - z(i, j);
-                let before = if i > 0 { z(i, j) - z(i - 1, j) } else { d };
+                let before = if i > 0 { z(i, j) - z(i - 1, j) } else { 0.0 };
                 let after = if i + 2 < ny {
                     z(i + 2, j) - z(i + 1, j)
                 } else {
-                    d
+                    0.0
                 };
                 is_cliff(before, d, after, dy)
             })

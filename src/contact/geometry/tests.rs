@@ -402,6 +402,42 @@ fn the_treads_either_side_of_a_riser_are_level_to_the_wall() {
     }
 }
 
+/// A riser on the grid's last edge is a wall like any other: the apron beyond the border is
+/// level (the clamped coordinates), so the tread before it stays level to the wall. Read as a
+/// Catmull–Rom ramp, the 6 cm riser ending the ladder's stairs down at x = 3 rose 4.4 mm above
+/// its tread 1.4 cm before the edge, and a WORMS foot standing there was put 5.24 mm deep.
+/// (Catmull–Rom's weights, where the cells are smooth, sum to 1 within rounding.)
+#[test]
+fn a_riser_on_the_grids_border_is_a_wall_too() {
+    let terrain = crate::terrain::steps([6.0, 4.0], [0.0, 0.0], 0.3, 0.3, -0.06, 0.01).unwrap();
+    assert_eq!(terrain.x_range()[1], 3.0);
+    assert_eq!(terrain.sample(200, 599), -0.54);
+    assert_eq!(terrain.sample(200, 600), -0.6);
+    let mut walls = Vec::new();
+    terrain.walls_near(2.99, 0.5, 0.004, |w| walls.push(w));
+    assert!(!walls.is_empty() && walls.iter().all(|w| w.axis == 0 && w.at == 2.995));
+    for x in [2.97, 2.98, 2.986, 2.99, 2.9949] {
+        let s = terrain.surface(x, 0.5124);
+        assert!((s.height - -0.54).abs() < 1e-15, "at {x}: {}", s.height);
+        assert!(s.slope_x.abs() < 1e-12 && s.slope_y.abs() < 1e-12, "at {x}");
+    }
+    for x in [2.9951, 2.998, 3.0, 3.2] {
+        let s = terrain.surface(x, 0.5124);
+        assert!((s.height - -0.6).abs() < 1e-15, "at {x}: {}", s.height);
+        assert!(s.slope_x.abs() < 1e-12 && s.slope_y.abs() < 1e-12, "at {x}");
+    }
+    // a ball 1 mm into the tread, 1.5 cm before the wall (its top edge out of reach): 1 mm
+    let r = 0.05;
+    let center = DVec3::new(2.98, 0.5124, -0.54 + r - 0.001);
+    let g = sphere_geometry(&terrain, center, r, Orientation::Exact);
+    assert!((g.penetration - 0.001).abs() < 1e-9, "{}", g.penetration);
+    assert!(
+        g.frame.normal.abs_diff_eq(DVec3::Z, 1e-9),
+        "{}",
+        g.frame.normal
+    );
+}
+
 /// A box's four sides face out, each horizontally, and its vertical corner edge pushes along
 /// the diagonal: walls along y as well as x, and where two meet. (Pyramid stairs, two 0.1 m
 /// steps: risers 0.205 m and 0.405 m from the centre, midway between samples.)
