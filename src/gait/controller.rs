@@ -577,7 +577,8 @@ impl GaitController {
 
     /// Perceptive: where the feet's centres are now (body frame, as the points of
     /// [`Self::targets_on`]'s `ground`), so that a stance foot does not follow its planned
-    /// point over an edge it does not stand on ([`foothold::stance_ground`]).
+    /// point over an edge it does not stand on ([`foothold::stance_ground`]), nor hang at its
+    /// planned ground over a pit it stands over ([`foothold::standing_ground`]).
     pub fn feet_at(&mut self, feet: [DVec3; 6]) {
         self.feet_at = Some(feet);
     }
@@ -1001,13 +1002,22 @@ impl GaitController {
             if let Some(ground) = &ground {
                 foot.z += match phase {
                     LegPhase::Stance(_) => {
-                        self.stance_ground[k] = self.rim[k]
-                            + match self.feet_at {
-                                Some(feet) => {
-                                    foothold::stance_ground(ground, foot, feet[k], self.radius[k])
-                                }
-                                None => ground(foot),
-                            };
+                        self.stance_ground[k] = match self.feet_at {
+                            Some(feet) => {
+                                let (r, at) = (self.radius[k], feet[k]);
+                                let planned =
+                                    self.rim[k] + foothold::stance_ground(ground, foot, at, r);
+                                foothold::standing_ground(
+                                    ground,
+                                    foot,
+                                    planned,
+                                    at,
+                                    r,
+                                    self.sole[k],
+                                )
+                            }
+                            None => self.rim[k] + ground(foot),
+                        };
                         self.stance_ground[k]
                     }
                     LegPhase::Swing(s) => {

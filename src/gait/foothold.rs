@@ -79,6 +79,30 @@ pub fn stance_ground(
     }
 }
 
+/// The ground a stance foot whose centre is at `foot` stands on, its plan's ground being
+/// `planned_ground` (at `planned`, [`stance_ground`] and the swing's rim): that, unless an edge
+/// lies between the two and the foot is over ground lower than planned — a pit beside the stone
+/// its foothold was chosen on, the body lagging its plan — then the ground it rests on there
+/// ([`resting_ground`]). Held at the planned height the foot hangs over the pit: bullet's
+/// tripod set two feet down 9–10 cm above the pits' floors, and its body, carried by less
+/// than half its weight, fell 4 cm onto a tarsus on a stone's edge (5.24 mm deep).
+pub fn standing_ground(
+    ground: &impl Fn(DVec3) -> f64,
+    planned: DVec3,
+    planned_ground: f64,
+    foot: DVec3,
+    radius: f64,
+    sole: f64,
+) -> f64 {
+    let apart = (planned - foot).truncate().length() + radius;
+    let resting = resting_ground(ground, foot, sole);
+    if planned_ground - resting > EDGE_SLOPE * apart {
+        resting
+    } else {
+        planned_ground
+    }
+}
+
 /// The ground a foot reaching `radius` across stands on over `p` (body frame, `ground`'s points):
 /// over a pit narrower than the foot, where it rests on the pit's rims; elsewhere, the ground
 /// under its centre. The rims are read as a sphere of that radius centred above `p` rests on
@@ -439,5 +463,44 @@ mod tests {
             let g = stance_ground(&slope, planned, foot, radius);
             assert_eq!(g, slope(planned), "{planned_x}");
         }
+    }
+
+    /// A stance foot set down over a 10 cm pit 2 cm past the stone its foothold was planned on
+    /// stands on the pit's floor, not in the air at the stone's height; one on the stone planned
+    /// over the pit, one on a 30° slope off its planned point, one over a pit narrower than its
+    /// sole (resting on the rims) and one whose planned point lies farther off than the pit is
+    /// deep keep their planned ground.
+    #[test]
+    fn a_stance_foot_over_a_pit_beside_its_planned_stone_stands_in_the_pit() {
+        let (radius, sole) = (0.01, 0.01);
+        let pit = |p: DVec3| if p.x < 0.3 { 0.0 } else { -0.1 };
+        let stone = DVec3::new(0.29, 0.1, -0.1);
+        let over = DVec3::new(0.31, 0.1, -0.1);
+        let planned = stance_ground(&pit, stone, over, radius);
+        assert_eq!(planned, 0.0);
+        assert_eq!(
+            standing_ground(&pit, stone, planned, over, radius, sole),
+            -0.1
+        );
+        let planned = stance_ground(&pit, over, stone, radius);
+        assert_eq!(
+            standing_ground(&pit, over, planned, stone, radius, sole),
+            0.0
+        );
+        let slope = |p: DVec3| 0.577 * p.x;
+        let g = slope(stone);
+        assert_eq!(standing_ground(&slope, stone, g, over, radius, sole), g);
+        let narrow = |p: DVec3| if (p.x - 0.31).abs() < 0.01 { -0.1 } else { 0.0 };
+        let rims = resting_ground(&narrow, over, 0.05);
+        assert!(rims > -0.005, "{rims}");
+        assert_eq!(
+            standing_ground(&narrow, stone, 0.0, over, radius, 0.05),
+            0.0
+        );
+        let far = DVec3::new(0.36, 0.1, -0.1);
+        assert_eq!(
+            standing_ground(&pit, DVec3::new(0.29, 0.1, -0.1), 0.0, far, radius, sole),
+            0.0
+        );
     }
 }
