@@ -94,9 +94,15 @@ pub fn standing_ground(
     radius: f64,
     sole: f64,
 ) -> f64 {
-    let apart = (planned - foot).truncate().length() + radius;
+    let most_drop = EDGE_SLOPE * ((planned - foot).truncate().length() + radius);
+    // the resting ground is never below the centre's: where that is not lower by the edge's
+    // drop, neither is the resting ground, and its sampling of the footprint (read at every
+    // step of every stance) is not needed
+    if planned_ground - ground(foot) <= most_drop {
+        return planned_ground;
+    }
     let resting = resting_ground(ground, foot, sole);
-    if planned_ground - resting > EDGE_SLOPE * apart {
+    if planned_ground - resting > most_drop {
         resting
     } else {
         planned_ground
