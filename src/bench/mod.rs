@@ -267,16 +267,31 @@ pub fn run_bench(options: &BenchOptions, mut report: impl FnMut(&Figure)) -> Res
     })
 }
 
+/// The CPU's model as `/proc/cpuinfo` (`text`) gives it, with its family and model numbers where
+/// it has them: on virtual machines the name alone can hide the generation ("AMD EPYC" is a
+/// Zen 4, family 25, or a Zen 5, family 26, whose steps differ by half; docs/performance.md).
+fn cpu_model(text: &str) -> Option<String> {
+    let field = |key: &str| {
+        text.lines()
+            .take_while(|l| !l.trim().is_empty())
+            .find_map(|l| {
+                let (name, value) = l.split_once(':')?;
+                (name.trim() == key).then(|| value.trim().to_string())
+            })
+            .filter(|v| !v.is_empty())
+    };
+    let name = field("model name")?;
+    Some(match (field("cpu family"), field("model")) {
+        (Some(family), Some(model)) => format!("{name} (family {family}, model {model})"),
+        _ => name,
+    })
+}
+
 /// What was measured, in words: build, machine, solver, contact scheme.
 pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
+        .and_then(|s| cpu_model(&s))
         .unwrap_or_else(|| "unknown".into());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let articulations = options
@@ -419,6 +434,29 @@ mod tests {
         assert!(
             id.starts_with(&format!("{} patches (0001–", files.len())),
             "{id}"
+        );
+    }
+
+    /// The machine line names the CPU's family and model from the first processor's block; a
+    /// `/proc/cpuinfo` without them (other architectures) gives the name alone, and one without a
+    /// name gives none.
+    #[test]
+    fn the_cpu_is_named_with_its_family_and_model() {
+        let zen4 = "processor\t: 0\nvendor_id\t: AuthenticAMD\ncpu family\t: 25\nmodel\t\t: 17\n\
+                    model name\t: AMD EPYC\nstepping\t: 0\n\nprocessor\t: 1\ncpu family\t: 26\n\
+                    model\t\t: 2\nmodel name\t: AMD EPYC\n";
+        assert_eq!(
+            super::cpu_model(zen4).as_deref(),
+            Some("AMD EPYC (family 25, model 17)")
+        );
+        let bare = "processor\t: 0\nmodel name\t: ARMv8 Processor rev 1 (v8l)\n";
+        assert_eq!(
+            super::cpu_model(bare).as_deref(),
+            Some("ARMv8 Processor rev 1 (v8l)")
+        );
+        assert_eq!(
+            super::cpu_model("processor\t: 0\nBogoMIPS\t: 50.00\n"),
+            None
         );
     }
 }
