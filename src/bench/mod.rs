@@ -287,6 +287,42 @@ fn cpu_model(text: &str) -> Option<String> {
     })
 }
 
+/// The first core's caches from Linux's `cache/index*` directories under `dir` ("L1i 32K, L1d
+/// 32K, L2 1024K, L3 32768K"): hexsim's part of a step is bound by how much of its code the L1
+/// instruction cache keeps (docs/performance.md), so a figure says what it ran on. None where
+/// the directory is not there or says nothing.
+fn cpu_caches(dir: &std::path::Path) -> Option<String> {
+    let read = |d: &std::path::Path, f: &str| {
+        std::fs::read_to_string(d.join(f))
+            .ok()
+            .map(|s| s.trim().to_string())
+    };
+    let mut caches: Vec<(u32, String, String)> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| {
+            let d = e.ok()?.path();
+            let name = d.file_name()?.to_str()?;
+            name.starts_with("index").then_some(())?;
+            let level: u32 = read(&d, "level")?.parse().ok()?;
+            let kind = match read(&d, "type")?.as_str() {
+                "Instruction" => "i",
+                "Data" => "d",
+                _ => "",
+            };
+            Some((level, kind.to_string(), read(&d, "size")?))
+        })
+        .collect();
+    // by level, the instruction cache before the data cache
+    caches.sort_by_key(|(level, kind, _)| (*level, kind != "i", kind.clone()));
+    (!caches.is_empty()).then(|| {
+        caches
+            .iter()
+            .map(|(level, kind, size)| format!("L{level}{kind} {size}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    })
+}
+
 /// What was measured, in words: build, machine, solver, contact scheme.
 pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
@@ -325,7 +361,13 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
     [
         ("hexsim", env!("CARGO_PKG_VERSION").to_string()),
         ("build", build.to_string()),
-        ("machine", format!("{cpu}, {cores} cores")),
+        (
+            "machine",
+            match cpu_caches(std::path::Path::new("/sys/devices/system/cpu/cpu0/cache")) {
+                Some(caches) => format!("{cpu}, {cores} cores; caches {caches}"),
+                None => format!("{cpu}, {cores} cores"),
+            },
+        ),
         (
             "method",
             format!(
@@ -458,5 +500,30 @@ mod tests {
             super::cpu_model("processor\t: 0\nBogoMIPS\t: 50.00\n"),
             None
         );
+    }
+
+    /// The caches are read from Linux's `cache/index*` directories, the instruction cache before
+    /// the data cache of the same level; a missing directory gives none.
+    #[test]
+    fn the_caches_are_listed_by_level() {
+        let dir = tempfile::tempdir().unwrap();
+        for (index, level, kind, size) in [
+            (0, 1, "Data", "32K"),
+            (1, 1, "Instruction", "32K"),
+            (2, 2, "Unified", "1024K"),
+            (3, 3, "Unified", "32768K"),
+        ] {
+            let d = dir.path().join(format!("index{index}"));
+            std::fs::create_dir(&d).unwrap();
+            std::fs::write(d.join("level"), format!("{level}\n")).unwrap();
+            std::fs::write(d.join("type"), format!("{kind}\n")).unwrap();
+            std::fs::write(d.join("size"), format!("{size}\n")).unwrap();
+        }
+        std::fs::create_dir(dir.path().join("uevent_dir")).unwrap();
+        assert_eq!(
+            super::cpu_caches(dir.path()).as_deref(),
+            Some("L1i 32K, L1d 32K, L2 1024K, L3 32768K")
+        );
+        assert_eq!(super::cpu_caches(&dir.path().join("absent")), None);
     }
 }
