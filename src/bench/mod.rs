@@ -297,23 +297,24 @@ fn cpu_caches(dir: &std::path::Path) -> Option<String> {
             .ok()
             .map(|s| s.trim().to_string())
     };
-    let mut caches: Vec<(u32, String, String)> = std::fs::read_dir(dir)
+    let mut caches: Vec<(u32, &str, String)> = std::fs::read_dir(dir)
         .ok()?
         .filter_map(|e| {
             let d = e.ok()?.path();
-            let name = d.file_name()?.to_str()?;
-            name.starts_with("index").then_some(())?;
+            if !d.file_name()?.to_str()?.starts_with("index") {
+                return None;
+            }
             let level: u32 = read(&d, "level")?.parse().ok()?;
             let kind = match read(&d, "type")?.as_str() {
                 "Instruction" => "i",
                 "Data" => "d",
                 _ => "",
             };
-            Some((level, kind.to_string(), read(&d, "size")?))
+            Some((level, kind, read(&d, "size")?))
         })
         .collect();
     // by level, the instruction cache before the data cache
-    caches.sort_by_key(|(level, kind, _)| (*level, kind != "i", kind.clone()));
+    caches.sort_by_key(|&(level, kind, _)| (level, kind != "i", kind));
     (!caches.is_empty()).then(|| {
         caches
             .iter()
@@ -330,6 +331,8 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
         .and_then(|s| cpu_model(&s))
         .unwrap_or_else(|| "unknown".into());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let caches = cpu_caches(std::path::Path::new("/sys/devices/system/cpu/cpu0/cache"))
+        .map_or(String::new(), |caches| format!("; caches {caches}"));
     let articulations = options
         .articulations
         .iter()
@@ -361,13 +364,7 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
     [
         ("hexsim", env!("CARGO_PKG_VERSION").to_string()),
         ("build", build.to_string()),
-        (
-            "machine",
-            match cpu_caches(std::path::Path::new("/sys/devices/system/cpu/cpu0/cache")) {
-                Some(caches) => format!("{cpu}, {cores} cores; caches {caches}"),
-                None => format!("{cpu}, {cores} cores"),
-            },
-        ),
+        ("machine", format!("{cpu}, {cores} cores{caches}")),
         (
             "method",
             format!(
