@@ -324,6 +324,36 @@ fn cpu_caches(dir: &std::path::Path) -> Option<String> {
     })
 }
 
+/// The build, in words: cargo's profile (`build.rs` reads it from the folder it builds in), and
+/// what of the flags given to rustc changes the speed of the code: a profile-guided build
+/// (`-Cprofile-use`, docs/performance.md), an instrumented one, one for a given CPU.
+fn build_line(profile: &str, debug_assertions: bool, rustflags: &str) -> String {
+    let mut line = profile.to_string();
+    if debug_assertions {
+        line.push_str(" (debug assertions: numbers meaningless, use --release)");
+    }
+    let flags: Vec<&str> = rustflags.split_whitespace().collect();
+    // a flag is `-Cname=value`, or `-C` and `name=value` apart
+    let codegen = flags.iter().enumerate().filter_map(|(i, &f)| match f {
+        "-C" | "--codegen" => flags.get(i + 1).copied(),
+        _ => f
+            .strip_prefix("-C")
+            .or_else(|| f.strip_prefix("--codegen=")),
+    });
+    for option in codegen {
+        if option.starts_with("profile-use") {
+            line.push_str(", profile-guided (-Cprofile-use)");
+        } else if option.starts_with("profile-generate") {
+            line.push_str(", instrumented for profiling (numbers meaningless)");
+        } else if let Some(cpu) = option.strip_prefix("target-cpu=") {
+            line.push_str(&format!(", target-cpu={cpu}"));
+        } else if let Some(features) = option.strip_prefix("target-feature=") {
+            line.push_str(&format!(", target-feature={features}"));
+        }
+    }
+    line
+}
+
 /// What was measured, in words: build, machine, solver, contact scheme.
 pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
@@ -356,14 +386,14 @@ pub fn configuration(options: &BenchOptions) -> Vec<(String, String)> {
         })
         .collect::<Vec<_>>()
         .join("; ");
-    let build = if cfg!(debug_assertions) {
-        "debug (numbers meaningless: use --release)"
-    } else {
-        "release"
-    };
+    let build = build_line(
+        env!("HEXSIM_PROFILE"),
+        cfg!(debug_assertions),
+        env!("HEXSIM_RUSTFLAGS"),
+    );
     [
         ("hexsim", env!("CARGO_PKG_VERSION").to_string()),
-        ("build", build.to_string()),
+        ("build", build),
         ("machine", format!("{cpu}, {cores} cores{caches}")),
         (
             "method",
@@ -456,6 +486,37 @@ pub fn rapier_patches() -> String {
 
 #[cfg(test)]
 mod tests {
+    /// The build line names the profile and the flags that change the code's speed, whether
+    /// cargo passed them joined (`-Cprofile-use=…`) or apart (`-C target-cpu=…`), and nothing
+    /// of flags that do not.
+    #[test]
+    fn the_build_line_names_profile_guided_and_tuned_builds() {
+        assert_eq!(super::build_line("release", false, ""), "release");
+        assert_eq!(
+            super::build_line(
+                "release",
+                false,
+                "-Cprofile-use=/t/merged.profdata -Cdebuginfo=1"
+            ),
+            "release, profile-guided (-Cprofile-use)"
+        );
+        assert_eq!(
+            super::build_line(
+                "release",
+                false,
+                "-Cprofile-generate=/t/pgo -C target-cpu=native"
+            ),
+            "release, instrumented for profiling (numbers meaningless), target-cpu=native"
+        );
+        assert_eq!(
+            super::build_line("release-lto", false, "--codegen=target-feature=+avx2"),
+            "release-lto, target-feature=+avx2"
+        );
+        assert_eq!(
+            super::build_line("debug", true, "-Dwarnings"),
+            "debug (debug assertions: numbers meaningless, use --release)"
+        );
+    }
     /// Every patch in `third_party/rapier3d/patches` is in [`super::RAPIER_PATCHES`], in order:
     /// a patch added to the series and not here would leave the id unchanged.
     #[test]
