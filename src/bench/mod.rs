@@ -517,6 +517,7 @@ mod tests {
             "debug (debug assertions: numbers meaningless, use --release)"
         );
     }
+
     /// Every patch in `third_party/rapier3d/patches` is in [`super::RAPIER_PATCHES`], in order:
     /// a patch added to the series and not here would leave the id unchanged.
     #[test]

@@ -547,9 +547,10 @@ mod tests {
         }
     }
 
-    /// The rows set (the contacts' paths) read instead of those found by their entries: W bit
-    /// for bit the same, with path rows whose entries are zero (a foot's last joint that does
-    /// not move it along any axis), and a step with fewer contacts after one with more.
+    /// The rows set (the contacts' paths) read instead of those found by their entries, each at
+    /// its contacts' lanes only instead of at every lane: W bit for bit the same, with path rows
+    /// whose entries are zero (a foot's last joint that does not move it along any axis), and a
+    /// step with fewer contacts after one with more.
     #[test]
     fn the_rows_set_give_the_same_w_as_the_rows_with_entries() {
         let parents = parents();
