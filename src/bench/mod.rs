@@ -288,9 +288,9 @@ fn cpu_model(text: &str) -> Option<String> {
 }
 
 /// The first core's caches from Linux's `cache/index*` directories under `dir` ("L1i 32K, L1d
-/// 32K, L2 1024K, L3 32768K"): hexsim's part of a step is bound by how much of its code the L1
-/// instruction cache keeps (docs/performance.md), so a figure says what it ran on. None where
-/// the directory is not there or says nothing.
+/// 32K, L2 1024K, L3 32768K"): a step touches more code than the L1 instruction cache holds, and
+/// its time depends on how much of it stays near the core (docs/performance.md), so a figure says
+/// what it ran on. None where the directory is not there or says nothing.
 fn cpu_caches(dir: &std::path::Path) -> Option<String> {
     let read = |d: &std::path::Path, f: &str| {
         std::fs::read_to_string(d.join(f))
