@@ -35,6 +35,20 @@ pub struct JointContact {
     pub sharing: usize,
 }
 
+/// Where [`JointSolver::respond`] reads and writes contact `i`'s state between steps: a slice of
+/// the contacts' own, or the caller's storage reached through an index — a state is 168 bytes,
+/// and copied out and back it was two calls to `memcpy` a contact a step.
+pub trait ContactStates {
+    fn state(&mut self, i: usize) -> &mut ContactState;
+}
+
+impl ContactStates for [ContactState] {
+    #[inline]
+    fn state(&mut self, i: usize) -> &mut ContactState {
+        &mut self[i]
+    }
+}
+
 /// The most sticking contacts solved in fixed-size storage (a hexapod's feet): a step with more
 /// (a belly on the ground) solves in storage it allocates.
 pub const MAX_JOINT_CONTACTS: usize = 6;
@@ -244,7 +258,7 @@ impl JointSolver {
         contacts: &[JointContact],
         mobility: impl Fn(usize, usize) -> DMat3,
         dt: f64,
-        states: &mut [ContactState],
+        states: &mut (impl ContactStates + ?Sized),
         out: &mut [Option<ContactForce>],
     ) {
         let n = contacts.len();
@@ -257,9 +271,10 @@ impl JointSolver {
             solution,
         } = self;
         pending.clear();
-        for (i, (c, state)) in contacts.iter().zip(states.iter_mut()).enumerate() {
+        for (i, c) in contacts.iter().enumerate() {
             let normal_mass = 1.0 / mobility(i, i).z_axis.z / c.sharing.max(1) as f64;
             let alone = c.sharing <= 1;
+            let state = states.state(i);
             pending.push(model.begin(&c.geometry, c.velocity, normal_mass, alone, dt, state));
         }
         touching.clear();
@@ -344,7 +359,7 @@ impl JointSolver {
         for (s, &i) in touching.iter().enumerate() {
             let outcome = p(i).friction(&model.friction, stops[s]);
             let outcome = p(i).unjammed(outcome, mobility(i, i));
-            out[i] = Some(ContactModel::conclude(p(i), outcome, dt, &mut states[i]));
+            out[i] = Some(ContactModel::conclude(p(i), outcome, dt, states.state(i)));
         }
     }
 }

@@ -21,7 +21,7 @@
 
 use super::articulation::{ContactPoint, Joints};
 use super::engine::Engine;
-use crate::contact::joint::{JointContact, JointSolver};
+use crate::contact::joint::{ContactStates, JointContact, JointSolver};
 use crate::contact::{
     ContactForce, ContactModel, ContactState, Faces, MAX_FACES, SphereGeometry, Variant,
     closest_from_each, faces_from_below_into, search_start,
@@ -91,6 +91,20 @@ fn free(slots: &mut [Slot]) {
     }
 }
 
+/// This step's contacts' states, each in its face's slot: the solver's `i`th contact is slot
+/// `ids[i]` (read and written in place, not copied out and back).
+struct SlotStates<'a> {
+    slots: &'a mut [Slot],
+    ids: &'a [usize],
+}
+
+impl ContactStates for SlotStates<'_> {
+    #[inline]
+    fn state(&mut self, i: usize) -> &mut ContactState {
+        &mut self.slots[self.ids[i]].state
+    }
+}
+
 /// Faces whose normals differ by less than this (cos 45°) from one step to the next are taken to
 /// be the same face, its contact state carried on.
 const SAME_FACE: f64 = std::f64::consts::FRAC_1_SQRT_2;
@@ -116,7 +130,6 @@ pub(super) struct GroundContacts {
     velocities: Vec<DVec3>,
     mobility: Vec<DMat3>,
     forces: Vec<Option<ContactForce>>,
-    scratch_states: Vec<ContactState>,
     solver: JointSolver,
 }
 
@@ -163,7 +176,6 @@ impl GroundContacts {
             velocities: Vec::new(),
             mobility: Vec::new(),
             forces: Vec::new(),
-            scratch_states: Vec::new(),
             solver: JointSolver::default(),
         }
     }
@@ -272,9 +284,6 @@ impl GroundContacts {
         for (input, velocity) in self.inputs.iter_mut().zip(&self.velocities) {
             input.velocity = *velocity;
         }
-        self.scratch_states.clear();
-        self.scratch_states
-            .extend(self.ids.iter().map(|&id| self.slots[id].state));
         self.forces.clear();
         self.forces.resize(n, None);
         if contact.variant == Variant::Paper {
@@ -287,7 +296,7 @@ impl GroundContacts {
                     self.inputs[i].velocity,
                     normal_mass,
                     engine.dt(),
-                    &mut self.scratch_states[i],
+                    &mut self.slots[self.ids[i]].state,
                 );
             }
         } else {
@@ -297,7 +306,10 @@ impl GroundContacts {
                 &self.inputs,
                 |i, j| mobility[i * n + j],
                 engine.dt(),
-                &mut self.scratch_states,
+                &mut SlotStates {
+                    slots: &mut self.slots,
+                    ids: &self.ids,
+                },
                 &mut self.forces,
             );
         }
@@ -305,7 +317,6 @@ impl GroundContacts {
         link_contacts.clear();
         for i in 0..n {
             let id = self.ids[i];
-            self.slots[id].state = self.scratch_states[i];
             let Some(c) = &self.forces[i] else { continue };
             let point = &self.points[i];
             let torque = (c.point - point.com).cross(c.force);
