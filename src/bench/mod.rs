@@ -463,6 +463,7 @@ pub const RAPIER_PATCHES: &[(&str, &[u8])] = &[
     patch!("0014-solver-lay-small-joint-colors-out-in-SIMD-chunks-in-.patch"),
     patch!("0015-solver-read-a-joint-s-body-velocities-once-for-all-i.patch"),
     patch!("0016-solver-emit-a-3D-revolute-s-angular-motor-row-in-the.patch"),
+    patch!("0017-solver-reuse-the-island-s-stage-sync-and-generic-vel.patch"),
 ];
 
 /// The patch series in a line: how many, the first and last number, and the first 12 hex digits

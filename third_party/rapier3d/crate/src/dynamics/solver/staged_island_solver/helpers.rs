@@ -98,8 +98,19 @@ impl VelocitySolver {
             }
         }
 
-        self.generic_solver_vels_increment = DVector::zeros(multibody_solver_id as usize);
-        self.generic_solver_vels = DVector::zeros(multibody_solver_id as usize);
+        // zeroed in place when their size is last step's (a new vector was two allocations a
+        // step, and their frees)
+        let ndofs = multibody_solver_id as usize;
+        for v in [
+            &mut self.generic_solver_vels_increment,
+            &mut self.generic_solver_vels,
+        ] {
+            if v.len() == ndofs {
+                v.fill(0.0);
+            } else {
+                *v = DVector::zeros(ndofs);
+            }
+        }
 
         for link in &self.multibody_roots {
             let multibody = multibodies

@@ -63,6 +63,23 @@ impl StageSync {
         }
     }
 
+    /// Resets `self` to [`Self::new`]`(num_workers)`'s state, keeping its cursors' storage when the
+    /// worker count is the same: the island solve resets its sync every step, and a new one
+    /// allocated (and freed) a cache-line-aligned vector each time.
+    pub(super) fn reset(&mut self, num_workers: usize) {
+        if self.cursors.len() != num_workers {
+            *self = Self::new(num_workers);
+            return;
+        }
+        self.num_workers = num_workers;
+        *self.published.get_mut() = 0;
+        *self.advance_ticket.get_mut() = 0;
+        *self.completed.get_mut() = 0;
+        for cursor in &mut self.cursors {
+            cursor.0 = AtomicCursor::new(0);
+        }
+    }
+
     /// Records `count` executed units of `stage` (total `stage_work`, identical across workers).
     /// The completion crossing the total advances the stage right here, so [`Self::sync`] waiters
     /// only *read* `published` — no RMWs while spinning. Sound unconditionally: an incomplete
