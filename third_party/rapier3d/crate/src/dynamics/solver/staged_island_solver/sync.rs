@@ -71,12 +71,12 @@ impl StageSync {
             *self = Self::new(num_workers);
             return;
         }
-        self.num_workers = num_workers;
+        // (`num_workers` is the cursors' count already: `new` sets both)
         *self.published.get_mut() = 0;
         *self.advance_ticket.get_mut() = 0;
         *self.completed.get_mut() = 0;
         for cursor in &mut self.cursors {
-            cursor.0 = AtomicCursor::new(0);
+            *cursor.0.get_mut() = 0;
         }
     }
 
