@@ -398,3 +398,65 @@ fn resume_reruns_a_scenario_whose_mesh_changed() {
     assert_eq!(of(&first, "drop"), of(&after, "drop"));
     assert_ne!(of(&first, "kraby")["hash"], of(&after, "kraby")["hash"]);
 }
+
+/// A scenario's recording or trajectory (`--record-dir`) may not be a file the batch reads (another
+/// scenario's height file) nor its results file, and the results may not go to a folder: each is
+/// refused before anything runs, and nothing is overwritten or left behind.
+#[test]
+fn a_scenarios_output_may_not_overwrite_an_input_or_the_results() {
+    let dir = scratch("clobber");
+    let heights = format!("{}\n", vec!["0.0"; 41].join(",")).repeat(41);
+    std::fs::write(dir.join("scenarios/ground.csv"), &heights).unwrap();
+    write(
+        &dir,
+        "a.toml",
+        &format!("name = \"ground\"\nduration = 0.05\n{FLAT}[record]\ntrajectory = true\n"),
+    );
+    write(
+        &dir,
+        "b.toml",
+        "name = \"b\"\nduration = 0.05\n[terrain.source]\nkind = \"csv\"\npath = \"ground.csv\"\n\
+         x_range = [-2.0, 2.0]\ny_range = [-2.0, 2.0]\n",
+    );
+    let (a, b) = ("scenarios/a.toml", "scenarios/b.toml");
+    let out = hexsim(&["batch", a, b, "-q", "--record-dir", "scenarios"], &dir);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(
+        text(&out).contains(
+            "scenario's trajectory scenarios/ground.csv: it is the terrain's height file"
+        ),
+        "{}",
+        text(&out)
+    );
+    let out = hexsim(
+        &[
+            "batch",
+            a,
+            "-q",
+            "-o",
+            "rec/ground.csv",
+            "--record-dir",
+            "rec",
+        ],
+        &dir,
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(
+        text(&out).contains("it is the same file as the results file -o rec/ground.csv"),
+        "{}",
+        text(&out)
+    );
+    std::fs::create_dir(dir.join("out")).unwrap();
+    let out = hexsim(&["batch", a, "-q", "-o", "out"], &dir);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out));
+    assert!(
+        text(&out).contains("cannot write out: it is a folder"),
+        "{}",
+        text(&out)
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("scenarios/ground.csv")).unwrap(),
+        heights
+    );
+    assert!(!dir.join("out.partial").exists() && !dir.join("results.jsonl").exists());
+}

@@ -223,6 +223,8 @@ pub fn run(scenarios: &[Scenario], options: &Options) -> Result<Outcome> {
             }
         }
     }
+    // a folder or an unwritable place named for the results: said before anything is written
+    crate::record::output::check_writable(&options.output)?;
     results::write_all(&options.output, &kept)?;
     let done: std::collections::HashSet<&str> = kept.iter().map(|r| r.name.as_str()).collect();
     let mut todo: Vec<(usize, &Scenario)> = mine
@@ -333,6 +335,26 @@ pub fn status_word(status: Status) -> &'static str {
     }
 }
 
+/// The files scenario `s` writes into `record_dir` when its `[record]` asks: its recording
+/// (`NAME.rrd`) and its trajectory (`NAME.csv`), each named for [`check_distinct`]'s message. The
+/// batch checks them against every scenario's inputs and its results file before it runs: one
+/// scenario's output must not overwrite what another reads.
+///
+/// [`check_distinct`]: crate::record::output::check_distinct
+pub fn record_files(s: &Scenario, record_dir: &Path) -> [Option<(&'static str, PathBuf)>; 2] {
+    let file = |extension: &str| record_dir.join(format!("{}.{extension}", s.name));
+    [
+        s.spec
+            .record
+            .rrd
+            .then(|| ("scenario's recording", file("rrd"))),
+        s.spec
+            .record
+            .trajectory
+            .then(|| ("scenario's trajectory", file("csv"))),
+    ]
+}
+
 /// Runs one scenario into a record; None if it was interrupted.
 fn run_one(
     s: &Scenario,
@@ -351,15 +373,10 @@ fn run_one(
             bar.inc(done.saturating_sub(before));
         }) as Box<dyn Fn(u64) + Send>
     };
-    let file = |extension: &str| options.record_dir.join(format!("{}.{extension}", s.name));
+    let [recording, trajectory] = record_files(s, &options.record_dir);
     let outputs = Outputs::new()
-        .with_some(s.spec.record.rrd.then(|| Output::Recording(file("rrd"))))
-        .with_some(
-            s.spec
-                .record
-                .trajectory
-                .then(|| Output::Trajectory(file("csv"))),
-        )
+        .with_some(recording.map(|(_, path)| Output::Recording(path)))
+        .with_some(trajectory.map(|(_, path)| Output::Trajectory(path)))
         .with(Output::Progress(progress));
     let started = std::time::Instant::now();
     let result = s.run(outputs);

@@ -79,8 +79,16 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
         .flat_map(|s| s.inputs())
         .chain(args.baseline.iter().map(|b| ("baseline", b.clone())))
         .collect();
+    // nor is a scenario's recording or trajectory (another scenario's height file, the results)
+    let records: Vec<(&'static str, std::path::PathBuf)> = scenarios
+        .iter()
+        .flat_map(|s| hexsim::batch::record_files(s, &args.record_dir))
+        .flatten()
+        .collect();
+    let outputs = std::iter::once(("results file -o", args.output.as_path()))
+        .chain(records.iter().map(|(what, path)| (*what, path.as_path())));
     hexsim::record::output::check_distinct(
-        [("results file -o", args.output.as_path())],
+        outputs,
         inputs.iter().map(|(what, path)| (*what, path.as_path())),
     )?;
     let baseline = match &args.baseline {
