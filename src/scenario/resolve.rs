@@ -105,6 +105,14 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
         return Err(format!("dt: expected a time step in (0, 0.01] s, got {dt}"));
     }
     check_number(spec.duration, Range::NonNegative, "s").map_err(|e| format!("duration: {e}"))?;
+    if spec.duration < dt {
+        // a run of no step has no metric to judge: its zeros would pass any upper bound
+        return Err(format!(
+            "duration: expected at least one time step (dt = {} s), got {} s",
+            num(dt),
+            num(spec.duration)
+        ));
+    }
     if let Err((field, expected)) = spec.contact.model().validate() {
         return Err(format!("contact.{field}: {expected}"));
     }

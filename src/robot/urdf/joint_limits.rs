@@ -36,16 +36,18 @@ pub(super) fn revolute(
             joint.name
         ));
     }
-    let mut effort = joint.limit.effort;
-    if effort == 0.0 {
-        effort = f64::NAN;
-        unstated.effort.push(joint.name.clone());
-    }
-    if !(effort.is_nan() || effort.is_finite() && effort > 0.0) {
+    let effort = joint.limit.effort;
+    // a NaN written in the file is refused here: below, NaN stands for "not stated" (0, urdf-rs's
+    // default), which the fit fills in
+    if !(effort == 0.0 || effort.is_finite() && effort > 0.0) {
         return Err(format!(
             "joint `{}`: <limit effort> (the servo's torque limit, N·m) must be > 0, got {effort}",
             joint.name
         ));
+    }
+    if effort == 0.0 {
+        unstated.effort.push(joint.name.clone());
+        return Ok((axis.normalize(), lower, upper, f64::NAN));
     }
     Ok((axis.normalize(), lower, upper, effort))
 }
