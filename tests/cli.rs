@@ -1053,6 +1053,28 @@ fn run_takes_a_scenario_file() {
         assert_eq!(out.status.code(), Some(2), "{stderr}");
         assert!(stderr.contains(expected), "{stderr}");
     };
+    // the file's expectations are judged as `hexsim batch` judges them
+    let expecting = dir.join("expecting.toml");
+    std::fs::write(
+        &expecting,
+        "duration = 0.3\nsettle = 0.2\n[terrain.source]\nkind = \"flat\"\nsize = [4.0, 4.0]\n\
+         [expect]\ndistance_min = 5.0\nmax_tilt_deg = 45\n",
+    )
+    .unwrap();
+    let out = hexsim()
+        .args(["run", expecting.to_str().unwrap(), "--no-record"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("error: expectation not met: distance_min: ") && stderr.contains(" < 5"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains("max_tilt_deg"),
+        "a met one is not named: {stderr}"
+    );
     refused(&["ladder/gaps.toml"], "a sweep of 12 scenarios");
     refused(&["scenarios/ball_bell.toml"], "a ball scenario");
     refused(

@@ -17,7 +17,8 @@ use super::{COMMAND_LINE, Cli, Command, conclude, progress_bar, warn_about};
 pub struct RunArgs {
     /// A scenario file (TOML, as `hexsim batch` reads) to run and record instead of the walk
     /// the flags describe; only the output flags (--record, --trajectory, --metrics, --spawn,
-    /// --strict, --allow-flags) go with it. A sweep is refused: `hexsim batch` runs those.
+    /// --strict, --allow-flags) go with it. Its `[expect]` is judged as `hexsim batch` judges it
+    /// (exit 1 if one is not met). A sweep is refused: `hexsim batch` runs those.
     #[arg(
         value_name = "SCENARIO",
         conflicts_with_all = [
@@ -418,6 +419,26 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
                 .join(", ")
         );
         code = ExitCode::from(1);
+    }
+    // a scenario file's own expectations (`[expect]`), judged as `hexsim batch` judges them
+    // (a divergence and the walk's flags are judged above)
+    if report.failure.is_none() && m.complete {
+        let unmet: Vec<String> = report
+            .checks
+            .iter()
+            .filter(|c| {
+                !c.passed
+                    && !matches!(
+                        c.expectation.as_str(),
+                        "no_divergence" | "walk_as_commanded"
+                    )
+            })
+            .map(hexsim::batch::describe_check)
+            .collect();
+        if !unmet.is_empty() {
+            eprintln!("error: expectation not met: {}", unmet.join("; "));
+            code = ExitCode::from(1);
+        }
     }
     if args.spawn && !args.no_record {
         hexsim::record::rerun::spawn_viewer(&args.record)?;
