@@ -51,7 +51,7 @@ pub fn ladder(args: LadderArgs) -> Result<ExitCode> {
     if jobs == 0 {
         anyhow::bail!("--jobs: expected at least 1");
     }
-    std::fs::create_dir_all(&args.output)?;
+    hexsim::record::output::create_folder(&args.output, "--output")?;
     let robot = args
         .robot
         .as_ref()

@@ -54,7 +54,7 @@ pub fn optimize(args: OptimizeArgs) -> Result<ExitCode> {
         written.iter().map(|p| ("output", p.as_path())),
         opt.inputs.iter().map(|(what, p)| (*what, p.as_path())),
     )?;
-    std::fs::create_dir_all(&args.output)?;
+    hexsim::record::output::create_folder(&args.output, "--output")?;
     let jobs = args.jobs.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });

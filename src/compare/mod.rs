@@ -141,7 +141,7 @@ pub fn run(
     jobs: usize,
 ) -> anyhow::Result<Vec<Outcome>> {
     if let Some(dir) = trajectories {
-        std::fs::create_dir_all(dir)?;
+        crate::record::output::create_folder(dir, "--trajectories")?;
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs.max(1))

@@ -65,6 +65,19 @@ pub fn check_writable(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Creates the folder `path` (with its parents) that a command writes its files into, or says
+/// which folder and why not: `what` is the option that named it.
+pub fn create_folder(path: &Path, what: &str) -> Result<()> {
+    if path.exists() && !path.is_dir() {
+        bail!(
+            "{what} {}: it is a file, and a folder is expected here; name a folder",
+            path.display()
+        );
+    }
+    std::fs::create_dir_all(path)
+        .with_context(|| format!("{what} {}: cannot create this folder", path.display()))
+}
+
 /// Moves the finished temporary file to its final name (a device or FIFO has none).
 pub fn commit(path: &Path) -> Result<()> {
     let target = followed(path);
@@ -171,6 +184,25 @@ pub fn check_distinct<'a, 'b>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_output_folder_that_is_a_file_is_named_in_the_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("taken");
+        std::fs::write(&file, "x").unwrap();
+        let e = create_folder(&file, "--output").unwrap_err().to_string();
+        assert!(
+            e.starts_with("--output ") && e.contains("taken: it is a file"),
+            "{e}"
+        );
+        let nested = dir.path().join("a/b");
+        create_folder(&nested, "--output").unwrap();
+        create_folder(&nested, "--output").unwrap();
+        assert!(nested.is_dir());
+        let under_file = file.join("sub");
+        let e = format!("{:#}", create_folder(&under_file, "--output").unwrap_err());
+        assert!(e.contains("taken/sub: cannot create this folder"), "{e}");
+    }
 
     #[test]
     fn an_output_that_is_an_input_or_another_output_is_refused() {
