@@ -193,7 +193,7 @@ pub struct Steps {
 impl HeightSource for Steps {
     fn validate(&self) -> Result<(), FieldError> {
         finite("step_height", self.step_height)?;
-        positive("step_length", self.step_length)?;
+        cells2("step_length", self.step_length, self.cell)?;
         finite("first_step", self.first_step)?;
         size2("size", self.size)?;
         finite2("center", self.center)?;
@@ -241,6 +241,7 @@ impl HeightSource for Stairs {
         cells2("landing", self.landing, self.cell)?;
         finite("first_step", self.first_step)?;
         size2("size", self.size)?;
+        cell_fits(self.size, self.cell)?;
         finite2("center", self.center)
     }
 
@@ -284,6 +285,7 @@ impl HeightSource for PyramidStairs {
         count("count", self.count, 1000)?;
         cells2("top", self.top, self.cell)?;
         size2("size", self.size)?;
+        cell_fits(self.size, self.cell)?;
         finite2("center", self.center)?;
         let width = self.top + 2.0 * (self.count - 1) as f64 * self.step_width;
         holds(
@@ -337,6 +339,7 @@ impl HeightSource for DiscreteObstacles {
         bounds("height", self.height)?;
         non_negative("platform", self.platform)?;
         size2("size", self.size)?;
+        cell_fits(self.size, self.cell)?;
         finite2("center", self.center)?;
         holds(self.size, self.platform, "the platform")
     }
@@ -392,6 +395,7 @@ impl HeightSource for SteppingStones {
         positive("depth", self.depth)?;
         non_negative("platform", self.platform)?;
         size2("size", self.size)?;
+        cell_fits(self.size, self.cell)?;
         finite2("center", self.center)?;
         holds(self.size, self.platform, "the platform")
     }
@@ -447,6 +451,7 @@ impl HeightSource for Gaps {
         positive("depth", self.depth)?;
         finite("first_gap", self.first_gap)?;
         size2("size", self.size)?;
+        cell_fits(self.size, self.cell)?;
         finite2("center", self.center)
     }
 

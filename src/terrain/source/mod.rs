@@ -50,8 +50,9 @@ pub trait HeightSource {
     }
 }
 
-/// Where the heights come from (`kind = "..."` in `[source]`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Where the heights come from (`kind = "..."` in `[source]`). Read by [`Source::deserialize`],
+/// written tagged with its kind.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Source {
     Natural(Natural),
@@ -69,6 +70,78 @@ pub enum Source {
     Csv(Csv),
     Png(Png),
     Stl(Stl),
+}
+
+/// Each kind's name in `[source]` and how its fields are read.
+macro_rules! kinds {
+    ($($kind:literal => $variant:ident),* $(,)?) => {
+        /// The kinds, as `kind = "..."` names them.
+        pub const KINDS: &[&str] = &[$($kind),*];
+
+        /// The source of `kind` read from its other `fields`: an error names the field.
+        fn read_kind(kind: &str, fields: toml::Value) -> Result<Source, String> {
+            match kind {
+                $($kind => fields.try_into().map(Source::$variant).map_err(|e| field_error(&e)),)*
+                other => Err(format!(
+                    "field `source.kind`: expected one of {}, got {other:?}",
+                    KINDS.join(", ")
+                )),
+            }
+        }
+    };
+}
+
+kinds! {
+    "natural" => Natural,
+    "bell" => Bell,
+    "flat" => Flat,
+    "slope" => Slope,
+    "steps" => Steps,
+    "stairs" => Stairs,
+    "pyramid_stairs" => PyramidStairs,
+    "discrete_obstacles" => DiscreteObstacles,
+    "stepping_stones" => SteppingStones,
+    "gaps" => Gaps,
+    "rough" => Rough,
+    "sine" => Sine,
+    "csv" => Csv,
+    "png" => Png,
+    "stl" => Stl,
+}
+
+/// toml's "invalid value: …\nin `seed`" as "field `source.seed`: invalid value: …".
+fn field_error(e: &toml::de::Error) -> String {
+    let message = e.to_string();
+    let message = message.trim_end();
+    match message.rsplit_once("\nin `") {
+        Some((what, field)) => format!("field `source.{}: {what}", field),
+        None => format!("in [source]: {message}"),
+    }
+}
+
+/// Read through the kind's own struct, not serde's tagged enum: that buffers the table and its
+/// error names neither the field nor what it holds ("expected u32" at `[source]`).
+impl<'de> Deserialize<'de> for Source {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let mut table = toml::Table::deserialize(d)?;
+        let kind = match table.remove("kind") {
+            Some(toml::Value::String(kind)) => kind,
+            Some(other) => {
+                return Err(D::Error::custom(format!(
+                    "field `source.kind`: expected a string, one of {}, got {other}",
+                    KINDS.join(", ")
+                )));
+            }
+            None => {
+                return Err(D::Error::custom(format!(
+                    "field `source.kind`: missing; expected one of {}",
+                    KINDS.join(", ")
+                )));
+            }
+        };
+        read_kind(&kind, toml::Value::Table(table)).map_err(D::Error::custom)
+    }
 }
 
 impl Source {
