@@ -178,6 +178,22 @@ impl GaitSpec {
                 ));
             }
         }
+        // the walk's nominal speed, which the default command takes: over a command's bound it is
+        // the stride's fault, named here rather than the command's
+        if let Some(stride) = self.stride_length {
+            let stance = self.duty_factor * self.period;
+            let most = super::command::MAX_SPEED;
+            if stride / stance > most {
+                return Err(format!(
+                    "field `stride_length`: {stride} m over a stance of {} s (duty_factor × period) \
+                     walks at {} m/s, more than the {most} m/s a walk may command; expected a \
+                     stride in metres, at most {} m",
+                    crate::limits::num(stance),
+                    crate::limits::num(stride / stance),
+                    crate::limits::num(most * stance)
+                ));
+            }
+        }
         if let Some(stance_height) = self.stance_height {
             positive("stance_height", stance_height)?;
         }

@@ -277,6 +277,15 @@ fn resolve_ball(spec: &ScenarioSpec, contact: &ContactModel) -> Result<BallConfi
         ));
     }
     let b = spec.ball.unwrap_or_default();
+    if b.drop_height < 0.0 {
+        // a ball started inside the ground is thrown out by the compressed spring: not a drop
+        return Err(format!(
+            "ball.drop_height: expected ≥ 0 m (its lowest point above the ground: 0 starts it \
+             resting on it), got {}; the ball would start {} mm inside the ground",
+            num(b.drop_height),
+            num((-b.drop_height * 1e4).round() / 10.0)
+        ));
+    }
     let config = BallConfig {
         radius: b.radius,
         mass: b.mass,
@@ -455,7 +464,10 @@ fn resolve_walk(
         &robot,
         &gait.standing_pose,
         gains,
-        servo.stiffness.is_some(),
+        servo.stiffness.is_none().then(|| {
+            let (pose, step_height) = (&gait.standing_pose, gait.gait.step_height);
+            crate::setup::servo::fitted(&robot, pose, support, step_height).1
+        }),
         contact_step,
         warnings,
         notes,

@@ -249,14 +249,15 @@ fn touchdown_step(
 /// it is larger than the contact spring or the landing feet allow (`contact`), naming the bound
 /// and the step hexsim would choose — else the default, or 1 ms / n with the least n all of
 /// them allow (said in a note: hexsim's own choice, nothing doubtful in the input, so `--strict`
-/// does not refuse it). `stiffness_given`: the servo's, for the message.
+/// does not refuse it). `fitted`: what the servo's stiffness was fitted for (None: given), for
+/// the message.
 #[allow(clippy::too_many_arguments)]
 pub fn choose(
     requested: Requested,
     robot: &RobotModel,
     pose: &[f64],
     gains: ServoGains,
-    stiffness_given: bool,
+    fitted: Option<crate::robot::servo::FittedFor>,
     contact: ContactStep,
     warnings: &mut Vec<String>,
     notes: &mut Vec<String>,
@@ -272,10 +273,16 @@ pub fn choose(
         return Ok(requested.dt());
     };
     let k = gains.stiffness;
-    let fitted = if stiffness_given {
-        ""
-    } else {
-        ", fitted to the robot's weight and the gait's step height"
+    use crate::robot::servo::FittedFor;
+    let fitted = match fitted {
+        None => "",
+        Some(FittedFor::Sag) => ", fitted to the robot's weight and the gait's step height",
+        Some(FittedFor::Bandwidth) => ", fitted to the reference servo's bandwidth on these legs",
+        // the fit's floor: a small robot's own figures ask for less
+        Some(FittedFor::Reference) => {
+            ", hex18's, the least the fit gives (a robot far smaller than hex18 may set its own: \
+             --servo-stiffness, or `servo.stiffness` in a scenario)"
+        }
     };
     let omega = (k / inertia).sqrt();
     let name = &robot.joints[joint].name;
@@ -405,7 +412,14 @@ mod tests {
         let contact = contact_step(requested, &w.robot, &w.contact, &w.gait, 3, false)?;
         let mut notes = Vec::new();
         let dt = choose(
-            requested, &w.robot, &w.pose, w.gains, false, contact, said, &mut notes,
+            requested,
+            &w.robot,
+            &w.pose,
+            w.gains,
+            Some(crate::robot::servo::FittedFor::Sag),
+            contact,
+            said,
+            &mut notes,
         );
         said.extend(notes);
         dt

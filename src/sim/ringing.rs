@@ -25,8 +25,9 @@ pub fn describe(joint: &str, from: f64) -> String {
     format!(
         "the servo on `{joint}` rang at the step rate from t = {from:.4} s (its rate changed sign \
          every step for {RING_STEPS} steps and more, its foot off the ground): it oversteps on \
-         that joint's inertia at this dt (the impulse joints' spring is explicit); reduce dt, \
-         soften the servo, or use the multibody articulation"
+         that joint's inertia at this dt; reduce dt or soften the servo (on impulse joints, \
+         whose spring is explicit: or walk on the multibody articulation, whose spring is \
+         implicit)"
     )
 }
 
