@@ -106,8 +106,9 @@ fn owner(node: roxmltree::Node) -> Option<String> {
 }
 
 /// The first attribute of a link or joint that urdf-rs cannot read (a number that is not one, a
-/// vector of the wrong length, an unknown joint type, a required attribute missing), with its
-/// line; None if none is found, and urdf-rs's own message then stands.
+/// vector of the wrong length, an unknown joint type, a required attribute missing, an empty
+/// `<geometry>`, an `<inertial>` without its mass or inertia), with its line; None if none is
+/// found, and urdf-rs's own message then stands.
 pub(super) fn syntax_error(text: &str) -> Option<Place> {
     let document = match roxmltree::Document::parse(text) {
         Ok(document) => document,
@@ -150,6 +151,25 @@ pub(super) fn syntax_error(text: &str) -> Option<Place> {
                 }
             }
             continue;
+        }
+        // the elements urdf-rs needs inside these, which it reports only as a parser's state
+        if tag == "geometry" && !node.children().any(|c| c.is_element()) {
+            return place(format!(
+                "<geometry> in {owner}: empty (expected one shape: <box>, <cylinder>, <sphere>, \
+                 <capsule> or <mesh>)"
+            ));
+        }
+        if tag == "inertial" {
+            for (needed, example) in [
+                ("mass", "<mass value=\"0.1\"/>"),
+                ("inertia", "<inertia ixx=… ixy=… ixz=… iyy=… iyz=… izz=…/>"),
+            ] {
+                if !node.children().any(|c| c.tag_name().name() == needed) {
+                    return place(format!(
+                        "<inertial> in {owner}: no <{needed}> element (expected {example})"
+                    ));
+                }
+            }
         }
         let Some(attributes) = attributes(tag, velocity_required) else {
             continue;
@@ -285,6 +305,27 @@ mod tests {
                 robot("0.07", "revolute", "0 1", "limit"),
                 8,
                 "<axis xyz=\"0 1\"> in joint `hip`: expected 3 numbers separated by spaces, got \"0 1\"",
+            ),
+            (
+                robot("0.07", "revolute", "0 1 0", "limit").replace(
+                    "<link name=\"leg\"/>",
+                    "<link name=\"leg\">\n<collision><geometry></geometry></collision></link>",
+                ),
+                6,
+                "<geometry> in link `leg`: empty (expected one shape",
+            ),
+            (
+                robot("0.07", "revolute", "0 1 0", "limit").replace("<mass value=\"0.07\"/>", ""),
+                3,
+                "<inertial> in link `body`: no <mass> element (expected <mass value=\"0.1\"/>)",
+            ),
+            (
+                robot("0.07", "revolute", "0 1 0", "limit").replace(
+                    "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>",
+                    "",
+                ),
+                3,
+                "<inertial> in link `body`: no <inertia> element",
             ),
         ];
         for (text, line, message) in cases {
