@@ -27,6 +27,34 @@ fn keys<M: Table>() -> impl Iterator<Item = &'static str> {
     M::TABLE.iter().flat_map(|m| m.bounds.iter().map(|b| b.key))
 }
 
+/// A least bound above a greatest on one metric (in its unit): no run meets both, which would
+/// only show as a failure after the run.
+fn contradiction<M: Table>(bounds: &std::collections::BTreeMap<String, f64>) -> Option<String> {
+    for metric in M::TABLE {
+        let set = |side: Side| {
+            metric
+                .bounds
+                .iter()
+                .filter(move |b| b.side == side)
+                .filter_map(|b| Some((b, *bounds.get(b.key)?)))
+        };
+        for (least, low) in set(Side::Min) {
+            for (most, high) in set(Side::Max) {
+                if low / least.scale > high / most.scale {
+                    return Some(format!(
+                        "expect.{}: {} is above expect.{} = {}: no run can meet both",
+                        least.key,
+                        crate::limits::num(low),
+                        most.key,
+                        crate::limits::num(high)
+                    ));
+                }
+            }
+        }
+    }
+    None
+}
+
 impl Expectations {
     /// Checks that every expectation applies to `kind` and every limit is a finite number; the
     /// error names the expectation.
@@ -62,6 +90,13 @@ impl Expectations {
                     "expect.{key}: expected a finite number, got {limit}"
                 ));
             }
+        }
+        let contradiction = match kind {
+            Kind::Walk => contradiction::<metrics::HexapodMetrics>(&self.bounds),
+            Kind::Ball => contradiction::<metrics::BallMetrics>(&self.bounds),
+        };
+        if let Some(message) = contradiction {
+            return Err(message);
         }
         if self.no_clamped_ik && kind != Kind::Walk {
             return Err("expect.no_clamped_ik: applies to Walk scenarios only".into());
