@@ -473,6 +473,17 @@ fn resolve_walk(
         notes,
     )?;
     let commands = resolve_commands(spec, &gait.gait)?;
+    // a change the walk never reaches: a typo in `at` or in `duration`, which the run would hide
+    for (i, c) in spec.command.iter().flatten().enumerate() {
+        if c.at >= spec.duration {
+            warnings.push(format!(
+                "command[{i}]: at = {} s, at or after the walk's end (duration = {} s): it is never \
+                 used",
+                num(c.at),
+                num(spec.duration)
+            ));
+        }
+    }
     if let Some(start) = spec.start
         && ![start.x, start.y, Some(start.heading_deg)]
             .into_iter()
