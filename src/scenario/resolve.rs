@@ -114,7 +114,8 @@ fn check_common(spec: &ScenarioSpec, name: &str) -> Result<(), String> {
         ));
     }
     if let Err((field, expected)) = spec.contact.model().validate() {
-        return Err(format!("contact.{field}: {expected}"));
+        let key = super::spec::ContactSpec::key_of(&field);
+        return Err(format!("contact.{key}: {expected}"));
     }
     if matches!(spec.kind, Kind::Walk) && spec.contact.spin_friction != 0.0 {
         return Err(format!(

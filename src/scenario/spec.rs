@@ -370,6 +370,21 @@ impl Default for ContactSpec {
 }
 
 impl ContactSpec {
+    /// The scenario's key (`contact.KEY`; the flag `--KEY` with dashes) behind a field of
+    /// [`Self::model`]'s as [`ContactModel::validate`] names it: the physics' names
+    /// (`orientation.xe`, Coulomb's `mu`) are not what the user wrote.
+    pub fn key_of(model_field: &str) -> &str {
+        match model_field {
+            "orientation.xe" | "orientation.ye" => "paper_step",
+            "friction.mu" | "friction.mu_coulomb" => "mu_kinetic",
+            "friction.coefficient" => "viscous",
+            field => field
+                .strip_prefix("friction.")
+                .or_else(|| field.strip_prefix("normal."))
+                .unwrap_or(field),
+        }
+    }
+
     /// The contact as given, the reference stiffness and damping where they are left out.
     pub fn model(&self) -> ContactModel {
         use crate::contact::{REFERENCE_DAMPING, REFERENCE_STIFFNESS};
