@@ -1007,6 +1007,23 @@ fn built_in_files_by_name_from_any_folder() {
         stderr.contains("built-in gaits, by name: tripod, ripple, wave"),
         "{stderr}"
     );
+    // `hexsim terrain` and `hexsim robot` take the same names
+    let inspect = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hexsim"))
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(
+            out.status.success(),
+            "{args:?}: {stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout
+    };
+    assert!(inspect(&["terrain", "info", "flat"]).contains("x ∈ [-10.0, 10.0]"));
+    assert!(inspect(&["robot", "hex18", "--gait", "wave"]).starts_with("hex18: hex18, 19 links"));
     // a file called `flat` here is the user's, and this one is not a terrain
     std::fs::write(dir.join("flat"), "not = \"a terrain\"\n").unwrap();
     let out = run(&["--terrain", "flat"]);

@@ -13,9 +13,11 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct RobotArgs {
-    /// Robot URDF (with its robot file, NAME.toml, beside it if there is one).
+    /// Robot URDF (with its robot file, NAME.toml, beside it if there is one), or `hex18`, the
+    /// built-in reference robot, as `hexsim run --robot` takes it.
     robot: PathBuf,
-    /// Gait whose standing pose is checked. Default: gaits/tripod.toml (built in).
+    /// Gait whose standing pose is checked: a gait file, or a built-in gait's name (tripod,
+    /// ripple, wave). Default: gaits/tripod.toml (built in).
     #[arg(long)]
     gait: Option<PathBuf>,
     /// Also write a rerun recording of the robot standing in the gait's fitted pose on level
@@ -48,9 +50,17 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
         .filter_map(|(what, path)| Some((what, path?.as_path())));
         hexsim::record::output::check_distinct([("--record", path.as_path())], inputs)?;
     }
-    let model = robot::load(&args.robot)?;
+    // `hex18` and a gait's bare name (`wave`) are the built-in files, as `hexsim run` reads them,
+    // where no file of that name is here
+    let model = match builtin::named(&[("hex18", builtin::HEX18)], &args.robot, &args.robot) {
+        Some(_) => builtin::hex18(),
+        None => robot::load(&args.robot)?,
+    };
     let gait = match &args.gait {
-        Some(path) => GaitSpec::from_file(path)?,
+        Some(path) => match builtin::named(builtin::GAITS, path, path) {
+            Some(b) => GaitSpec::from_toml(b.text, Path::new(b.path))?,
+            None => GaitSpec::from_file(path)?,
+        },
         None => GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))?,
     };
     let mut report = describe(&args.robot, &model, &gait);

@@ -3,14 +3,16 @@
 use anyhow::Result;
 use clap::Subcommand;
 use hexsim::record::output::write_streamed;
-use hexsim::terrain;
-use std::path::PathBuf;
+use hexsim::scenario::builtin;
+use hexsim::terrain::{self, TerrainSpec};
+use std::path::{Path, PathBuf};
 
 #[derive(Subcommand)]
 pub enum TerrainCommand {
     /// Export a terrain file's surface as STL (mesh), PNG (16-bit heights) and/or CSV.
     Export {
-        /// Terrain file (TOML).
+        /// Terrain file (TOML), or a built-in terrain's name (`natural`, `flat`, …), as
+        /// `hexsim run --terrain` takes it.
         terrain: PathBuf,
         #[arg(long)]
         stl: Option<PathBuf>,
@@ -20,7 +22,23 @@ pub enum TerrainCommand {
         csv: Option<PathBuf>,
     },
     /// Print a terrain's size, resolution and height range.
-    Info { terrain: PathBuf },
+    Info {
+        /// Terrain file (TOML), or a built-in terrain's name (`natural`, `flat`, …), as
+        /// `hexsim run --terrain` takes it.
+        terrain: PathBuf,
+    },
+}
+
+/// The terrain `path` names: its file, or the built-in terrain of that bare name when no such
+/// file is there (as `--terrain` reads it); with the path its relative files resolve against.
+fn spec_of(path: &Path) -> Result<(TerrainSpec, PathBuf)> {
+    Ok(match builtin::named(builtin::TERRAINS, path, path) {
+        Some(b) => (
+            TerrainSpec::from_toml(b.text, Path::new(b.path))?,
+            PathBuf::from(b.path),
+        ),
+        None => (TerrainSpec::from_file(path)?, path.to_path_buf()),
+    })
 }
 
 pub fn terrain_command(command: TerrainCommand) -> Result<()> {
@@ -35,7 +53,7 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
                 anyhow::bail!("nothing to export: give --stl FILE, --png FILE and/or --csv FILE");
             }
             // no export may overwrite the terrain file or its height file, or another export
-            let spec = terrain::TerrainSpec::from_file(&terrain)?;
+            let (spec, origin) = spec_of(&terrain)?;
             let mut inputs = vec![("terrain file", terrain.clone())];
             if let Some(data) = spec.source.get().data_file() {
                 let folder = terrain.parent().unwrap_or(std::path::Path::new(""));
@@ -48,7 +66,7 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
                     .filter_map(|(flag, path)| Some((*flag, path.as_deref()?))),
                 inputs.iter().map(|(what, path)| (*what, path.as_path())),
             )?;
-            let grid = terrain::load(&terrain)?;
+            let grid = spec.build(&origin)?;
             if let Some(path) = stl {
                 write_streamed(&path, |out| Ok(terrain::io::stl_to(&grid, out)?))?;
                 out!("wrote {}", path.display());
@@ -74,7 +92,8 @@ pub fn terrain_command(command: TerrainCommand) -> Result<()> {
             Ok(())
         }
         TerrainCommand::Info { terrain } => {
-            let grid = terrain::load(&terrain)?;
+            let (spec, origin) = spec_of(&terrain)?;
+            let grid = spec.build(&origin)?;
             let (lo, hi) = grid.height_bounds();
             let (dx, dy) = grid.spacing();
             out!("{}", terrain.display());

@@ -140,7 +140,7 @@ fn values(key: &str, spec: &Value) -> Result<Vec<Value>, String> {
                 (Some(count), None) => {
                     if !(count >= 1.0 && count.fract() == 0.0 && count as usize <= MAX_VARIANTS) {
                         return err(&format!(
-                            "`count`: expected a whole number ≥ 1, got {count}"
+                            "`count`: expected a whole number from 1 to {MAX_VARIANTS}, got {count}"
                         ));
                     }
                     let n = count as usize;
