@@ -1,7 +1,8 @@
 //! Fields laid over a scenario's table by dotted path (`gait.period`, `contact.stiffness`), the
 //! one way sweeps, comparisons and searches change a scenario: missing tables are made on the
-//! way, `command.FIELD` is the first (only) `[[command]]`'s, and the result is then read as a
-//! [`super::ScenarioSpec`], whose schema refuses a field it does not have, naming it.
+//! way, `command.FIELD` is the first `[[command]]`'s and `command.N.FIELD` the one at place N
+//! (from 0), and the result is then read as a [`super::ScenarioSpec`], whose schema refuses a
+//! field it does not have, naming it.
 
 use toml::{Table, Value};
 
@@ -35,6 +36,30 @@ pub fn set(table: &mut Table, path: &str, value: Value) -> Result<(), String> {
         };
         command.insert(field.to_string(), value);
         return Ok(());
+    }
+    if let ["command", index, field] = parts[..] {
+        // a later command's field, by its place in the list (0 the first)
+        let count = table
+            .get("command")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len);
+        let Some(Value::Table(command)) = index
+            .parse::<usize>()
+            .ok()
+            .and_then(|i| table.get_mut("command")?.as_array_mut()?.get_mut(i))
+        else {
+            return Err(format!(
+                "`command.{index}`: expected the place (from 0) of one of the scenario's \
+                 {count} [[command]] tables"
+            ));
+        };
+        command.insert(field.to_string(), value);
+        return Ok(());
+    }
+    if parts[0] == "command" {
+        return Err(
+            "expected `command.FIELD` (the first [[command]]'s) or `command.N.FIELD`".into(),
+        );
     }
     let mut at = table;
     for (i, part) in parts[..parts.len() - 1].iter().enumerate() {
@@ -97,6 +122,21 @@ mod tests {
         set(&mut t, "command.forward", Value::Float(0.1)).unwrap();
         assert_eq!(t["command"][0]["forward"].as_float(), Some(0.1));
         assert!(t["command"][1].get("forward").is_none());
+        // a later one by its place
+        set(&mut t, "command.1.forward", Value::Float(0.3)).unwrap();
+        assert_eq!(t["command"][1]["forward"].as_float(), Some(0.3));
+        assert_eq!(t["command"][0]["forward"].as_float(), Some(0.1));
+        for (path, expected) in [
+            (
+                "command.2.forward",
+                "of one of the scenario's 2 [[command]] tables",
+            ),
+            ("command.x.forward", "`command.x`: expected the place"),
+            ("command.1.a.b", "expected `command.FIELD`"),
+        ] {
+            let e = set(&mut t, path, Value::Float(0.3)).unwrap_err();
+            assert!(e.contains(expected), "{path}: {e}");
+        }
     }
 
     #[test]
