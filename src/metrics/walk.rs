@@ -27,6 +27,9 @@ pub const SKATE_SHARE: f64 = 0.10;
 pub const SIDEWAYS_SHARE: f64 = 0.10;
 /// A walk commanded straight ahead that turned more than this (deg) lost its heading.
 pub const HEADING_BOUND_DEG: f64 = 10.0;
+/// A walk commanded to turn by more than [`HEADING_BOUND_DEG`] that turned less than this share
+/// of it, or the other way, did not follow its command.
+pub const TURN_SHARE: f64 = 0.5;
 
 /// A hexapod run's summary, written as JSON.
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
@@ -103,7 +106,8 @@ pub struct HexapodMetrics {
     pub slip_share: Option<f64>,
     /// What makes the walk not the walk commanded, each said in a sentence: its feet skated
     /// ([`SKATE_SHARE`]), it went backwards against the command, drifted sideways
-    /// ([`SIDEWAYS_SHARE`]) or turned ([`HEADING_BOUND_DEG`]) when commanded straight ahead.
+    /// ([`SIDEWAYS_SHARE`]) or turned ([`HEADING_BOUND_DEG`]) when commanded straight ahead, or
+    /// turned less than [`TURN_SHARE`] of a turn commanded.
     /// Empty for an honest walk.
     pub walk_flags: Vec<String>,
     /// The longest time any joint stayed within [`NEAR_LIMIT`] of a URDF limit over the walk (s):
@@ -266,6 +270,8 @@ struct Accumulators {
     height2: f64,
     yaw_prev: f64,
     yaw_total: f64,
+    /// The turn commanded so far (rad): the commanded yaw rate summed over the steps.
+    yaw_commanded: f64,
     stance_steps: [u64; 6],
     force_sum: [f64; 6],
     dt: f64,
@@ -437,6 +443,14 @@ impl HexapodMetrics {
                 self.heading_change_deg
             ));
         }
+        let commanded = a.yaw_commanded.to_degrees();
+        if commanded.abs() > HEADING_BOUND_DEG && self.heading_change_deg / commanded < TURN_SHARE {
+            flags.push(format!(
+                "turned {:+.1}° of the {commanded:+.1}° commanded (less than {:.0} %)",
+                self.heading_change_deg,
+                TURN_SHARE * 100.0
+            ));
+        }
         self.walk_flags = flags;
     }
 
@@ -557,6 +571,7 @@ impl Observer<WalkSample, Walker> for HexapodMetrics {
         a.moving |= command.forward != 0.0 || command.sideways != 0.0;
         a.strafing |= command.sideways != 0.0;
         a.turning |= command.yaw_rate != 0.0;
+        a.yaw_commanded += command.yaw_rate * dt;
         let along = glam::DVec2::new(command.forward, command.sideways).normalize_or_zero();
         if let Some(last) = a.last_position {
             let step = glam::DMat2::from_angle(yaw) * along;

@@ -53,6 +53,38 @@ fn marking_time_is_not_skating() {
     );
 }
 
+/// A turn commanded and not followed is flagged: less than half of it, or the other way; a walk
+/// commanded to turn less than `HEADING_BOUND_DEG` in all is not judged on it.
+#[test]
+fn a_turn_not_followed_is_flagged() {
+    let judged = |commanded_deg: f64, turned_deg: f64| {
+        let mut m = HexapodMetrics::new(1e-3, 2.5, Vec::new(), None);
+        m.acc.turning = true;
+        m.acc.yaw_commanded = commanded_deg.to_radians();
+        m.heading_change_deg = turned_deg;
+        m.judge();
+        m.walk_flags
+    };
+    assert_eq!(judged(100.0, 90.4), Vec::<String>::new());
+    assert_eq!(judged(-100.0, -51.0), Vec::<String>::new());
+    assert_eq!(judged(8.0, 0.0), Vec::<String>::new());
+    for (commanded, turned) in [
+        (1800.0, 162.0),
+        (-1800.0, -162.0),
+        (100.0, -20.0),
+        (30.0, 0.0),
+    ] {
+        let flags = judged(commanded, turned);
+        assert!(
+            flags.len() == 1
+                && flags[0].starts_with(&format!(
+                    "turned {turned:+.1}° of the {commanded:+.1}° commanded"
+                )),
+            "{commanded}, {turned}: {flags:?}"
+        );
+    }
+}
+
 /// A swing brushing the ground is a scuff, not skating: the share is judged on the slip left
 /// when the swings' scuffs are taken out (hex18 blind over 6 cm obstacles: 10.1 % of its
 /// distance in contact, 3.5 % on the ground).
