@@ -19,7 +19,8 @@ fn one_level(name: &str, header: &str) -> String {
 }
 
 /// `hexsim run` of [`one_level`]`(family, header)` with each `(from, to)` of `edits` replaced,
-/// written to a scratch folder, with `extra` flags and its walk flags allowed: its metrics, the
+/// written to a scratch folder, with `extra` flags, no recording (it would be written in the
+/// project's folder) and its walk flags allowed: its metrics, the
 /// test failing as `what` if the run does not succeed.
 fn run_level(
     family: &str,
@@ -41,6 +42,7 @@ fn run_level(
     cmd.arg("run")
         .arg(&file)
         .args(extra)
+        .arg("--no-record")
         .arg("--metrics")
         .arg(&json)
         .arg("--allow-flags");
@@ -430,7 +432,7 @@ fn legs_shoving_the_body_against_a_wall_give_way() {
             ("x = -0.5", "x = 0.3"),
             ("duration = 25.0", "duration = 8.0"),
         ],
-        &["--no-record"],
+        &[],
         "harika at an 8 cm trench",
     );
     let weight = hexsim::robot::load(&urdf).unwrap().total_mass() * 9.80665;
@@ -470,7 +472,7 @@ fn a_yielded_leg_takes_its_load_back_without_a_kick() {
             ("gap = 0.02", "gap = 0.04"),
             ("duration = 25.0", "duration = 14.9"),
         ],
-        &["--no-record"],
+        &[],
         "MushroomRL over 4 cm stones",
     );
     let foot = m["max_penetration"].as_f64().unwrap();
