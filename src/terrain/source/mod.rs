@@ -1,6 +1,6 @@
 //! Where a terrain's heights come from: one parameter struct per generator (generated.rs) or
 //! height file (files.rs), each with its defaults, its checks and its build, so a new source is
-//! one struct there and one line in [`Source`]. The checks they share are here.
+//! one struct there and one line in `sources!` here. The checks they share are here.
 
 use super::generate;
 use super::grid::{GridError, HeightGrid};
@@ -50,33 +50,20 @@ pub trait HeightSource {
     }
 }
 
-/// Where the heights come from (`kind = "..."` in `[source]`). Read by [`Source::deserialize`],
-/// written tagged with its kind.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Source {
-    Natural(Natural),
-    Bell(Bell),
-    Flat(Flat),
-    Slope(Slope),
-    Steps(Steps),
-    Stairs(Stairs),
-    PyramidStairs(PyramidStairs),
-    DiscreteObstacles(DiscreteObstacles),
-    SteppingStones(SteppingStones),
-    Gaps(Gaps),
-    Rough(Rough),
-    Sine(Sine),
-    Csv(Csv),
-    Png(Png),
-    Stl(Stl),
-}
-
-/// Each kind's name in `[source]` and how its fields are read.
-macro_rules! kinds {
+/// The sources, each as its `kind = "..."` name and its struct: [`Source`] with one variant
+/// each, written tagged with that name and read by [`Source::deserialize`]; the one list a new
+/// source is added to.
+macro_rules! sources {
     ($($kind:literal => $variant:ident),* $(,)?) => {
+        /// Where the heights come from (`kind = "..."` in `[source]`).
+        #[derive(Debug, Clone, PartialEq, Serialize)]
+        #[serde(tag = "kind")]
+        pub enum Source {
+            $(#[serde(rename = $kind)] $variant($variant),)*
+        }
+
         /// The kinds, as `kind = "..."` names them.
-        pub const KINDS: &[&str] = &[$($kind),*];
+        const KINDS: &[&str] = &[$($kind),*];
 
         /// The source of `kind` read from its other `fields`: an error names the field.
         fn read_kind(kind: &str, fields: toml::Value) -> Result<Source, String> {
@@ -88,10 +75,24 @@ macro_rules! kinds {
                 )),
             }
         }
+
+        impl Source {
+            pub fn get(&self) -> &dyn HeightSource {
+                match self {
+                    $(Source::$variant(s) => s,)*
+                }
+            }
+
+            pub fn get_mut(&mut self) -> &mut dyn HeightSource {
+                match self {
+                    $(Source::$variant(s) => s,)*
+                }
+            }
+        }
     };
 }
 
-kinds! {
+sources! {
     "natural" => Natural,
     "bell" => Bell,
     "flat" => Flat,
@@ -114,7 +115,10 @@ fn field_error(e: &toml::de::Error) -> String {
     let message = e.to_string();
     let message = message.trim_end();
     match message.rsplit_once("\nin `") {
-        Some((what, field)) => format!("field `source.{}: {what}", field),
+        Some((what, field)) => {
+            let field = field.trim_end_matches('`');
+            format!("field `source.{field}`: {what}")
+        }
         None => format!("in [source]: {message}"),
     }
 }
@@ -141,48 +145,6 @@ impl<'de> Deserialize<'de> for Source {
             }
         };
         read_kind(&kind, toml::Value::Table(table)).map_err(D::Error::custom)
-    }
-}
-
-impl Source {
-    pub fn get(&self) -> &dyn HeightSource {
-        match self {
-            Source::Natural(s) => s,
-            Source::Bell(s) => s,
-            Source::Flat(s) => s,
-            Source::Slope(s) => s,
-            Source::Steps(s) => s,
-            Source::Stairs(s) => s,
-            Source::PyramidStairs(s) => s,
-            Source::DiscreteObstacles(s) => s,
-            Source::SteppingStones(s) => s,
-            Source::Gaps(s) => s,
-            Source::Rough(s) => s,
-            Source::Sine(s) => s,
-            Source::Csv(s) => s,
-            Source::Png(s) => s,
-            Source::Stl(s) => s,
-        }
-    }
-
-    pub fn get_mut(&mut self) -> &mut dyn HeightSource {
-        match self {
-            Source::Natural(s) => s,
-            Source::Bell(s) => s,
-            Source::Flat(s) => s,
-            Source::Slope(s) => s,
-            Source::Steps(s) => s,
-            Source::Stairs(s) => s,
-            Source::PyramidStairs(s) => s,
-            Source::DiscreteObstacles(s) => s,
-            Source::SteppingStones(s) => s,
-            Source::Gaps(s) => s,
-            Source::Rough(s) => s,
-            Source::Sine(s) => s,
-            Source::Csv(s) => s,
-            Source::Png(s) => s,
-            Source::Stl(s) => s,
-        }
     }
 }
 
