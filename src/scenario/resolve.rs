@@ -451,7 +451,7 @@ fn resolve_walk(
         }
     }
     let servo = spec.servo.unwrap_or_default();
-    let gains = crate::setup::servo::gains(
+    let (gains, fitted_for) = crate::setup::servo::gains(
         servo.stiffness,
         servo.damping,
         &robot,
@@ -465,10 +465,7 @@ fn resolve_walk(
         &robot,
         &gait.standing_pose,
         gains,
-        servo.stiffness.is_none().then(|| {
-            let (pose, step_height) = (&gait.standing_pose, gait.gait.step_height);
-            crate::setup::servo::fitted(&robot, pose, support, step_height).1
-        }),
+        fitted_for,
         contact_step,
         warnings,
         notes,
@@ -529,9 +526,10 @@ fn resolve_robot(
     inputs: &mut Inputs,
 ) -> Result<RobotModel, String> {
     // `robot = "hex18"` (or `--robot hex18`) from a folder without such a file: the built-in one
-    let file = spec.robot.as_ref().filter(|file| {
-        builtin::named(&[("hex18", builtin::HEX18)], file, &base.join(file)).is_none()
-    });
+    let file = spec
+        .robot
+        .as_ref()
+        .filter(|file| builtin::named(builtin::ROBOTS, file, &base.join(file)).is_none());
     match file {
         None => {
             inputs.builtin("robot", builtin::HEX18.path, builtin::HEX18.text);

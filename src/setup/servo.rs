@@ -20,7 +20,8 @@ pub fn fitted(
 }
 
 /// The gains: those given, a stiffness given with the reference's damping ratio to it, and the
-/// rest [`fitted`]. Refused unless the stiffness is > 0 and the damping ≥ 0.
+/// rest [`fitted`]; with what the stiffness was fitted for (None: given), which the time step's
+/// message names. Refused unless the stiffness is > 0 and the damping ≥ 0.
 pub fn gains(
     stiffness: Option<f64>,
     damping: Option<f64>,
@@ -28,15 +29,18 @@ pub fn gains(
     pose: &[f64],
     support: usize,
     step_height: f64,
-) -> Result<ServoGains, String> {
-    let fit = || fitted(robot, pose, support, step_height).0;
-    let (stiffness, damping) = match (stiffness, damping) {
-        (Some(k), Some(d)) => (k, d),
-        (Some(k), None) => (k, k * REFERENCE_DAMPING / REFERENCE_STIFFNESS),
-        (None, Some(d)) => (fit().stiffness, d),
+) -> Result<(ServoGains, Option<FittedFor>), String> {
+    let fit = || fitted(robot, pose, support, step_height);
+    let (stiffness, damping, why) = match (stiffness, damping) {
+        (Some(k), Some(d)) => (k, d, None),
+        (Some(k), None) => (k, k * REFERENCE_DAMPING / REFERENCE_STIFFNESS, None),
+        (None, Some(d)) => {
+            let (g, why) = fit();
+            (g.stiffness, d, Some(why))
+        }
         (None, None) => {
-            let g = fit();
-            (g.stiffness, g.damping)
+            let (g, why) = fit();
+            (g.stiffness, g.damping, Some(why))
         }
     };
     if !(stiffness.is_finite() && stiffness > 0.0 && damping.is_finite() && damping >= 0.0) {
@@ -44,7 +48,7 @@ pub fn gains(
             "servo: expected stiffness > 0 and damping ≥ 0, got {stiffness} and {damping}"
         ));
     }
-    Ok(ServoGains { stiffness, damping })
+    Ok((ServoGains { stiffness, damping }, why))
 }
 
 #[cfg(test)]
@@ -75,7 +79,7 @@ mod tests {
     #[test]
     fn a_given_stiffness_keeps_the_reference_damping_ratio() {
         let (robot, pose, step) = hex18_standing();
-        let g = gains(
+        let (g, _) = gains(
             Some(2.0 * REFERENCE_STIFFNESS),
             None,
             &robot,
@@ -85,7 +89,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(g.damping, 2.0 * REFERENCE_DAMPING);
-        let g = gains(None, Some(0.5), &robot, &pose, 3, step).unwrap();
+        let (g, _) = gains(None, Some(0.5), &robot, &pose, 3, step).unwrap();
         assert_eq!((g.stiffness, g.damping), (REFERENCE_STIFFNESS, 0.5));
     }
 
