@@ -987,7 +987,7 @@ fn a_walk_on_skating_feet_is_flagged_and_fails() {
 fn built_in_files_by_name_from_any_folder() {
     let dir = scratch("named");
     let run = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_hexsim"))
+        hexsim()
             .current_dir(&dir)
             .args(["run", "--duration", "0.3", "--no-record"])
             .args(args)
@@ -1009,11 +1009,7 @@ fn built_in_files_by_name_from_any_folder() {
     );
     // `hexsim terrain` and `hexsim robot` take the same names
     let inspect = |args: &[&str]| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_hexsim"))
-            .current_dir(&dir)
-            .args(args)
-            .output()
-            .unwrap();
+        let out = hexsim().current_dir(&dir).args(args).output().unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
         assert!(
             out.status.success(),

@@ -52,7 +52,7 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
     }
     // `hex18` and a gait's bare name (`wave`) are the built-in files, as `hexsim run` reads them,
     // where no file of that name is here
-    let model = match builtin::named(&[("hex18", builtin::HEX18)], &args.robot, &args.robot) {
+    let model = match builtin::named(builtin::ROBOTS, &args.robot, &args.robot) {
         Some(_) => builtin::hex18(),
         None => robot::load(&args.robot)?,
     };

@@ -182,14 +182,14 @@ impl GaitSpec {
         // the stride's fault, named here rather than the command's
         if let Some(stride) = self.stride_length {
             let stance = self.duty_factor * self.period;
-            let most = super::command::MAX_SPEED;
-            if stride / stance > most {
+            let (speed, most) = (stride / stance, super::command::MAX_SPEED);
+            if speed > most {
                 return Err(format!(
                     "field `stride_length`: {stride} m over a stance of {} s (duty_factor × period) \
                      walks at {} m/s, more than the {most} m/s a walk may command; expected a \
                      stride in metres, at most {} m",
                     crate::limits::num(stance),
-                    crate::limits::num(stride / stance),
+                    crate::limits::num(speed),
                     crate::limits::num(most * stance)
                 ));
             }

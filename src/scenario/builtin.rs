@@ -19,6 +19,9 @@ pub const HEX18_FILE: Builtin = Builtin {
     text: include_str!("../../robots/hex18.toml"),
 };
 
+/// The robots built in, by name (`--robot hex18`, `robot = "hex18"`): the reference alone.
+pub const ROBOTS: &[(&str, Builtin)] = &[("hex18", HEX18)];
+
 /// The reference robot, loaded with its robot file.
 pub fn hex18() -> crate::robot::RobotModel {
     crate::robot::urdf::from_str_with(HEX18.text, Some(HEX18_FILE.text), HEX18.path.as_ref())
