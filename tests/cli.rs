@@ -1020,6 +1020,20 @@ fn built_in_files_by_name_from_any_folder() {
     };
     assert!(inspect(&["terrain", "info", "flat"]).contains("x ∈ [-10.0, 10.0]"));
     assert!(inspect(&["robot", "hex18", "--gait", "wave"]).starts_with("hex18: hex18, 19 links"));
+    // and a name that is none of them says which are, whichever command reads it
+    let refused = |args: &[&str], names: &str| {
+        let out = hexsim().current_dir(&dir).args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(names), "{args:?}: {stderr}");
+    };
+    let terrains = "built-in terrains, by name: bell, discrete_obstacles, flat,";
+    refused(&["terrain", "info", "flatt"], terrains);
+    refused(&["terrain", "export", "flatt", "--csv", "out.csv"], terrains);
+    refused(&["robot", "hex18", "--gait", "wavy"], "built-in gaits, by name: tripod,");
+    refused(&["robot", "hex19"], "built-in robots, by name: hex18");
+    refused(&["run", "--robot", "hex19", "--no-record"], "built-in robots, by name: hex18");
+    assert!(!dir.join("out.csv").exists());
     // a file called `flat` here is the user's, and this one is not a terrain
     std::fs::write(dir.join("flat"), "not = \"a terrain\"\n").unwrap();
     let out = run(&["--terrain", "flat"]);

@@ -54,12 +54,27 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
     // where no file of that name is here
     let model = match builtin::named(builtin::ROBOTS, &args.robot, &args.robot) {
         Some(_) => builtin::hex18(),
-        None => robot::load(&args.robot)?,
+        None => robot::load(&args.robot).map_err(|e| {
+            let message = e.to_string();
+            anyhow::anyhow!(builtin::not_found_hint(
+                message,
+                &args.robot,
+                "robots",
+                builtin::ROBOTS
+            ))
+        })?,
     };
     let gait = match &args.gait {
         Some(path) => match builtin::named(builtin::GAITS, path, path) {
             Some(b) => GaitSpec::from_toml(b.text, Path::new(b.path))?,
-            None => GaitSpec::from_file(path)?,
+            None => GaitSpec::from_file(path).map_err(|e| {
+                anyhow::anyhow!(builtin::not_found_hint(
+                    e.to_string(),
+                    path,
+                    "gaits",
+                    builtin::GAITS
+                ))
+            })?,
         },
         None => GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))?,
     };

@@ -37,7 +37,18 @@ fn spec_of(path: &Path) -> Result<(TerrainSpec, PathBuf)> {
             TerrainSpec::from_toml(b.text, Path::new(b.path))?,
             PathBuf::from(b.path),
         ),
-        None => (TerrainSpec::from_file(path)?, path.to_path_buf()),
+        None => {
+            let spec = TerrainSpec::from_file(path).map_err(|e| {
+                let message = e.to_string();
+                anyhow::anyhow!(builtin::not_found_hint(
+                    message,
+                    path,
+                    "terrains",
+                    builtin::TERRAINS
+                ))
+            })?;
+            (spec, path.to_path_buf())
+        }
     })
 }
 

@@ -118,3 +118,19 @@ pub fn named(
 pub fn names(list: &[(&str, Builtin)]) -> String {
     list.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
 }
+
+/// `message` for a file of `kind` that could not be read, with the built-in names of its kind
+/// (`list`) when nothing is at `path`: a name mistyped, or a repository's file named from
+/// elsewhere.
+pub fn not_found_hint(
+    message: String,
+    path: &std::path::Path,
+    kind: &str,
+    list: &[(&str, Builtin)],
+) -> String {
+    if path.exists() {
+        message
+    } else {
+        format!("{message} (built-in {kind}, by name: {})", names(list))
+    }
+}

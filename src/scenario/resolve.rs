@@ -235,7 +235,7 @@ fn resolve_terrain(
                 }
                 None => TerrainSource {
                     spec: TerrainSpec::from_file(&path).map_err(|e| {
-                        not_found_hint(e.to_string(), &path, "terrains", builtin::TERRAINS)
+                        builtin::not_found_hint(e.to_string(), &path, "terrains", builtin::TERRAINS)
                     })?,
                     name: file.display().to_string(),
                     origin: path,
@@ -543,31 +543,16 @@ fn resolve_robot(
                 Some(builtin::HEX18_FILE.text),
                 Path::new(builtin::HEX18.path),
             )
+            .map_err(|e| format!("robot: {e}"))
         }
         Some(file) => {
             let path = base.join(file);
-            inputs.robot(&path).map_err(|e| format!("robot: {e}"))?;
-            crate::robot::load(&path)
+            let hint = |e: String| builtin::not_found_hint(e, &path, "robots", builtin::ROBOTS);
+            inputs
+                .robot(&path)
+                .map_err(|e| hint(format!("robot: {e}")))?;
+            crate::robot::load(&path).map_err(|e| hint(format!("robot: {e}")))
         }
-    }
-    .map_err(|e| format!("robot: {e}"))
-}
-
-/// `message` for a file that could not be read, with the built-in names of its kind when the
-/// file does not exist (a name mistyped, or a repository's file named from elsewhere).
-fn not_found_hint(
-    message: String,
-    path: &Path,
-    kind: &str,
-    list: &[(&str, builtin::Builtin)],
-) -> String {
-    if path.exists() {
-        message
-    } else {
-        format!(
-            "{message} (built-in {kind}, by name: {})",
-            builtin::names(list)
-        )
     }
 }
 
@@ -591,7 +576,7 @@ fn resolve_gait(
             None => {
                 let path = base.join(file);
                 let gait = GaitSpec::from_file(&path).map_err(|e| {
-                    not_found_hint(format!("gait: {e}"), &path, "gaits", builtin::GAITS)
+                    builtin::not_found_hint(format!("gait: {e}"), &path, "gaits", builtin::GAITS)
                 })?;
                 // digested once read: the loader says what is wrong with a file it cannot use
                 inputs.file("gait file", &path, crate::limits::TEXT_FILE_BYTES)?;
