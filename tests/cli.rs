@@ -860,8 +860,8 @@ fn the_robot_report_and_the_run_count_the_same_steps_out_of_reach() {
 }
 
 /// A walk judged against its command (issue 40): hex18 on a 0.08 s tripod cannot keep up with
-/// its gait and skates (measured: the worst foot slid 4.3 m on the ground while the body went
-/// 3.5 m in 4 s, hex18's own tripod 0.9 % of its distance); the run says it skated, the metrics flag it (`walk_flags`, `slip_share`),
+/// its gait and skates (measured: the worst foot slid 2.3 m on the ground while the body went
+/// 0.14 m in 4 s, hex18's own tripod 0.8 % of its distance); the run says it skated, the metrics flag it (`walk_flags`, `slip_share`),
 /// and it exits 1 unless `--allow-flags`. In a batch the same walk fails without any
 /// expectation (`walk_as_commanded`, set for every walk), and passes where its file accepts it
 /// (`walk_as_commanded = false`); a scenario bounding `slip_share_max` fails on that bound too.

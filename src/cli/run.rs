@@ -16,8 +16,8 @@ use super::{COMMAND_LINE, Cli, Command, conclude, progress_bar, warn_about};
 #[derive(Args)]
 pub struct RunArgs {
     /// A scenario file (TOML, as `hexsim batch` reads) to run and record instead of the walk
-    /// the flags describe; only the output flags (--record, --trajectory, --metrics, --spawn,
-    /// --strict, --allow-flags) go with it. Its `[expect]` is judged as `hexsim batch` judges it
+    /// the flags describe; only the output flags (--record, --no-record, --trajectory, --metrics,
+    /// --spawn, --strict, --allow-flags) go with it. Its `[expect]` is judged as `hexsim batch` judges it
     /// (exit 1 if one is not met). A sweep is refused: `hexsim batch` runs those.
     #[arg(
         value_name = "SCENARIO",

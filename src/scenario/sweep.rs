@@ -9,7 +9,8 @@
 //! seed = { from = 1, to = 4 }             # integers from..=to (or give `step`)
 //! ```
 //! Keys are dotted paths into the scenario; a key whose tables do not exist yet creates them. The
-//! expanded scenario is named `NAME[stiffness=10000,mu_static=0.5,seed=1]`.
+//! expanded scenario is named `NAME[mu_static=0.5,stiffness=10000,seed=1]`, its keys in the
+//! order of their dotted paths.
 
 use toml::{Table, Value};
 
