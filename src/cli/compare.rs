@@ -167,10 +167,12 @@ pub fn compare(args: CompareArgs) -> Result<ExitCode> {
 
 /// A run's metrics as the table's rows: numbers as they are; a list per foot (six: foot slip) as
 /// its sum over the feet; a list per axis (three: the ball's final position) as one row per axis.
+/// An empty list (a walk's `walk_flags` when none is raised) is no figure.
 fn table_rows(map: &serde_json::Map<String, serde_json::Value>) -> Vec<(String, f64)> {
     let mut rows = Vec::new();
     for (key, value) in map {
         match value {
+            serde_json::Value::Array(items) if items.is_empty() => {}
             serde_json::Value::Array(items) if items.iter().all(|i| i.is_number()) => {
                 let values: Vec<f64> = items.iter().filter_map(serde_json::Value::as_f64).collect();
                 if values.len() == 3 {
@@ -189,4 +191,35 @@ fn table_rows(map: &serde_json::Map<String, serde_json::Value>) -> Vec<(String, 
         }
     }
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::table_rows;
+
+    /// Per-foot lists are summed, per-axis ones split; a list of text (`walk_flags`, raised or
+    /// not) is no row: an empty one once summed to a "-0" row.
+    #[test]
+    fn rows_sum_feet_split_axes_and_skip_lists_of_no_number() {
+        let metrics = serde_json::json!({
+            "distance": 1.5,
+            "foot_slip": [1.0, 2.0, 0.0, 0.0, 0.0, 0.5],
+            "final_position": [1.0, 2.0, 3.0],
+            "walk_flags": [],
+            "notes": ["skated"],
+        });
+        let rows = table_rows(metrics.as_object().unwrap());
+        let names: Vec<&str> = rows.iter().map(|(name, _)| name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "distance",
+                "final_position x",
+                "final_position y",
+                "final_position z",
+                "foot_slip (sum over feet)"
+            ]
+        );
+        assert_eq!(rows[4].1, 3.5);
+    }
 }
