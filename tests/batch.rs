@@ -138,6 +138,51 @@ fn resume_keeps_finished_results_and_reruns_the_rest() {
     assert_eq!(results(&dir.join("r.jsonl")).len(), 8);
 }
 
+/// A shard says what concerns its own scenarios only: the wave walk's note (the smaller time step
+/// hexsim chose for its landing feet) in the shard that runs it, not in the tripod's.
+#[test]
+fn a_shard_notes_only_its_own_scenarios() {
+    let dir = scratch("shard-notes");
+    walks(&dir);
+    let notes = |shard: &str| {
+        let out = hexsim(
+            &["batch", "scenarios", "--shard", shard, "-o", "s.jsonl"],
+            &dir,
+        );
+        let all = text(&out);
+        let ran: Vec<String> = records(&dir.join("s.jsonl"))
+            .iter()
+            .map(|r| r["name"].as_str().unwrap().to_string())
+            .collect();
+        std::fs::remove_file(dir.join("s.jsonl")).unwrap();
+        let notes: Vec<String> = all
+            .lines()
+            .filter(|l| l.starts_with("note: "))
+            .map(str::to_string)
+            .collect();
+        (ran, notes, all)
+    };
+    let whole = notes("1/1");
+    assert!(
+        whole
+            .1
+            .iter()
+            .any(|n| n.contains("dt: ") && n.contains("(walk_wave)")),
+        "{}",
+        whole.2
+    );
+    for shard in ["1/2", "2/2"] {
+        let (ran, notes, all) = notes(shard);
+        assert_eq!(ran.len(), 1, "{all}");
+        let wave = ran[0] == "walk_wave";
+        assert_eq!(notes.iter().any(|n| n.contains("dt: ")), wave, "{all}");
+        assert!(
+            !all.contains(if wave { "walk_tripod)" } else { "walk_wave" }),
+            "{all}"
+        );
+    }
+}
+
 #[test]
 fn shards_merged_equal_the_whole_batch_and_merge_refuses_gaps_and_repeats() {
     let dir = scratch("shards");

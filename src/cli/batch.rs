@@ -120,7 +120,14 @@ pub fn batch(args: BatchArgs) -> Result<ExitCode> {
         if jobs == 1 { "" } else { "s" },
         args.output.display()
     );
-    warn_about(&scenarios, args.strict)?;
+    // a shard says what concerns the scenarios it runs (the others' shards say theirs)
+    let shards = scenarios.iter().enumerate();
+    warn_about(
+        shards
+            .filter(|&(i, _)| args.shard.contains(i))
+            .map(|(_, s)| s),
+        args.strict,
+    )?;
     let options = batch::Options {
         jobs,
         output: args.output.clone(),
