@@ -1029,10 +1029,19 @@ fn built_in_files_by_name_from_any_folder() {
     };
     let terrains = "built-in terrains, by name: bell, discrete_obstacles, flat,";
     refused(&["terrain", "info", "flatt"], terrains);
-    refused(&["terrain", "export", "flatt", "--csv", "out.csv"], terrains);
-    refused(&["robot", "hex18", "--gait", "wavy"], "built-in gaits, by name: tripod,");
+    refused(
+        &["terrain", "export", "flatt", "--csv", "out.csv"],
+        terrains,
+    );
+    refused(
+        &["robot", "hex18", "--gait", "wavy"],
+        "built-in gaits, by name: tripod,",
+    );
     refused(&["robot", "hex19"], "built-in robots, by name: hex18");
-    refused(&["run", "--robot", "hex19", "--no-record"], "built-in robots, by name: hex18");
+    refused(
+        &["run", "--robot", "hex19", "--no-record"],
+        "built-in robots, by name: hex18",
+    );
     assert!(!dir.join("out.csv").exists());
     // a file called `flat` here is the user's, and this one is not a terrain
     std::fs::write(dir.join("flat"), "not = \"a terrain\"\n").unwrap();
