@@ -3,6 +3,7 @@
 mod articulation;
 pub mod ball;
 mod engine;
+mod face_slots;
 mod ground_contact;
 
 pub use articulation::{Articulation, IMPULSE_PGS_ITERATIONS, JointDrift, ServoGains};
