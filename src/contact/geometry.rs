@@ -46,8 +46,9 @@ const CLOSEST_POINT_TOLERANCE: f64 = 1e-9;
 /// deepest answer kept.
 ///
 /// In a concave corner the sphere presses into several faces at once: this is their springs
-/// summed into one contact ([`Faces::summed`]), which is what one body with one contact state —
-/// the ball — needs; [`sphere_faces`] gives the faces one by one.
+/// summed into one contact ([`Faces::summed`]), for a reading that wants one (a sphere's depth
+/// for a message, the ball under rolling resistance or spin friction, which act on one
+/// contact); [`sphere_faces`] gives the faces one by one, each a contact of its own.
 pub fn sphere_geometry(
     terrain: &HeightGrid,
     center: DVec3,

@@ -114,14 +114,18 @@ impl BallRecorder {
             )?;
         }
         self.path_end = Some(position);
-        match &s.contact {
-            Some(c) => rec.log(
+        // each face's force at its point (two in a riser's foot)
+        let faces: Vec<_> = s.faces.iter().flatten().collect();
+        if faces.is_empty() {
+            rec.log("world/contact_force", &rerun::Clear::flat())?;
+        } else {
+            let scaled = |f: glam::DVec3| (f * self.force_scale).as_vec3().to_array();
+            rec.log(
                 "world/contact_force",
-                &rerun::Arrows3D::from_vectors([(c.force * self.force_scale).as_vec3().to_array()])
-                    .with_origins([c.point.as_vec3().to_array()])
+                &rerun::Arrows3D::from_vectors(faces.iter().map(|c| scaled(c.force)))
+                    .with_origins(faces.iter().map(|c| c.point.as_vec3().to_array()))
                     .with_colors([[40, 120, 255]]),
-            )?,
-            None => rec.log("world/contact_force", &rerun::Clear::flat())?,
+            )?;
         }
         let (normal, tangential, depth) = s.contact.map_or((0.0, 0.0, 0.0), |c| {
             (c.normal_force, c.friction.length(), c.penetration)

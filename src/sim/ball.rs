@@ -1,9 +1,19 @@
 //! The paper's experiment: a rigid ball dropped on a terrain, with the contact model as the only
 //! ground force.
+//!
+//! On one face — the paper's case — the ball has one contact. In a concave corner (a riser's foot,
+//! a pit's floor against its wall) it presses into each face at once, and each face is a contact
+//! of its own, with its own depth, normal, damper and friction, solved together through the ball's
+//! mobility ([`crate::contact::joint`]), as a robot's foot in a corner is
+//! ([`super::ground_contact`]): summed into one contact, the springs' normal tilted from the floor
+//! to the riser over the first millimetres and lifted the ball against a wall (V20: 60° from
+//! horizontal as it met the riser).
 
 use super::engine::{Engine, STANDARD_GRAVITY};
+use super::face_slots::{Slot, SlotStates, free, match_faces};
+use crate::contact::joint::{JointContact, JointSolver};
 use crate::contact::{
-    ContactForce, ContactModel, ContactState, EffectiveMass, RollingBody, Variant,
+    ContactForce, ContactModel, EffectiveMass, MAX_FACES, RollingBody, SphereGeometry, Variant,
 };
 use crate::limits::{Range, check_number};
 use crate::terrain::HeightGrid;
@@ -75,8 +85,12 @@ pub struct BallSample {
     pub position: DVec3,
     pub velocity: DVec3,
     pub angular_velocity: DVec3,
-    /// The contact's response during the step that led here (None: in the air).
+    /// The contact's response during the step that led here (None: in the air); in a concave
+    /// corner its faces' merged ([`ContactForce::merge`]: forces summed, the deepest face's
+    /// point, frame and depth).
     pub contact: Option<ContactForce>,
+    /// Each face's response, the nearest first (one but in a concave corner; None past them).
+    pub faces: [Option<ContactForce>; MAX_FACES],
     pub kinetic_energy: f64,
     /// m·g·z of the centre.
     pub potential_energy: f64,
@@ -97,8 +111,10 @@ pub struct BallSim {
     config: BallConfig,
     terrain: Arc<HeightGrid>,
     contact: ContactModel,
-    contact_state: ContactState,
-    last_contact: Option<ContactForce>,
+    /// Each face's contact state, matched to its face from step to step (`face_slots`).
+    slots: [Slot; MAX_FACES],
+    solver: JointSolver,
+    last_faces: [Option<ContactForce>; MAX_FACES],
     step: u64,
 }
 
@@ -140,8 +156,9 @@ impl BallSim {
             config,
             terrain,
             contact,
-            contact_state: ContactState::default(),
-            last_contact: None,
+            slots: [Slot::default(); MAX_FACES],
+            solver: JointSolver::default(),
+            last_faces: [None; MAX_FACES],
             step: 0,
         }
     }
@@ -165,74 +182,148 @@ impl BallSim {
         let center = to_f64(body.translation());
         let velocity = to_f64(body.linvel());
         let angular_velocity = to_f64(body.angvel());
-        let geometry = self
-            .contact
-            .sphere_geometry(&self.terrain, center, self.config.radius);
-        let response = if self.contact.variant == Variant::Paper {
-            // the paper's: the centre's velocity, the force at the centre (no spin)
-            self.contact
-                .respond_paper(
-                    &geometry,
-                    velocity,
-                    self.config.mass,
-                    dt,
-                    &mut self.contact_state,
-                )
-                .map(|c| (c, DVec3::ZERO))
-        } else if geometry.penetration > 0.0 {
-            let arm = geometry.point - center;
-            let point_velocity = velocity + angular_velocity.cross(arm);
-            if self.config.lock_rotation {
-                let mass = EffectiveMass::particle(self.config.mass);
-                self.contact
-                    .respond(
-                        &geometry,
-                        point_velocity,
-                        &mass,
-                        dt,
-                        &mut self.contact_state,
-                    )
-                    .map(|c| (c, DVec3::ZERO))
-            } else {
-                let body = RollingBody {
-                    mass: self.config.mass,
-                    inertia: self.config.inertia(),
-                    arm: -arm,
-                    angular_velocity,
-                };
-                self.contact.respond_rolling(
-                    &geometry,
-                    point_velocity,
-                    &body,
-                    dt,
-                    &mut self.contact_state,
-                )
-            }
+        let radius = self.config.radius;
+        let all = self.contact.sphere_faces(&self.terrain, center, radius);
+        let faces = all.as_slice();
+        let mut responses = [None; MAX_FACES];
+        let mut rolling = DVec3::ZERO;
+        if self.contact.variant == Variant::Paper {
+            // the paper's: one contact, the centre's velocity, the force at the centre (no spin)
+            responses[0] = self.contact.respond_paper(
+                &all.summed(center, radius),
+                velocity,
+                self.config.mass,
+                dt,
+                &mut self.slots[0].state,
+            );
+        } else if faces[0].penetration <= 0.0 {
+            free(&mut self.slots);
         } else {
-            self.contact
-                .respond(
-                    &geometry,
-                    DVec3::ZERO,
-                    &EffectiveMass::particle(1.0),
-                    dt,
-                    &mut self.contact_state,
-                )
-                .map(|c| (c, DVec3::ZERO))
-        };
+            let ids = match_faces(&mut self.slots, faces);
+            // rolling resistance and spin friction act on one contact: a corner under them keeps
+            // its faces' springs summed into one
+            let torques = self.contact.rolling_resistance > 0.0 || self.contact.spin_friction > 0.0;
+            if faces.len() == 1 || torques {
+                let geometry = all.summed(center, radius);
+                let motion = (center, velocity, angular_velocity);
+                (responses[0], rolling) = self.respond_alone(&geometry, motion, ids[0]);
+            } else {
+                let motion = (center, velocity, angular_velocity);
+                self.respond_jointly(faces, motion, &ids, &mut responses);
+            }
+        }
         // through the set, not `bodies[ball]`: a body indexed mutably is marked modified, which
         // costs rapier work in the step
         let bodies = &mut self.engine.bodies;
         bodies.reset_forces_and_torques(self.ball);
-        if let Some((c, rolling)) = &response {
+        if responses[0].is_some() {
             // Force and torque about our own centre: rapier's `add_force_at_point` measures the arm
             // from its world centre of mass, which is not computed until the first step.
-            let torque = (c.point - center).cross(c.force) + *rolling;
-            bodies.add_force_and_torque(self.ball, c.force.as_vec3(), torque.as_vec3(), true);
+            let (mut force, mut torque) = (DVec3::ZERO, rolling);
+            for c in responses.iter().flatten() {
+                force += c.force;
+                torque += (c.point - center).cross(c.force);
+            }
+            bodies.add_force_and_torque(self.ball, force.as_vec3(), torque.as_vec3(), true);
         }
         self.engine.step();
         self.step += 1;
-        self.last_contact = response.map(|(c, _)| c);
+        self.last_faces = responses;
         self.sample()
+    }
+
+    /// The force of one contact, its state in slot `slot` (and the rolling resistance's and spin
+    /// friction's torque); `motion`: the ball's centre, velocity and angular velocity.
+    fn respond_alone(
+        &mut self,
+        geometry: &SphereGeometry,
+        (center, velocity, angular_velocity): (DVec3, DVec3, DVec3),
+        slot: usize,
+    ) -> (Option<ContactForce>, DVec3) {
+        let dt = self.engine.dt();
+        let state = &mut self.slots[slot].state;
+        let arm = geometry.point - center;
+        let point_velocity = velocity + angular_velocity.cross(arm);
+        if self.config.lock_rotation {
+            let mass = EffectiveMass::particle(self.config.mass);
+            let response = self
+                .contact
+                .respond(geometry, point_velocity, &mass, dt, state);
+            return (response, DVec3::ZERO);
+        }
+        let body = RollingBody {
+            mass: self.config.mass,
+            inertia: self.config.inertia(),
+            arm: -arm,
+            angular_velocity,
+        };
+        match self
+            .contact
+            .respond_rolling(geometry, point_velocity, &body, dt, state)
+        {
+            Some((c, rolling)) => (Some(c), rolling),
+            None => (None, DVec3::ZERO),
+        }
+    }
+
+    /// The forces of the faces of a concave corner, solved together through the ball's mobility:
+    /// a unit impulse b at face j's point moves face i's point by
+    /// W_ij(a, b) = a·b/m + (r_i × a)·I⁻¹·(r_j × b), r the arms from the centre (the rotation's
+    /// part left out for a ball that does not turn).
+    fn respond_jointly(
+        &mut self,
+        faces: &[SphereGeometry],
+        (center, velocity, angular_velocity): (DVec3, DVec3, DVec3),
+        ids: &[usize; MAX_FACES],
+        out: &mut [Option<ContactForce>; MAX_FACES],
+    ) {
+        let (mass, locked) = (self.config.mass, self.config.lock_rotation);
+        let inverse_inertia = if locked {
+            0.0
+        } else {
+            1.0 / self.config.inertia()
+        };
+        let spin = if locked {
+            DVec3::ZERO
+        } else {
+            angular_velocity
+        };
+        let n = faces.len();
+        let mut contacts = [const { None }; MAX_FACES];
+        for (slot, face) in contacts.iter_mut().zip(faces) {
+            *slot = Some(JointContact {
+                geometry: *face,
+                velocity: velocity + spin.cross(face.point - center),
+                sharing: n,
+            });
+        }
+        let contacts: Vec<JointContact> = contacts.into_iter().flatten().collect();
+        let mobility = |i: usize, j: usize| {
+            let (fi, fj) = (&faces[i].frame, &faces[j].frame);
+            let (ri, rj) = (faces[i].point - center, faces[j].point - center);
+            let w = |a: DVec3, b: DVec3| {
+                a.dot(b) / mass + ri.cross(a).dot(rj.cross(b)) * inverse_inertia
+            };
+            let column =
+                |b: DVec3| DVec3::new(w(fi.tangent_x, b), w(fi.tangent_y, b), w(fi.normal, b));
+            glam::DMat3::from_cols(
+                column(fj.tangent_x),
+                column(fj.tangent_y),
+                column(fj.normal),
+            )
+        };
+        let mut states = SlotStates {
+            slots: &mut self.slots,
+            ids: &ids[..n],
+        };
+        self.solver.respond(
+            &self.contact,
+            &contacts,
+            mobility,
+            self.engine.dt(),
+            &mut states,
+            &mut out[..n],
+        );
     }
 
     /// The current state.
@@ -248,19 +339,32 @@ impl BallSim {
         let c = &self.config;
         let kinetic_energy = 0.5 * c.mass * velocity.length_squared()
             + 0.5 * c.inertia() * angular_velocity.length_squared();
-        let geometry = self
-            .contact
-            .sphere_geometry(&self.terrain, position, c.radius);
+        // each face's spring (one but in a corner; its depth ≤ 0 clear of the ground)
+        let faces = self.contact.sphere_faces(&self.terrain, position, c.radius);
+        let spring_energy = match faces.as_slice() {
+            [one] => self.contact.normal.stored_energy(one.penetration),
+            several => several
+                .iter()
+                .map(|g| self.contact.normal.stored_energy(g.penetration))
+                .sum(),
+        };
+        let mut faces = self.last_faces.iter().flatten();
+        let contact = faces.next().map(|first| {
+            let mut merged = *first;
+            faces.for_each(|other| merged.merge(other));
+            merged
+        });
         BallSample {
             step: self.step,
             time: self.step as f64 * self.dt(),
             position,
             velocity,
             angular_velocity,
-            contact: self.last_contact,
+            contact,
+            faces: self.last_faces,
             kinetic_energy,
             potential_energy: c.mass * c.gravity * position.z,
-            spring_energy: self.contact.normal.stored_energy(geometry.penetration),
+            spring_energy,
         }
     }
 }

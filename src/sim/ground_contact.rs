@@ -394,16 +394,6 @@ fn lowest_of_box(frame: &DAffine3, centre: f64, half: DVec3, largest: f64) -> f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::EffectiveMass;
-    use crate::terrain::GroundFrame;
-
-    fn face(normal: DVec3) -> SphereGeometry {
-        SphereGeometry {
-            penetration: 1e-3,
-            point: DVec3::ZERO,
-            frame: GroundFrame::from_normal(normal),
-        }
-    }
 
     /// The box bound never passes over a sphere that reaches lower: each sphere's lowest point,
     /// placed as the step places it, is above the bound in every pose.
