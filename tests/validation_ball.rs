@@ -608,9 +608,10 @@ fn v16_rolling_resistance_stops_a_rolling_ball_as_the_torque_balance_says() {
         angular_velocity: [0.0, v0 / (r - depth), 0.0],
         ..config
     };
+    // V16's μ = 0.8, static and kinetic (as V4's)
     let model = ContactModel {
         rolling_resistance: rho,
-        ..spring_damper(2e4, 150.0, karnopp(0.9, 0.8))
+        ..spring_damper(2e4, 150.0, karnopp(0.8, 0.8))
     };
     let samples = run_ball(config, flat(), model, 9.0);
     let backwards = samples
@@ -821,18 +822,25 @@ fn v17_spin_friction_stops_a_spinning_ball() {
     );
     assert!(after < 1e-3, "V17: spun again at {after:.2e} rad/s");
     let free = spinning(0.0, 10.0);
-    let last = free.last().unwrap();
-    let drift = (last.position - free[0].position).truncate().length();
+    // over the whole 10 s, not at its end alone: the spin's largest departure from 10 rad/s and
+    // the centre's farthest from where it started, in 3-D
+    let spin_off = free
+        .iter()
+        .map(|s| (s.angular_velocity.z - 10.0).abs())
+        .fold(0.0, f64::max);
+    let drift = free
+        .iter()
+        .map(|s| (s.position - free[0].position).length())
+        .fold(0.0, f64::max);
     println!(
-        "V17 without spin friction: {:.5} rad/s at 10 s, moved {drift:.1e} m",
-        last.angular_velocity.z
+        "V17 without spin friction: {:.5} rad/s at 10 s (at most {spin_off:.1e} off 10), moved at most {drift:.1e} m",
+        free.last().unwrap().angular_velocity.z
     );
     // V17 allows 0.1 %; nothing acts on the spin, so it must keep it to f32's resolution (an ulp
     // of 10 rad/s is 1e-6; rapier's gyroscopic pass once added one a step: +8.2e-3 in 10 s)
     assert!(
-        (last.angular_velocity.z - 10.0).abs() <= 1e-5,
-        "V17: spin {}",
-        last.angular_velocity.z
+        spin_off <= 1e-5,
+        "V17: the spin strayed {spin_off:.2e} rad/s"
     );
     assert!(drift < 1e-6, "V17: the ball moved {drift:.2e} m");
 }
