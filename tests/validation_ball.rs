@@ -306,6 +306,34 @@ fn v6_karnopp_holds_a_foot_on_20_degrees_without_creep() {
     }
 }
 
+/// V6 without the drift recovery (r = 0), the corrector that pulls a sticking contact back to its
+/// anchor: Karnopp's stiction alone holds the foot, so no creep is hidden by undoing it (as
+/// V14's `v14_holds_without_drift_recovery` for the robot).
+#[test]
+fn v6_holds_without_drift_recovery() {
+    for (mass, radius) in [(0.05, 0.01), (1.0, 0.05)] {
+        let model = ContactModel {
+            drift_recovery: 0.0,
+            ..spring_damper(2e4, 150.0, karnopp(0.9, 0.8))
+        };
+        let samples = released_on_plane(20.0, foot(mass, radius), model, 10.0);
+        let start = samples[0].position;
+        let moved = samples
+            .iter()
+            .map(|s| (s.position - start).length())
+            .fold(0.0, f64::max);
+        println!(
+            "V6 without drift recovery: the {mass} kg foot moved {:.2e} mm in 10 s",
+            moved * 1e3
+        );
+        assert!(
+            moved < 1e-3,
+            "V6 without drift recovery: the {mass} kg foot moved {:.4} mm in 10 s",
+            moved * 1e3
+        );
+    }
+}
+
 #[test]
 fn v7_karnopp_foot_slides_on_45_degrees() {
     let angle = 45f64.to_radians();

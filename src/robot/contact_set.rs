@@ -279,21 +279,31 @@ mod tests {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// Spheres of the capsule's radius at most 1.2·r apart leave its surface at most
+    /// (√(1 + 0.6²) − 1)·r = 0.166·r from them: midway between two, r out and 0.6·r along.
     #[test]
-    fn a_capsule_is_covered_to_a_fifth_of_its_radius() {
+    fn a_capsule_is_covered_to_a_sixth_of_its_radius() {
         let (r, length) = (0.01, 0.12);
         let spheres = spheres_of(
             &piece(urdf_rs::Geometry::Capsule { radius: r, length }),
             Path::new("."),
         )
         .unwrap();
-        // every point of the capsule's surface is within 0.2·r of the spheres' union, never outside
-        for k in 0..=240 {
-            let z = -0.5 * length + length * k as f64 / 240.0;
+        // every point of the capsule's surface is within that of the spheres' union, never
+        // outside; and the widest gap is that, the spheres no closer than they need be
+        let bound = ((1.0f64 + 0.6 * 0.6).sqrt() - 1.0) * r;
+        let mut widest = 0.0f64;
+        for k in 0..=2400 {
+            let z = -0.5 * length + length * k as f64 / 2400.0;
             let p = DVec3::new(r, 0.0, z);
             let g = gap(&spheres, p);
-            assert!((-1e-12..=0.2 * r).contains(&g), "z = {z}: {g}");
+            assert!((-1e-12..=bound + 1e-12).contains(&g), "z = {z}: {g}");
+            widest = widest.max(g);
         }
+        assert!(
+            widest > 0.9 * bound,
+            "the widest gap {widest} of the bound {bound}"
+        );
         // and nothing reaches beyond the capsule
         let tip = gap(&spheres, DVec3::new(0.0, 0.0, 0.5 * length + r));
         assert!(tip.abs() < 1e-12, "{tip}");
