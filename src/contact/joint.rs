@@ -707,6 +707,51 @@ mod tests {
         assert!(deepest < 3e-3, "{} mm deep", deepest * 1e3);
     }
 
+    /// n contacts sharing one rigid body (a box landing flat on its four corner spheres) damp it
+    /// as one damper of n·c: each sized for M/n, their forces over a step sum to
+    /// M·ẋ·(1 − e^(−n·c·h/M))/h, so the body's approach decays by exactly e^(−n·c·h/M) in the
+    /// step. n dampers each sized for M alone (φ(c·h/M) each) would take 2.2 times that here
+    /// (n·c·h/M = 3) and throw the box back up.
+    #[test]
+    fn dampers_sharing_a_body_decay_as_one_of_their_sum() {
+        let (mass, c, h, x) = (0.2, 150.0, 1e-3, 1e-9);
+        let model = ContactModel {
+            normal: crate::contact::NormalLaw::SpringDamper {
+                stiffness: 2e4,
+                damping: c,
+            },
+            ..ContactModel::default()
+        };
+        let frame = GroundFrame::from_normal(DVec3::Z);
+        let approach = 0.3;
+        for n in [1usize, 2, 4] {
+            let contacts: Vec<JointContact> = (0..n)
+                .map(|i| JointContact {
+                    geometry: SphereGeometry {
+                        penetration: x,
+                        point: DVec3::new(0.1 * i as f64, 0.0, 0.0),
+                        frame,
+                    },
+                    velocity: DVec3::new(0.0, 0.0, -approach),
+                    sharing: n,
+                })
+                .collect();
+            let mut states = vec![ContactState::default(); n];
+            let mut out = vec![None; n];
+            // a particle: every contact's unit impulse moves every other contact by 1/M
+            let w = |_: usize, _: usize| DMat3::IDENTITY / mass;
+            respond_jointly(&model, &contacts, w, h, &mut states, &mut out);
+            let damper: f64 =
+                out.iter().flatten().map(|f| f.normal_force).sum::<f64>() - n as f64 * 2e4 * x;
+            let after = approach - damper * h / mass;
+            let exact = approach * (-(n as f64) * c * h / mass).exp();
+            assert!(
+                (after - exact).abs() <= 1e-12 * approach,
+                "n = {n}: {after} m/s after a step, the exact decay {exact}"
+            );
+        }
+    }
+
     /// Two contacts a nanometre apart: T_SS is singular to within rounding, and an LU solve
     /// returns huge opposite internal forces that the friction cone then clips (the contacts
     /// reported sliding). Solved with the cut-off relative to T_SS's own scale they share the
