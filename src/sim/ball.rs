@@ -114,6 +114,8 @@ pub struct BallSim {
     /// Each face's contact state, matched to its face from step to step (`face_slots`).
     slots: [Slot; MAX_FACES],
     solver: JointSolver,
+    /// A corner's faces as the joint solver takes them (kept: a step allocates nothing).
+    corner: Vec<JointContact>,
     last_faces: [Option<ContactForce>; MAX_FACES],
     step: u64,
 }
@@ -158,6 +160,7 @@ impl BallSim {
             contact,
             slots: [Slot::default(); MAX_FACES],
             solver: JointSolver::default(),
+            corner: Vec::with_capacity(MAX_FACES),
             last_faces: [None; MAX_FACES],
             step: 0,
         }
@@ -289,15 +292,12 @@ impl BallSim {
             angular_velocity
         };
         let n = faces.len();
-        let mut contacts = [const { None }; MAX_FACES];
-        for (slot, face) in contacts.iter_mut().zip(faces) {
-            *slot = Some(JointContact {
-                geometry: *face,
-                velocity: velocity + spin.cross(face.point - center),
-                sharing: n,
-            });
-        }
-        let contacts: Vec<JointContact> = contacts.into_iter().flatten().collect();
+        self.corner.clear();
+        self.corner.extend(faces.iter().map(|face| JointContact {
+            geometry: *face,
+            velocity: velocity + spin.cross(face.point - center),
+            sharing: n,
+        }));
         let mobility = |i: usize, j: usize| {
             let (fi, fj) = (&faces[i].frame, &faces[j].frame);
             let (ri, rj) = (faces[i].point - center, faces[j].point - center);
@@ -318,7 +318,7 @@ impl BallSim {
         };
         self.solver.respond(
             &self.contact,
-            &contacts,
+            &self.corner,
             mobility,
             self.engine.dt(),
             &mut states,
