@@ -54,27 +54,16 @@ pub fn robot_command(args: RobotArgs) -> Result<()> {
     // where no file of that name is here
     let model = match builtin::named(builtin::ROBOTS, &args.robot, &args.robot) {
         Some(_) => builtin::hex18(),
-        None => robot::load(&args.robot).map_err(|e| {
-            let message = e.to_string();
-            anyhow::anyhow!(builtin::not_found_hint(
-                message,
-                &args.robot,
-                "robots",
-                builtin::ROBOTS
-            ))
-        })?,
+        None => robot::load(&args.robot)
+            .map_err(builtin::with_hint(&args.robot, "robots", builtin::ROBOTS))
+            .map_err(anyhow::Error::msg)?,
     };
     let gait = match &args.gait {
         Some(path) => match builtin::named(builtin::GAITS, path, path) {
             Some(b) => GaitSpec::from_toml(b.text, Path::new(b.path))?,
-            None => GaitSpec::from_file(path).map_err(|e| {
-                anyhow::anyhow!(builtin::not_found_hint(
-                    e.to_string(),
-                    path,
-                    "gaits",
-                    builtin::GAITS
-                ))
-            })?,
+            None => GaitSpec::from_file(path)
+                .map_err(builtin::with_hint(path, "gaits", builtin::GAITS))
+                .map_err(anyhow::Error::msg)?,
         },
         None => GaitSpec::from_toml(builtin::TRIPOD.text, Path::new(builtin::TRIPOD.path))?,
     };

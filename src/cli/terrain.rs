@@ -37,18 +37,12 @@ fn spec_of(path: &Path) -> Result<(TerrainSpec, PathBuf)> {
             TerrainSpec::from_toml(b.text, Path::new(b.path))?,
             PathBuf::from(b.path),
         ),
-        None => {
-            let spec = TerrainSpec::from_file(path).map_err(|e| {
-                let message = e.to_string();
-                anyhow::anyhow!(builtin::not_found_hint(
-                    message,
-                    path,
-                    "terrains",
-                    builtin::TERRAINS
-                ))
-            })?;
-            (spec, path.to_path_buf())
-        }
+        None => (
+            TerrainSpec::from_file(path)
+                .map_err(builtin::with_hint(path, "terrains", builtin::TERRAINS))
+                .map_err(anyhow::Error::msg)?,
+            path.to_path_buf(),
+        ),
     })
 }
 

@@ -119,6 +119,15 @@ pub fn names(list: &[(&str, Builtin)]) -> String {
     list.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
 }
 
+/// [`not_found_hint`] as a `map_err` for a command that reads a file of `kind` at `path`.
+pub fn with_hint<E: std::fmt::Display>(
+    path: &std::path::Path,
+    kind: &str,
+    list: &[(&str, Builtin)],
+) -> impl FnOnce(E) -> String {
+    move |e| not_found_hint(e.to_string(), path, kind, list)
+}
+
 /// `message` for a file of `kind` that could not be read, with the built-in names of its kind
 /// (`list`) when nothing is at `path`: a name mistyped, or a repository's file named from
 /// elsewhere.
