@@ -283,39 +283,11 @@ fn foot(mass: f64, radius: f64) -> BallConfig {
     }
 }
 
-/// The reference foot (the hexapod's tibia: 0.05 kg, sole radius 0.01 m, c·dt/m = 3) and a 1 kg
-/// one: both must hold on 20° without creep.
-#[test]
-fn v6_karnopp_holds_a_foot_on_20_degrees_without_creep() {
+/// V6's two feet on 20° with `model` (Karnopp μs = 0.9, μk = 0.8): the reference foot (the
+/// hexapod's tibia: 0.05 kg, sole radius 0.01 m, c·dt/m = 3) and a 1 kg one, each held to moving
+/// less than 1 mm in 10 s. `what` names the variant in the messages.
+fn v6_holds_both_feet(model: ContactModel, what: &str) {
     for (mass, radius) in [(0.05, 0.01), (1.0, 0.05)] {
-        let samples = released_on_slope(20.0, karnopp(0.9, 0.8), foot(mass, radius), 10.0);
-        let start = samples[0].position;
-        let moved = samples
-            .iter()
-            .map(|s| (s.position - start).length())
-            .fold(0.0, f64::max);
-        println!(
-            "V6: the {mass} kg foot moved {:.2e} mm in 10 s",
-            moved * 1e3
-        );
-        assert!(
-            moved < 1e-3,
-            "V6: the {mass} kg foot moved {:.4} mm in 10 s, expected < 1 mm",
-            moved * 1e3
-        );
-    }
-}
-
-/// V6 without the drift recovery (r = 0), the corrector that pulls a sticking contact back to its
-/// anchor: Karnopp's stiction alone holds the foot, so no creep is hidden by undoing it (as
-/// V14's `v14_holds_without_drift_recovery` for the robot).
-#[test]
-fn v6_holds_without_drift_recovery() {
-    for (mass, radius) in [(0.05, 0.01), (1.0, 0.05)] {
-        let model = ContactModel {
-            drift_recovery: 0.0,
-            ..spring_damper(2e4, 150.0, karnopp(0.9, 0.8))
-        };
         let samples = released_on_plane(20.0, foot(mass, radius), model, 10.0);
         let start = samples[0].position;
         let moved = samples
@@ -323,15 +295,32 @@ fn v6_holds_without_drift_recovery() {
             .map(|s| (s.position - start).length())
             .fold(0.0, f64::max);
         println!(
-            "V6 without drift recovery: the {mass} kg foot moved {:.2e} mm in 10 s",
+            "V6{what}: the {mass} kg foot moved {:.2e} mm in 10 s",
             moved * 1e3
         );
         assert!(
             moved < 1e-3,
-            "V6 without drift recovery: the {mass} kg foot moved {:.4} mm in 10 s",
+            "V6{what}: the {mass} kg foot moved {:.4} mm in 10 s, expected < 1 mm",
             moved * 1e3
         );
     }
+}
+
+#[test]
+fn v6_karnopp_holds_a_foot_on_20_degrees_without_creep() {
+    v6_holds_both_feet(spring_damper(2e4, 150.0, karnopp(0.9, 0.8)), "");
+}
+
+/// V6 without the drift recovery (r = 0), the corrector that pulls a sticking contact back to its
+/// anchor: Karnopp's stiction alone holds the foot, so no creep is hidden by undoing it (as
+/// V14's `v14_holds_without_drift_recovery` for the robot).
+#[test]
+fn v6_holds_without_drift_recovery() {
+    let model = ContactModel {
+        drift_recovery: 0.0,
+        ..spring_damper(2e4, 150.0, karnopp(0.9, 0.8))
+    };
+    v6_holds_both_feet(model, " without drift recovery");
 }
 
 #[test]
