@@ -154,7 +154,7 @@ fn the_papers_damper_needs_a_small_step_on_a_light_foot() {
 }
 
 /// V9–V10: a ball that cannot roll and sticks where friction holds it — on the bell it stays on
-/// the slope where it landed (V9's bound is met for that reason), and on the natural terrain it
+/// the slope near where it landed, never farther out (V9's bound is met for that reason), and on the natural terrain it
 /// comes to rest (V10's "comes to rest", which hexsim's rolling ball meets only with rolling
 /// resistance).
 #[test]
@@ -176,7 +176,14 @@ fn the_papers_ball_sticks_where_it_lands() {
         last.position.truncate().length(),
         last.velocity.length()
     );
-    assert!(reach <= 0.77 && last.velocity.length() < 1e-3);
+    // never farther out than where it landed, √(0.7² + 0.3²) = 0.7616 m, but for its bounce's
+    // 1.5 mm (it slides inward, 7.6 cm, before friction holds it), and at rest
+    let landed = (0.7f64 * 0.7 + 0.3 * 0.3).sqrt();
+    assert!(
+        reach <= landed + 2e-3,
+        "reached {reach} m, landed at {landed} m"
+    );
+    assert!(last.velocity.length() < 1e-3);
     let ground = terrain::load(&project_file("terrains/natural_matlab.toml")).unwrap();
     let config = BallConfig {
         position: [0.3, -0.2, ground.height(0.3, -0.2) + 0.3],
