@@ -944,32 +944,28 @@ fn v15_same_scenario_same_result_bit_for_bit(articulation: Articulation) {
 fn v15_a_seeded_run_repeats_byte_for_byte_in_another_process() {
     let dir = scratch("v15");
     let run = |seed: &str, name: &str| {
-        let out = hexsim()
-            .args([
-                "run",
-                "--terrain",
-                "natural",
-                "--duration",
-                "2",
-                "--no-record",
-            ])
-            .args(["--seed", seed, "--trajectory"])
-            .arg(dir.join(format!("{name}.csv")))
-            .arg("--metrics")
-            .arg(dir.join(format!("{name}.json")))
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        let (csv, json) = (
+            dir.join(format!("{name}.csv")),
+            dir.join(format!("{name}.json")),
         );
-        let read = |ext: &str| std::fs::read(dir.join(format!("{name}.{ext}"))).unwrap();
+        let mut cmd = hexsim();
+        cmd.args([
+            "run",
+            "--terrain",
+            "natural",
+            "--duration",
+            "2",
+            "--no-record",
+        ])
+        .args(["--seed", seed, "--trajectory"])
+        .arg(&csv)
+        .arg("--metrics")
+        .arg(&json);
+        let metrics = metrics_of(cmd, &json, &format!("V15, seed {seed}"));
         // the metrics' timing fields aside (they name the run, not its result)
-        let metrics: serde_json::Value = serde_json::from_slice(&read("json")).unwrap();
         let mut metrics = metrics.as_object().unwrap().clone();
         metrics.remove("metadata");
-        (read("csv"), metrics)
+        (std::fs::read(&csv).unwrap(), metrics)
     };
     let (a, b, other) = (run("7", "a"), run("7", "b"), run("8", "c"));
     assert!(
