@@ -206,12 +206,11 @@ impl BallSim {
             // rolling resistance and spin friction act on one contact: a corner under them keeps
             // its faces' springs summed into one
             let torques = self.contact.rolling_resistance > 0.0 || self.contact.spin_friction > 0.0;
+            let motion = (center, velocity, angular_velocity);
             if faces.len() == 1 || torques {
                 let geometry = all.summed(center, radius);
-                let motion = (center, velocity, angular_velocity);
                 (responses[0], rolling) = self.respond_alone(&geometry, motion, ids[0]);
             } else {
-                let motion = (center, velocity, angular_velocity);
                 self.respond_jointly(faces, motion, &ids, &mut responses);
             }
         }
